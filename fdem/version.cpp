@@ -1,0 +1,1 @@
+namespace fdem { const char* version() { return FDEM_VERSION; } }

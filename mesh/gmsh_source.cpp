@@ -1,0 +1,261 @@
+// mesh/gmsh_source.cpp: Gmsh model -> Mesh, and the simple geometry sources (rectangle, .geo, .msh).
+#include "mesh/gmsh_source.hpp"
+
+#include <gmsh.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <unordered_map>
+
+namespace fdem::mesh {
+
+namespace {
+int g_sessions = 0;
+
+// Gmsh reports most problems through its logger rather than by throwing; turn them into MeshError.
+void throw_on_gmsh_error(const std::string& what) {
+    std::string err;
+    gmsh::logger::getLastError(err);
+    if (!err.empty()) throw MeshError(what + ": " + err);
+}
+}  // namespace
+
+GmshSession::GmshSession(bool verbose) {
+    if (g_sessions++ == 0) gmsh::initialize(0, nullptr, false);
+    gmsh::option::setNumber("General.Terminal", verbose ? 1 : 0);
+    gmsh::option::setNumber("General.Verbosity", verbose ? 5 : 1);
+    gmsh::clear();
+}
+
+GmshSession::~GmshSession() {
+    if (--g_sessions == 0) gmsh::finalize();
+}
+
+Mesh extract_current_model() {
+    Mesh m;
+    // All 3-node triangles with the surface entity each belongs to.
+    std::vector<std::pair<int, int>> surfaces;
+    gmsh::model::getEntities(surfaces, 2);
+    struct RawTri {
+        std::size_t n[3];
+        int entity;
+    };
+    std::vector<RawTri> raw;
+    for (const auto& [dim, tag] : surfaces) {
+        std::vector<std::size_t> etags, ntags;
+        gmsh::model::mesh::getElementsByType(2, etags, ntags, tag);
+        for (std::size_t e = 0; e < etags.size(); ++e)
+            raw.push_back({{ntags[3 * e], ntags[3 * e + 1], ntags[3 * e + 2]}, tag});
+        (void)dim;
+    }
+    if (raw.empty()) throw MeshError("the Gmsh model holds no 3-node triangles (was a 2D mesh generated?)");
+
+    // Regions: 2D physical groups by entity. If the model defines none, every triangle is in "body".
+    std::vector<std::pair<int, int>> phys;
+    gmsh::model::getPhysicalGroups(phys);
+    std::map<int, int> entity_region;
+    for (const auto& [dim, ptag] : phys) {
+        if (dim != 2) continue;
+        std::string name;
+        gmsh::model::getPhysicalName(dim, ptag, name);
+        if (name.empty()) name = "surface_" + std::to_string(ptag);
+        std::vector<int> ents;
+        gmsh::model::getEntitiesForPhysicalGroup(dim, ptag, ents);
+        const int region = static_cast<int>(m.regions.size());
+        m.regions.push_back(name);
+        for (int ent : ents) entity_region.emplace(ent, region);  // first group wins
+    }
+    const bool has_regions = !m.regions.empty();
+    if (!has_regions) m.regions.push_back("body");
+
+    // Node coordinates by tag.
+    std::vector<std::size_t> node_tags;
+    std::vector<double> coord, param;
+    gmsh::model::mesh::getNodes(node_tags, coord, param, -1, -1, true, false);
+    std::unordered_map<std::size_t, std::size_t> tag_pos;
+    tag_pos.reserve(node_tags.size());
+    for (std::size_t i = 0; i < node_tags.size(); ++i) tag_pos.emplace(node_tags[i], i);
+
+    // Compact numbering over the nodes of kept triangles, in order of first appearance.
+    std::unordered_map<std::size_t, int> tag_index;
+    auto index_of = [&](std::size_t tag) {
+        auto it = tag_index.find(tag);
+        if (it != tag_index.end()) return it->second;
+        auto pos = tag_pos.find(tag);
+        if (pos == tag_pos.end()) throw MeshError("a triangle refers to node " + std::to_string(tag) + ", which has no coordinates");
+        const int idx = static_cast<int>(m.xy.size() / 2);
+        m.xy.push_back(coord[3 * pos->second]);
+        m.xy.push_back(coord[3 * pos->second + 1]);
+        tag_index.emplace(tag, idx);
+        return idx;
+    };
+    std::map<int, std::vector<int>> entity_triangles;
+    for (const auto& t : raw) {
+        int region = 0;
+        if (has_regions) {
+            auto it = entity_region.find(t.entity);
+            if (it == entity_region.end()) continue;  // with physical groups, only their elements belong to the model
+            region = it->second;
+        }
+        int a = index_of(t.n[0]), b = index_of(t.n[1]), c = index_of(t.n[2]);
+        const double* p = m.xy.data();
+        double area2 = (p[2 * b] - p[2 * a]) * (p[2 * c + 1] - p[2 * a + 1]) -
+                       (p[2 * c] - p[2 * a]) * (p[2 * b + 1] - p[2 * a + 1]);
+        if (area2 < 0) std::swap(b, c);
+        const int ti = m.n_triangles();
+        m.tri.insert(m.tri.end(), {a, b, c});
+        m.tri_region.push_back(region);
+        entity_triangles[t.entity].push_back(ti);
+    }
+    if (m.tri.empty()) throw MeshError("no triangle belongs to a 2D physical group");
+
+    // Degenerate triangles: area below 1e-12 of the squared longest edge.
+    for (int t = 0; t < m.n_triangles(); ++t) {
+        const int* n = &m.tri[3 * t];
+        const double* p = m.xy.data();
+        const double ax = p[2 * n[1]] - p[2 * n[0]], ay = p[2 * n[1] + 1] - p[2 * n[0] + 1];
+        const double bx = p[2 * n[2]] - p[2 * n[0]], by = p[2 * n[2] + 1] - p[2 * n[0] + 1];
+        const double cx = p[2 * n[2]] - p[2 * n[1]], cy = p[2 * n[2] + 1] - p[2 * n[1] + 1];
+        const double l2 = std::max({ax * ax + ay * ay, bx * bx + by * by, cx * cx + cy * cy});
+        if (std::abs(ax * by - ay * bx) <= 1e-12 * l2)
+            throw MeshError("degenerate triangle " + std::to_string(t) + " in region '" +
+                            m.regions[m.tri_region[t]] + "' near (" + std::to_string(p[2 * n[0]]) + ", " +
+                            std::to_string(p[2 * n[0] + 1]) + ")");
+    }
+
+    // Physical groups of every dimension, by name.
+    for (const auto& [dim, ptag] : phys) {
+        PhysicalGroup g;
+        g.dim = dim;
+        gmsh::model::getPhysicalName(dim, ptag, g.name);
+        if (g.name.empty()) g.name = (dim == 0 ? "point_" : dim == 1 ? "curve_" : "surface_") + std::to_string(ptag);
+        std::vector<int> ents;
+        gmsh::model::getEntitiesForPhysicalGroup(dim, ptag, ents);
+        for (int ent : ents) {
+            if (dim == 2) {
+                auto it = entity_triangles.find(ent);
+                if (it != entity_triangles.end())
+                    g.triangles.insert(g.triangles.end(), it->second.begin(), it->second.end());
+            }
+            if (dim == 1) {
+                std::vector<std::size_t> etags, ntags;
+                gmsh::model::mesh::getElementsByType(1, etags, ntags, ent);
+                for (std::size_t e = 0; e < etags.size(); ++e) {
+                    auto ia = tag_index.find(ntags[2 * e]), ib = tag_index.find(ntags[2 * e + 1]);
+                    if (ia == tag_index.end() || ib == tag_index.end()) continue;  // edge of a dropped surface
+                    g.edges.push_back({ia->second, ib->second});
+                }
+            }
+            std::vector<std::size_t> ntags;
+            std::vector<double> c, pc;
+            gmsh::model::mesh::getNodes(ntags, c, pc, dim, ent, true, false);
+            for (auto tag : ntags) {
+                auto it = tag_index.find(tag);
+                if (it != tag_index.end()) g.nodes.push_back(it->second);
+            }
+        }
+        std::sort(g.nodes.begin(), g.nodes.end());
+        g.nodes.erase(std::unique(g.nodes.begin(), g.nodes.end()), g.nodes.end());
+        std::sort(g.triangles.begin(), g.triangles.end());
+        m.groups.push_back(std::move(g));
+    }
+    if (!has_regions) {
+        PhysicalGroup body;
+        body.name = "body";
+        body.dim = 2;
+        for (int t = 0; t < m.n_triangles(); ++t) body.triangles.push_back(t);
+        for (int k = 0; k < m.n_nodes(); ++k) body.nodes.push_back(k);
+        m.groups.push_back(std::move(body));
+    }
+    return m;
+}
+
+Mesh mesh_rectangle(double x0, double y0, double width, double height, double size) {
+    if (!(width > 0) || !(height > 0) || !(size > 0))
+        throw MeshError("rectangle needs width > 0, height > 0 and mesh size > 0");
+    GmshSession session;
+    gmsh::model::add("rectangle");
+    const int s = gmsh::model::occ::addRectangle(x0, y0, 0, width, height);
+    gmsh::model::occ::synchronize();
+    std::vector<std::pair<int, int>> pts, curves;
+    gmsh::model::getEntities(pts, 0);
+    gmsh::model::mesh::setSize(pts, size);
+    gmsh::option::setNumber("Mesh.MeshSizeMax", size);
+    // Name the boundary by where it lies rather than by OCC's curve numbering.
+    gmsh::model::getEntities(curves, 1);
+    std::map<std::string, std::vector<int>> sides;
+    const double tol = 1e-5 * std::max(width, height);  // OCC bounding boxes carry its tolerance (~1e-7 m)
+    for (const auto& [dim, tag] : curves) {
+        double xmin, ymin, zmin, xmax, ymax, zmax;
+        gmsh::model::getBoundingBox(dim, tag, xmin, ymin, zmin, xmax, ymax, zmax);
+        if (std::abs(ymax - ymin) < tol) sides[std::abs(ymin - y0) < tol ? "bottom" : "top"].push_back(tag);
+        else sides[std::abs(xmin - x0) < tol ? "left" : "right"].push_back(tag);
+    }
+    std::map<std::string, std::vector<int>> corners;
+    for (const auto& [dim, tag] : pts) {
+        double xmin, ymin, zmin, xmax, ymax, zmax;
+        gmsh::model::getBoundingBox(dim, tag, xmin, ymin, zmin, xmax, ymax, zmax);
+        const bool left = std::abs(xmin - x0) < tol, bottom = std::abs(ymin - y0) < tol;
+        corners[std::string("corner_") + (bottom ? "b" : "t") + (left ? "l" : "r")].push_back(tag);
+    }
+    gmsh::model::setPhysicalName(2, gmsh::model::addPhysicalGroup(2, {s}), "body");
+    for (const auto& [name, tags] : sides) gmsh::model::setPhysicalName(1, gmsh::model::addPhysicalGroup(1, tags), name);
+    for (const auto& [name, tags] : corners) gmsh::model::setPhysicalName(0, gmsh::model::addPhysicalGroup(0, tags), name);
+    gmsh::model::mesh::generate(2);
+    throw_on_gmsh_error("meshing the rectangle");
+    return extract_current_model();
+}
+
+namespace {
+void require_readable(const std::string& path) {
+    std::ifstream f(path);
+    if (!f) throw MeshError("cannot open '" + path + "'");
+}
+}  // namespace
+
+Mesh mesh_geo_file(const std::string& path, double size_factor) {
+    require_readable(path);
+    GmshSession session;
+    gmsh::option::setNumber("Mesh.MeshSizeFactor", size_factor);
+    try {
+        gmsh::open(path);
+        throw_on_gmsh_error("reading '" + path + "'");
+        gmsh::model::mesh::generate(2);
+        throw_on_gmsh_error("meshing '" + path + "'");
+    } catch (const MeshError&) {
+        throw;
+    } catch (const std::exception& e) {
+        throw MeshError("Gmsh failed on '" + path + "': " + e.what());
+    } catch (...) {
+        throw MeshError("Gmsh failed on '" + path + "'");
+    }
+    try {
+        return extract_current_model();
+    } catch (const MeshError& e) {
+        throw MeshError(path + ": " + e.what());
+    }
+}
+
+Mesh read_msh_file(const std::string& path) {
+    require_readable(path);
+    GmshSession session;
+    try {
+        gmsh::open(path);
+        throw_on_gmsh_error("reading '" + path + "'");
+    } catch (const MeshError&) {
+        throw;
+    } catch (const std::exception& e) {
+        throw MeshError("Gmsh failed on '" + path + "': " + e.what());
+    } catch (...) {
+        throw MeshError("Gmsh failed on '" + path + "'");
+    }
+    try {
+        return extract_current_model();
+    } catch (const MeshError& e) {
+        throw MeshError(path + ": " + e.what());
+    }
+}
+
+}  // namespace fdem::mesh

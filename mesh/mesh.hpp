@@ -1,0 +1,48 @@
+// mesh/mesh.hpp: the plain-array triangle mesh that every geometry source produces and the engine consumes.
+//
+// DATA LAYOUT
+//   xy        2 * n_nodes doubles, node k at (xy[2k], xy[2k+1]), metres.
+//   tri       3 * n_tri ints, counter-clockwise (reference area > 0), indices into the nodes.
+//   tri_region n_tri ints, index into `regions` (the 2D physical group the triangle belongs to; -1 = none).
+//   groups    every physical group of the Gmsh model by name, with its nodes (sorted, unique), its
+//             boundary edges (dim 1: node pairs in the order Gmsh gives) and its triangles (dim 2).
+// Indices are 0-based. "No index" is -1.
+#pragma once
+
+#include <array>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace fdem::mesh {
+
+struct PhysicalGroup {
+    std::string name;
+    int dim = 0;                            // 0 points, 1 curves, 2 surfaces
+    std::vector<int> nodes;                 // sorted, unique
+    std::vector<std::array<int, 2>> edges;  // dim 1 only
+    std::vector<int> triangles;             // dim 2 only
+};
+
+struct Mesh {
+    std::vector<double> xy;
+    std::vector<int> tri;
+    std::vector<int> tri_region;
+    std::vector<std::string> regions;
+    std::vector<PhysicalGroup> groups;
+
+    int n_nodes() const { return static_cast<int>(xy.size() / 2); }
+    int n_triangles() const { return static_cast<int>(tri.size() / 3); }
+    const PhysicalGroup* find_group(const std::string& name) const {
+        for (const auto& g : groups)
+            if (g.name == name) return &g;
+        return nullptr;
+    }
+};
+
+// Thrown for geometry or mesh problems a user can fix (bad file, missing group, degenerate triangle).
+struct MeshError : std::runtime_error {
+    using std::runtime_error::runtime_error;
+};
+
+}  // namespace fdem::mesh
