@@ -92,6 +92,7 @@ Mesh extract_current_model() {
         return idx;
     };
     std::map<int, std::vector<int>> entity_triangles;
+    std::map<int, int> entity_body;  // Gmsh surface tag -> compact body index, in tag order (raw is tag-ordered)
     for (const auto& t : raw) {
         int region = 0;
         if (has_regions) {
@@ -107,6 +108,7 @@ Mesh extract_current_model() {
         const int ti = m.n_triangles();
         m.tri.insert(m.tri.end(), {a, b, c});
         m.tri_region.push_back(region);
+        m.tri_body.push_back(entity_body.emplace(t.entity, static_cast<int>(entity_body.size())).first->second);
         entity_triangles[t.entity].push_back(ti);
     }
     if (m.tri.empty()) throw MeshError("no triangle belongs to a 2D physical group");

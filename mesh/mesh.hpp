@@ -4,6 +4,9 @@
 //   xy        2 * n_nodes doubles, node k at (xy[2k], xy[2k+1]), metres.
 //   tri       3 * n_tri ints, counter-clockwise (reference area > 0), indices into the nodes.
 //   tri_region n_tri ints, index into `regions` (the 2D physical group the triangle belongs to; -1 = none).
+//   tri_body  n_tri ints, compact index of the Gmsh surface entity the triangle was meshed on: one body is one
+//             masonry unit, the beam, the base ... (numbered in increasing Gmsh surface tag order, 0..n_bodies-1).
+//             It lets the topology tell a crack inside a unit (same body) from a joint between units.
 //   groups    every physical group of the Gmsh model by name, with its nodes (sorted, unique), its
 //             boundary edges (dim 1: node pairs in the order Gmsh gives) and its triangles (dim 2).
 // Indices are 0-based. "No index" is -1.
@@ -28,11 +31,17 @@ struct Mesh {
     std::vector<double> xy;
     std::vector<int> tri;
     std::vector<int> tri_region;
+    std::vector<int> tri_body;  // empty only for meshes built by hand; see DATA LAYOUT
     std::vector<std::string> regions;
     std::vector<PhysicalGroup> groups;
 
     int n_nodes() const { return static_cast<int>(xy.size() / 2); }
     int n_triangles() const { return static_cast<int>(tri.size() / 3); }
+    int n_bodies() const {
+        int n = 0;
+        for (int b : tri_body) n = b + 1 > n ? b + 1 : n;
+        return n;
+    }
     const PhysicalGroup* find_group(const std::string& name) const {
         for (const auto& g : groups)
             if (g.name == name) return &g;
