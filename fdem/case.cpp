@@ -1,0 +1,629 @@
+// fdem/case.cpp: TOML case file -> validated CaseSpec (toml++ from Debian; no hand-written parser).
+#include "fdem/case.hpp"
+
+#include <toml++/toml.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <functional>
+#include <set>
+#include <sstream>
+
+#include "fdem/errors.hpp"
+
+namespace fdem {
+
+namespace {
+
+std::string fmt_num(double v) {
+    std::ostringstream s;
+    s << v;
+    return s.str();
+}
+
+std::size_t edit_distance(const std::string& a, const std::string& b) {
+    std::vector<std::size_t> prev(b.size() + 1), cur(b.size() + 1);
+    for (std::size_t j = 0; j <= b.size(); ++j) prev[j] = j;
+    for (std::size_t i = 1; i <= a.size(); ++i) {
+        cur[0] = i;
+        for (std::size_t j = 1; j <= b.size(); ++j)
+            cur[j] = std::min({prev[j] + 1, cur[j - 1] + 1, prev[j - 1] + (a[i - 1] == b[j - 1] ? 0 : 1)});
+        std::swap(prev, cur);
+    }
+    return prev[b.size()];
+}
+
+std::string describe(const toml::node& n) {
+    std::ostringstream s;
+    if (n.is_string()) s << '"' << *n.value<std::string>() << '"';
+    else if (n.is_table()) s << "a table";
+    else if (n.is_array()) s << "an array";
+    else n.visit([&](auto&& v) { s << v; });
+    return s.str();
+}
+
+// Where a problem is reported: the case file and the lines of its nodes, or --set for overridden keys.
+struct Ctx {
+    std::string file;
+    std::vector<std::string> errors;
+    std::set<std::string> set_paths;
+
+    std::string where(const std::string& path, int line) const {
+        for (const auto& p : set_paths)
+            if (path == p || path.rfind(p + ".", 0) == 0) return "--set " + p;
+        return file + ":" + std::to_string(line);
+    }
+    void error(const std::string& path, int line, const std::string& msg) {
+        errors.push_back(where(path, line) + ": key '" + path + "': " + msg);
+    }
+};
+
+int line_of(const toml::node* n) { return n ? static_cast<int>(n->source().begin.line) : 0; }
+
+// Reads the keys of one table; every key asked for is "known", and finish() reports the others.
+class Reader {
+public:
+    Reader(Ctx& ctx, const toml::table& t, std::string path) : ctx_(ctx), t_(t), path_(std::move(path)) {}
+
+    int line() const { return line_of(&t_); }
+    std::string key_path(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
+    bool has(const std::string& key) {
+        known_.insert(key);
+        return t_.contains(key);
+    }
+    const toml::node* node(const std::string& key, bool required, const std::string& expect) {
+        known_.insert(key);
+        const toml::node* n = t_.get(key);
+        if (!n && required) ctx_.error(key_path(key), line(), "missing; expected " + expect);
+        return n;
+    }
+    std::optional<double> number(const std::string& key, bool required, const std::string& expect,
+                                 const std::function<bool(double)>& ok = nullptr) {
+        const toml::node* n = node(key, required, expect);
+        if (!n) return std::nullopt;
+        if (!n->is_number()) {
+            ctx_.error(key_path(key), line_of(n), "expected " + expect + ", got " + describe(*n));
+            return std::nullopt;
+        }
+        const double v = *n->value<double>();
+        if (!std::isfinite(v) || (ok && !ok(v))) {
+            ctx_.error(key_path(key), line_of(n), "expected " + expect + ", got " + fmt_num(v));
+            return std::nullopt;
+        }
+        return v;
+    }
+    std::optional<int> integer(const std::string& key, bool required, const std::string& expect,
+                               const std::function<bool(long long)>& ok = nullptr) {
+        const toml::node* n = node(key, required, expect);
+        if (!n) return std::nullopt;
+        if (!n->is_integer() || (ok && !ok(*n->value<long long>()))) {
+            ctx_.error(key_path(key), line_of(n), "expected " + expect + ", got " + describe(*n));
+            return std::nullopt;
+        }
+        return static_cast<int>(*n->value<long long>());
+    }
+    std::optional<std::string> string(const std::string& key, bool required, const std::string& expect,
+                                      const std::vector<std::string>& allowed = {}) {
+        const toml::node* n = node(key, required, expect);
+        if (!n) return std::nullopt;
+        if (!n->is_string()) {
+            ctx_.error(key_path(key), line_of(n), "expected " + expect + ", got " + describe(*n));
+            return std::nullopt;
+        }
+        std::string v = *n->value<std::string>();
+        if (!allowed.empty() && std::find(allowed.begin(), allowed.end(), v) == allowed.end()) {
+            std::string list;
+            for (const auto& a : allowed) list += (list.empty() ? "\"" : ", \"") + a + "\"";
+            ctx_.error(key_path(key), line_of(n), "expected one of " + list + ", got \"" + v + "\"");
+            return std::nullopt;
+        }
+        return v;
+    }
+    std::optional<std::vector<double>> numbers(const std::string& key, bool required, const std::string& expect,
+                                               std::size_t exact_size = 0) {
+        const toml::node* n = node(key, required, expect);
+        if (!n) return std::nullopt;
+        const toml::array* a = n->as_array();
+        std::vector<double> out;
+        bool ok = a != nullptr;
+        if (a)
+            for (const auto& e : *a) {
+                if (!e.is_number() || !std::isfinite(*e.value<double>())) ok = false;
+                else out.push_back(*e.value<double>());
+            }
+        if (ok && exact_size && out.size() != exact_size) ok = false;
+        if (!ok) {
+            ctx_.error(key_path(key), line_of(n), "expected " + expect + ", got " + describe(*n));
+            return std::nullopt;
+        }
+        return out;
+    }
+    std::optional<std::array<double, 2>> vec2(const std::string& key, bool required, const std::string& expect) {
+        auto v = numbers(key, required, expect, 2);
+        if (!v) return std::nullopt;
+        return std::array<double, 2>{(*v)[0], (*v)[1]};
+    }
+    const toml::table* table(const std::string& key, bool required, const std::string& expect) {
+        const toml::node* n = node(key, required, expect);
+        if (!n) return nullptr;
+        if (!n->is_table()) {
+            ctx_.error(key_path(key), line_of(n), "expected " + expect + ", got " + describe(*n));
+            return nullptr;
+        }
+        return n->as_table();
+    }
+    // An array of tables ([[name]] blocks).
+    std::vector<const toml::table*> tables(const std::string& key, bool required, const std::string& expect) {
+        std::vector<const toml::table*> out;
+        const toml::node* n = node(key, required, expect);
+        if (!n) return out;
+        const toml::array* a = n->as_array();
+        if (!a || !a->is_array_of_tables()) {
+            ctx_.error(key_path(key), line_of(n), "expected " + expect + ", got " + describe(*n));
+            return out;
+        }
+        for (const auto& e : *a) out.push_back(e.as_table());
+        return out;
+    }
+    void finish() {
+        for (const auto& [k, v] : t_) {
+            const std::string key(k.str());
+            if (known_.count(key)) continue;
+            std::string best;
+            std::size_t best_d = 3;
+            for (const auto& cand : known_) {
+                const std::size_t d = edit_distance(key, cand);
+                if (d < best_d) best_d = d, best = cand;
+            }
+            std::string allowed;
+            for (const auto& cand : known_) allowed += (allowed.empty() ? "" : ", ") + cand;
+            ctx_.errors.push_back(ctx_.where(key_path(key), line_of(&v)) + ": unknown key '" + key_path(key) + "'" +
+                                  (best.empty() ? "" : "; did you mean '" + best + "'?") +
+                                  (allowed.empty() ? "" : " (allowed here: " + allowed + ")"));
+        }
+    }
+
+private:
+    Ctx& ctx_;
+    const toml::table& t_;
+    std::string path_;
+    std::set<std::string> known_;
+};
+
+// --set a.b.0.c=value: parse the value as TOML (a bare word becomes a string) and put it into the tree.
+void apply_override(toml::table& root, const std::string& spec, Ctx& ctx) {
+    const auto eq = spec.find('=');
+    if (eq == std::string::npos || eq == 0) throw InputError("--set " + spec + ": expected key=value, e.g. --set materials.stone.E=1e9");
+    const std::string path = spec.substr(0, eq), value = spec.substr(eq + 1);
+    toml::table parsed;
+    try {
+        parsed = toml::parse("v = " + value);
+    } catch (const toml::parse_error&) {
+        parsed = toml::table{{"v", value}};
+    }
+    std::vector<std::string> parts;
+    std::stringstream ss(path);
+    for (std::string p; std::getline(ss, p, '.');) parts.push_back(p);
+    toml::node* cur = &root;
+    for (std::size_t i = 0; i + 1 < parts.size(); ++i) {
+        const std::string& p = parts[i];
+        if (auto* t = cur->as_table()) {
+            if (!t->contains(p)) t->insert(p, toml::table{});
+            cur = t->get(p);
+        } else if (auto* a = cur->as_array()) {
+            char* end = nullptr;
+            const long idx = std::strtol(p.c_str(), &end, 10);
+            if (*end || idx < 0 || static_cast<std::size_t>(idx) >= a->size())
+                throw InputError("--set " + spec + ": '" + p + "' is not an index of the array (0.." +
+                                 std::to_string(static_cast<long>(a->size()) - 1) + ")");
+            cur = a->get(static_cast<std::size_t>(idx));
+        } else {
+            throw InputError("--set " + spec + ": '" + parts[i - 1] + "' is a value, not a table");
+        }
+    }
+    const std::string& last = parts.back();
+    const toml::node* v = parsed.get("v");
+    if (auto* t = cur->as_table()) {
+        v->visit([&](auto&& val) { t->insert_or_assign(last, val); });
+    } else if (auto* a = cur->as_array()) {
+        char* end = nullptr;
+        const long idx = std::strtol(last.c_str(), &end, 10);
+        if (*end || idx < 0 || static_cast<std::size_t>(idx) >= a->size())
+            throw InputError("--set " + spec + ": '" + last + "' is not an index of the array");
+        v->visit([&](auto&& val) { a->replace(a->cbegin() + idx, val); });
+    } else {
+        throw InputError("--set " + spec + ": the parent of '" + last + "' is a value, not a table");
+    }
+    ctx.set_paths.insert(path);
+}
+
+const std::vector<std::string> kComponents{"x", "y"};
+int component_index(const std::string& c) { return c == "y" ? 1 : 0; }
+
+void read_dof_set(Reader& r, const std::string& key, DofMode mode, SupportSpec& s) {
+    if (auto v = r.string(key, false, "\"x\", \"y\" or \"xy\"", {"x", "y", "xy"}))
+        for (char c : *v) s.mode[c == 'y' ? 1 : 0] = mode;
+}
+
+SupportSpec read_support(Ctx& ctx, const toml::table& t, const std::string& path) {
+    Reader r(ctx, t, path);
+    SupportSpec s;
+    s.line = r.line();
+    s.group = r.string("group", true, "the name of a group (Gmsh physical group)").value_or("");
+    read_dof_set(r, "fix", DofMode::fixed, s);
+    read_dof_set(r, "free", DofMode::free, s);
+    for (int c = 0; c < 2; ++c) {
+        const std::string key = c == 0 ? "vx" : "vy";
+        if (auto v = r.number(key, false, "a velocity in m/s")) {
+            if (s.mode[c] != DofMode::inherit)
+                ctx.error(r.key_path(key), r.line(), "component " + kComponents[c] + " is already fixed or freed in this support");
+            s.mode[c] = DofMode::velocity;
+            s.velocity[c] = *v;
+        }
+    }
+    s.ramp = r.number("ramp", false, "a ramp-up time >= 0 in s", [](double v) { return v >= 0; }).value_or(0.0);
+    auto add_protocol = [&](int comp, std::vector<double> t_pts, std::vector<double> u_pts, const std::string& key, int line) {
+        if (s.mode[comp] != DofMode::inherit) {
+            ctx.error(r.key_path(key), line, "component " + kComponents[comp] + " already has a support in this block");
+            return;
+        }
+        s.mode[comp] = DofMode::protocol;
+        s.protocol_t = std::move(t_pts);
+        s.protocol_u = std::move(u_pts);
+    };
+    if (const toml::table* p = r.table("protocol", false, "a table { component = \"x\", points = [[t, u], ...] }")) {
+        Reader pr(ctx, *p, r.key_path("protocol"));
+        const int comp = component_index(pr.string("component", true, "\"x\" or \"y\"", kComponents).value_or("x"));
+        const toml::node* pts = pr.node("points", true, "an array of [time s, displacement m] pairs");
+        std::vector<double> tt, uu;
+        bool ok = pts && pts->is_array() && pts->as_array()->size() >= 2;
+        if (ok)
+            for (const auto& e : *pts->as_array()) {
+                const toml::array* pair = e.as_array();
+                if (!pair || pair->size() != 2 || !(*pair)[0].is_number() || !(*pair)[1].is_number()) { ok = false; break; }
+                tt.push_back(*(*pair)[0].value<double>());
+                uu.push_back(*(*pair)[1].value<double>());
+            }
+        for (std::size_t i = 1; ok && i < tt.size(); ++i)
+            if (!(tt[i] > tt[i - 1])) ok = false;
+        if (pts && !ok)
+            ctx.error(pr.key_path("points"), line_of(pts),
+                      "expected at least two [time s, displacement m] pairs with strictly increasing times");
+        pr.finish();
+        if (ok) add_protocol(comp, tt, uu, "protocol", pr.line());
+    }
+    if (const toml::table* p = r.table("cyclic", false, "a table { component, amplitudes, cycles, rate }")) {
+        Reader pr(ctx, *p, r.key_path("cyclic"));
+        const int comp = component_index(pr.string("component", true, "\"x\" or \"y\"", kComponents).value_or("x"));
+        auto amps = pr.numbers("amplitudes", true, "an array of displacement amplitudes > 0 in m");
+        const int cycles = pr.integer("cycles", false, "a whole number of cycles per amplitude >= 1",
+                                      [](long long v) { return v >= 1; }).value_or(1);
+        auto rate = pr.number("rate", true, "a loading rate > 0 in m/s", [](double v) { return v > 0; });
+        pr.finish();
+        if (amps && rate) {
+            bool ok = !amps->empty();
+            for (double a : *amps) ok = ok && a > 0;
+            if (!ok) {
+                ctx.error(pr.key_path("amplitudes"), pr.line(), "expected a non-empty array of amplitudes > 0 in m");
+            } else {
+                // Each cycle: 0 -> +a -> 0 -> -a -> 0 at the constant rate.
+                std::vector<double> tt{0}, uu{0};
+                for (double a : *amps)
+                    for (int c = 0; c < cycles; ++c)
+                        for (double target : {a, 0.0, -a, 0.0}) {
+                            tt.push_back(tt.back() + std::abs(target - uu.back()) / *rate);
+                            uu.push_back(target);
+                        }
+                add_protocol(comp, tt, uu, "cyclic", pr.line());
+            }
+        }
+    }
+    if (s.mode[0] == DofMode::inherit && s.mode[1] == DofMode::inherit)
+        ctx.error(path, s.line, "a support needs fix, free, vx, vy, protocol or cyclic");
+    r.finish();
+    return s;
+}
+
+LoadSpec read_load(Ctx& ctx, const toml::table& t, const std::string& path) {
+    Reader r(ctx, t, path);
+    LoadSpec l;
+    l.line = r.line();
+    l.group = r.string("group", true, "the name of a group (Gmsh physical group)").value_or("");
+    auto force = r.vec2("force", false, "[Fx, Fy], the total force on the group in N");
+    auto pressure = r.number("pressure", false, "a pressure in Pa");
+    if (force && pressure) ctx.error(path, l.line, "give either force or pressure, not both");
+    if (!r.has("force") && !r.has("pressure")) ctx.error(path, l.line, "missing; expected force = [Fx, Fy] (N) or pressure (Pa)");
+    if (force) l.force = *force;
+    if (pressure) l.is_pressure = true, l.pressure = *pressure;
+    l.ramp = r.number("ramp", false, "a ramp time >= 0 in s", [](double v) { return v >= 0; }).value_or(0.0);
+    r.finish();
+    return l;
+}
+
+}  // namespace
+
+std::string MonitorSpec::unit() const {
+    if (type == "displacement") return "m";
+    if (type == "velocity") return "m/s";
+    if (type == "tilt") return "deg";
+    return "N";
+}
+
+int CaseSpec::material_index(const std::string& n) const {
+    for (std::size_t i = 0; i < materials.size(); ++i)
+        if (materials[i].name == n) return static_cast<int>(i);
+    return -1;
+}
+
+const MonitorSpec* CaseSpec::find_monitor(const std::string& n) const {
+    for (const auto& m : monitors)
+        if (m.name == n) return &m;
+    return nullptr;
+}
+
+CaseSpec load_case(const std::string& path, const std::vector<std::string>& overrides) {
+    namespace fs = std::filesystem;
+    if (!fs::exists(path)) throw InputError(path + ": no such case file");
+    toml::table root;
+    try {
+        root = toml::parse_file(path);
+    } catch (const toml::parse_error& e) {
+        throw InputError(path + ":" + std::to_string(e.source().begin.line) + ": TOML syntax error: " +
+                         std::string(e.description()));
+    }
+    Ctx ctx;
+    ctx.file = path;
+    CaseSpec spec;
+    spec.file = path;
+    spec.dir = fs::path(path).parent_path().string();
+    for (const auto& o : overrides) {
+        apply_override(root, o, ctx);
+        const auto eq = o.find('=');
+        spec.overrides.emplace_back(o.substr(0, eq), o.substr(eq + 1));
+    }
+
+    Reader top(ctx, root, "");
+    auto positive = [](double v) { return v > 0; };
+
+    if (const toml::table* t = top.table("case", true, "a [case] table")) {
+        Reader r(ctx, *t, "case");
+        spec.name = r.string("name", true, "a case name").value_or("");
+        spec.description = r.string("description", false, "a text").value_or("");
+        spec.thickness = r.number("thickness", true, "an out-of-plane thickness > 0 in m", positive).value_or(1.0);
+        spec.plane = r.string("plane", false, "\"stress\" or \"strain\"", {"stress", "strain"}).value_or("stress") == "strain"
+                         ? Plane::strain
+                         : Plane::stress;
+        r.finish();
+    }
+
+    if (const toml::table* t = top.table("geometry", true, "a [geometry] table")) {
+        Reader r(ctx, *t, "geometry");
+        GeometrySpec& g = spec.geometry;
+        g.line = r.line();
+        g.type = r.string("type", true, "the geometry source", {"rectangle", "gmsh", "msh"}).value_or("");
+        if (g.type == "rectangle") {
+            auto origin = r.vec2("origin", false, "[x0, y0] in m");
+            if (origin) g.x0 = (*origin)[0], g.y0 = (*origin)[1];
+            g.width = r.number("width", true, "a width > 0 in m", positive).value_or(1);
+            g.height = r.number("height", true, "a height > 0 in m", positive).value_or(1);
+            g.mesh_size = r.number("mesh_size", true, "a mesh size > 0 in m", positive).value_or(1);
+            if (g.mesh_size > 0 && std::min(g.width, g.height) / g.mesh_size > 5000)
+                ctx.error("geometry.mesh_size", g.line, "a mesh size of " + fmt_num(g.mesh_size) +
+                          " m gives more than 5000 elements across the rectangle; expected a coarser size");
+        } else if (g.type == "gmsh" || g.type == "msh") {
+            if (auto f = r.string("file", true, g.type == "gmsh" ? "the path of a .geo script" : "the path of a .msh file")) {
+                fs::path p(*f);
+                if (p.is_relative()) p = fs::path(spec.dir) / p;
+                g.file = p.string();
+                if (!fs::exists(p)) ctx.error("geometry.file", line_of(t->get("file")), "no such file '" + g.file + "'");
+            }
+            if (g.type == "gmsh")
+                g.size_factor = r.number("size_factor", false, "a factor > 0 on the script's mesh sizes", positive).value_or(1.0);
+        }
+        r.finish();
+    }
+
+    if (const toml::table* t = top.table("materials", true, "a [materials.NAME] table per material")) {
+        for (const auto& [k, v] : *t) {
+            Material m;
+            m.name = std::string(k.str());
+            const std::string p = "materials." + m.name;
+            if (!v.is_table()) {
+                ctx.error(p, line_of(&v), "expected a table of material properties (E, nu, density)");
+                continue;
+            }
+            Reader r(ctx, *v.as_table(), p);
+            m.line = r.line();
+            m.E = r.number("E", true, "Young's modulus > 0 in Pa", positive).value_or(1);
+            m.nu = r.number("nu", true, "Poisson's ratio in (-1, 0.5)", [](double x) { return x > -1 && x < 0.5; }).value_or(0);
+            m.density = r.number("density", true, "a density > 0 in kg/m^3", positive).value_or(1);
+            m.viscous_damping = r.number("viscous_damping", false, "a fraction of critical damping in [0, 1]",
+                                         [](double x) { return x >= 0 && x <= 1; }).value_or(0);
+            r.finish();
+            spec.materials.push_back(m);
+        }
+        if (spec.materials.empty()) ctx.error("materials", line_of(t), "expected at least one [materials.NAME] table");
+    }
+
+    if (const toml::table* t = top.table("regions", true, "a [regions] table mapping each region to a material")) {
+        for (const auto& [k, v] : *t) {
+            const std::string p = "regions." + std::string(k.str());
+            if (!v.is_string()) {
+                ctx.error(p, line_of(&v), "expected the name of a material, got " + describe(v));
+                continue;
+            }
+            const std::string mat = *v.value<std::string>();
+            if (spec.material_index(mat) < 0)
+                ctx.error(p, line_of(&v), "no material named '" + mat + "' in [materials]");
+            spec.region_material[std::string(k.str())] = mat;
+        }
+    }
+
+    for (const toml::table* t : top.tables("monitors", false, "[[monitors]] blocks")) {
+        const std::string p = "monitors." + std::to_string(spec.monitors.size());
+        Reader r(ctx, *t, p);
+        MonitorSpec m;
+        m.line = r.line();
+        m.name = r.string("name", true, "a column name for history.csv").value_or("");
+        m.type = r.string("type", true, "the monitored quantity", {"displacement", "velocity", "reaction", "load", "tilt"}).value_or("displacement");
+        if (m.type != "tilt") {
+            m.group = r.string("group", true, "the name of a group").value_or("");
+            m.component = component_index(r.string("component", true, "\"x\" or \"y\"", kComponents).value_or("x"));
+        }
+        r.finish();
+        static const std::set<std::string> reserved{"time", "step", "stage", "E_kin", "E_el", "E_joint", "E_contact",
+                                                    "W_ext", "D_damp", "D_visc", "D_frac", "D_fric", "E_balance"};
+        if (reserved.count(m.name) || spec.find_monitor(m.name))
+            ctx.error(p + ".name", m.line, "the name '" + m.name + "' is already used by another column");
+        if (!m.name.empty() && m.name.find_first_of(", \"\n") != std::string::npos)
+            ctx.error(p + ".name", m.line, "expected a name without commas, spaces or quotes");
+        spec.monitors.push_back(m);
+    }
+
+    if (const toml::table* t = top.table("numerics", false, "a [numerics] table")) {
+        Reader r(ctx, *t, "numerics");
+        spec.safety = r.number("safety", false, "a time-step safety factor in (0, 1]", [](double v) { return v > 0 && v <= 1; }).value_or(0.8);
+        if (auto dt = r.number("dt", false, "a fixed time step > 0 in s", positive)) spec.dt_override = dt;
+        r.finish();
+    }
+
+    if (const toml::table* t = top.table("output", false, "an [output] table")) {
+        Reader r(ctx, *t, "output");
+        spec.history_interval = r.number("history_interval", false, "an interval > 0 in s", positive).value_or(0);
+        spec.snapshot_interval = r.number("snapshot_interval", false, "an interval > 0 in s", positive).value_or(0);
+        if (const toml::table* c = r.table("curve", false, "a table { x = MONITOR, y = MONITOR }")) {
+            Reader cr(ctx, *c, "output.curve");
+            spec.curve_x = cr.string("x", true, "the monitor of the control displacement").value_or("");
+            spec.curve_y = cr.string("y", true, "the monitor of the load").value_or("");
+            cr.finish();
+            for (const auto* n : {&spec.curve_x, &spec.curve_y})
+                if (!n->empty() && !spec.find_monitor(*n))
+                    ctx.error("output.curve", cr.line(), "no monitor named '" + *n + "' in [[monitors]]");
+        }
+        r.finish();
+    }
+
+    if (const toml::table* t = top.table("reference", false, "a [reference] table")) {
+        Reader r(ctx, *t, "reference");
+        ReferenceSpec& ref = spec.reference;
+        ref.present = true;
+        ref.monitor = r.string("monitor", true, "the monitor compared with the reference").value_or("");
+        ref.quantity = r.string("quantity", false, "\"peak\" or \"final\"", {"peak", "final"}).value_or("peak");
+        ref.value = r.number("value", true, "the reference value in the monitor's unit").value_or(0);
+        ref.tolerance = r.number("tolerance", false, "a relative tolerance >= 0", [](double v) { return v >= 0; }).value_or(0);
+        ref.source = r.string("source", true, "where the reference value comes from").value_or("");
+        if (!ref.monitor.empty() && !spec.find_monitor(ref.monitor))
+            ctx.error("reference.monitor", r.line(), "no monitor named '" + ref.monitor + "' in [[monitors]]");
+        r.finish();
+    }
+
+    const auto stage_tables = top.tables("stages", true, "at least one [[stages]] block");
+    for (std::size_t si = 0; si < stage_tables.size(); ++si) {
+        const std::string p = "stages." + std::to_string(si);
+        Reader r(ctx, *stage_tables[si], p);
+        StageSpec s;
+        s.line = r.line();
+        s.name = r.string("name", false, "a stage name").value_or("stage " + std::to_string(si + 1));
+        s.duration = r.number("duration", false, "a duration > 0 in s", positive);
+        s.max_duration = r.number("max_duration", false, "a time limit > 0 in s", positive);
+        s.equilibrium = r.number("equilibrium", false, "an unbalanced-force ratio in (0, 1)", [](double v) { return v > 0 && v < 1; });
+        if (const toml::table* u = r.table("until", false, "a table { monitor = NAME, value = V }")) {
+            Reader ur(ctx, *u, p + ".until");
+            s.until_monitor = ur.string("monitor", true, "the name of a monitor");
+            s.until_value = ur.number("value", true, "the monitor value that ends the stage").value_or(0);
+            ur.finish();
+            if (s.until_monitor && !spec.find_monitor(*s.until_monitor))
+                ctx.error(p + ".until.monitor", ur.line(), "no monitor named '" + *s.until_monitor + "' in [[monitors]]");
+        }
+        s.gravity = r.vec2("gravity", false, "[gx, gy] in m/s^2");
+        s.gravity_ramp = r.number("gravity_ramp", false, "a ramp time >= 0 in s", [](double v) { return v >= 0; }).value_or(0);
+        s.tilt_rate = r.number("tilt_rate", false, "a rotation rate of gravity in deg/s").value_or(0);
+        s.local_damping = r.number("local_damping", false, "a local damping coefficient in [0, 1)", [](double v) { return v >= 0 && v < 1; });
+        s.history_interval = r.number("history_interval", false, "an interval > 0 in s", positive);
+        s.snapshot_interval = r.number("snapshot_interval", false, "an interval > 0 in s", positive);
+        const auto loads = r.tables("loads", false, "[[stages.loads]] blocks");
+        for (std::size_t i = 0; i < loads.size(); ++i) s.loads.push_back(read_load(ctx, *loads[i], p + ".loads." + std::to_string(i)));
+        const auto sups = r.tables("supports", false, "[[stages.supports]] blocks");
+        for (std::size_t i = 0; i < sups.size(); ++i)
+            s.supports.push_back(read_support(ctx, *sups[i], p + ".supports." + std::to_string(i)));
+        r.finish();
+
+        // A stage must be able to end.
+        if (!s.duration && !s.until_monitor && !s.equilibrium)
+            ctx.error(p, s.line, "this stage can never end: give duration (s), until = { monitor, value } or equilibrium");
+        bool driven = false;
+        if (s.until_monitor) {
+            const MonitorSpec* m = spec.find_monitor(*s.until_monitor);
+            if (m && m->type == "displacement")
+                for (const auto& sup : s.supports)
+                    if (sup.group == m->group &&
+                        ((sup.mode[m->component] == DofMode::velocity && sup.velocity[m->component] != 0) ||
+                         sup.mode[m->component] == DofMode::protocol))
+                        driven = true;
+            if (m && m->type == "displacement")
+                for (const auto& sup : s.supports)
+                    if (sup.group == m->group && sup.mode[m->component] == DofMode::velocity && sup.velocity[m->component] == 0)
+                        ctx.error(p + ".until", s.line, "this stage can never end: monitor '" + m->name +
+                                  "' is held by a zero velocity in this stage");
+        }
+        if ((s.until_monitor || s.equilibrium) && !s.duration && !s.max_duration && !driven)
+            ctx.error(p, s.line, "this stage may never end: with until (on a monitor not driven by a prescribed velocity) or "
+                                 "equilibrium, give max_duration (s) as a bound");
+        spec.stages.push_back(std::move(s));
+    }
+    top.finish();
+
+    // Until-targets on a driven displacement must lie in the direction of the velocity (from zero for stage 1).
+    if (!ctx.errors.empty()) throw InputError(ctx.errors);
+    return spec;
+}
+
+void check_against_mesh(const CaseSpec& spec, const MeshNames& names) {
+    std::vector<std::string> errors;
+    auto has_group = [&](const std::string& g) {
+        return std::find(names.groups.begin(), names.groups.end(), g) != names.groups.end();
+    };
+    std::string available;
+    for (const auto& g : names.groups) available += (available.empty() ? "" : ", ") + g;
+    auto missing = [&](const std::string& key, int line, const std::string& g) {
+        errors.push_back(spec.file + ":" + std::to_string(line) + ": key '" + key + "': no group named '" + g +
+                         "' in the mesh (groups: " + available + ")");
+    };
+    for (const auto& r : names.regions)
+        if (!spec.region_material.count(r))
+            errors.push_back(spec.file + ": key 'regions." + r + "': missing; the mesh has a region '" + r +
+                             "' and every region needs a material");
+    for (const auto& [r, m] : spec.region_material)
+        if (std::find(names.regions.begin(), names.regions.end(), r) == names.regions.end()) {
+            std::string regs;
+            for (const auto& x : names.regions) regs += (regs.empty() ? "" : ", ") + x;
+            errors.push_back(spec.file + ": key 'regions." + r + "': the mesh has no region (2D physical group) named '" +
+                             r + "' (regions: " + regs + ")");
+        }
+    for (std::size_t i = 0; i < spec.monitors.size(); ++i) {
+        const auto& m = spec.monitors[i];
+        if (m.type != "tilt" && !has_group(m.group)) missing("monitors." + std::to_string(i) + ".group", m.line, m.group);
+    }
+    for (std::size_t si = 0; si < spec.stages.size(); ++si) {
+        const auto& s = spec.stages[si];
+        for (std::size_t i = 0; i < s.loads.size(); ++i)
+            if (!has_group(s.loads[i].group))
+                missing("stages." + std::to_string(si) + ".loads." + std::to_string(i) + ".group", s.loads[i].line, s.loads[i].group);
+        for (std::size_t i = 0; i < s.supports.size(); ++i)
+            if (!has_group(s.supports[i].group))
+                missing("stages." + std::to_string(si) + ".supports." + std::to_string(i) + ".group", s.supports[i].line,
+                        s.supports[i].group);
+        for (std::size_t i = 0; i < s.loads.size(); ++i) {
+            if (!s.loads[i].is_pressure) continue;
+            for (std::size_t g = 0; g < names.groups.size(); ++g)
+                if (names.groups[g] == s.loads[i].group && names.group_dims[g] != 1)
+                    errors.push_back(spec.file + ":" + std::to_string(s.loads[i].line) + ": key 'stages." + std::to_string(si) +
+                                     ".loads." + std::to_string(i) + ".pressure': group '" + s.loads[i].group +
+                                     "' is not a curve (1D physical group); a pressure needs edges");
+        }
+    }
+    if (!errors.empty()) throw InputError(errors);
+}
+
+}  // namespace fdem

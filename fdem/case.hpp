@@ -1,0 +1,139 @@
+// fdem/case.hpp: a simulation case as read from its TOML file, validated, in SI units.
+//
+// The loader checks every key: missing required keys, wrong types, unknown keys (with a suggestion),
+// non-physical values, references to groups or monitors that do not exist, stages that can never end.
+// All problems found are reported together, each as "FILE:LINE: key 'a.b.c': what was expected".
+// Values given with --set are reported as coming from "--set".
+#pragma once
+
+#include <array>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace fdem {
+
+enum class Plane { stress, strain };
+
+struct Material {
+    std::string name;
+    double E = 0;                // Young's modulus, Pa
+    double nu = 0;               // Poisson's ratio, -
+    double density = 0;          // kg/m^3
+    double viscous_damping = 0;  // fraction of the element's critical viscous damping xi, - (FORMULATION §2)
+    int line = 0;
+};
+
+struct GeometrySpec {
+    std::string type;  // "rectangle" | "gmsh" | "msh"
+    // rectangle
+    double x0 = 0, y0 = 0;  // lower-left corner, m
+    double width = 0;       // m
+    double height = 0;      // m
+    double mesh_size = 0;   // target triangle size, m
+    // gmsh (.geo script) / msh (mesh file); paths relative to the case file
+    std::string file;
+    double size_factor = 1;  // multiplies the .geo script's mesh sizes, -
+    int line = 0;
+};
+
+// A force or pressure on a group, kept (and ramped from its previous value) in later stages until changed.
+struct LoadSpec {
+    std::string group;
+    bool is_pressure = false;
+    std::array<double, 2> force{0, 0};  // total force on the group, N (whole thickness), distributed by tributary length
+    double pressure = 0;                // Pa, acting against the current outward normal of the group's edges
+    double ramp = 0;                    // s, linear ramp from the previous value
+    int line = 0;
+};
+
+enum class DofMode { inherit, free, fixed, velocity, protocol };
+
+// A support on a group: per component free, fixed, a prescribed velocity (smooth ramp-up), or a
+// piecewise-linear displacement-versus-time protocol. Kept in later stages until changed.
+struct SupportSpec {
+    std::string group;
+    std::array<DofMode, 2> mode{DofMode::inherit, DofMode::inherit};
+    std::array<double, 2> velocity{0, 0};  // m/s
+    double ramp = 0;                       // s, smooth (1 - cos) ramp-up of a prescribed velocity
+    // protocol for one component: times (s, from the stage start) and displacements (m, relative to the stage start)
+    std::vector<double> protocol_t, protocol_u;
+    int line = 0;
+};
+
+struct MonitorSpec {
+    std::string name;
+    std::string type;  // "displacement" | "velocity" | "reaction" | "load" | "tilt"
+    std::string group;
+    int component = 0;  // 0 = x, 1 = y
+    std::string unit() const;
+    int line = 0;
+};
+
+struct StageSpec {
+    std::string name;
+    int line = 0;
+    // termination (at least one of duration / until / equilibrium)
+    std::optional<double> duration;      // s
+    std::optional<std::string> until_monitor;
+    double until_value = 0;              // in the monitor's unit
+    std::optional<double> equilibrium;   // unbalanced-force ratio, -
+    std::optional<double> max_duration;  // s, bound for until / equilibrium
+    // gravity: vector (m/s^2), ramp (s), and a slow counter-clockwise rotation of the vector (deg/s, tilting tests)
+    std::optional<std::array<double, 2>> gravity;
+    double gravity_ramp = 0;
+    double tilt_rate = 0;
+    std::optional<double> local_damping;  // alpha of FORMULATION §4, 0 <= alpha < 1
+    std::vector<LoadSpec> loads;
+    std::vector<SupportSpec> supports;
+    std::optional<double> history_interval;   // s
+    std::optional<double> snapshot_interval;  // s
+};
+
+struct ReferenceSpec {
+    std::string monitor;   // monitor compared
+    std::string quantity;  // "peak" (largest absolute value) | "final"
+    double value = 0;      // in the monitor's unit
+    double tolerance = 0;  // relative, for the pass/fail line (0: report only)
+    std::string source;
+    bool present = false;
+};
+
+struct CaseSpec {
+    std::string file;  // path of the case file
+    std::string dir;   // its folder (relative paths in the case are taken from here)
+    std::string name, description;
+    double thickness = 0;  // out-of-plane thickness, m
+    Plane plane = Plane::stress;
+    GeometrySpec geometry;
+    std::vector<Material> materials;
+    std::map<std::string, std::string> region_material;  // region (2D physical group) -> material name
+    std::vector<MonitorSpec> monitors;
+    std::vector<StageSpec> stages;
+    double safety = 0.8;  // fraction of the stable time step used, -
+    std::optional<double> dt_override;  // s, a fixed time step (tests of the stability limit), bypasses the safety factor
+    double history_interval = 0;   // s; 0 = every 100 steps
+    double snapshot_interval = 0;  // s; 0 = only at the end of each stage
+    std::string curve_x, curve_y;  // monitors forming the load-displacement curve (optional)
+    ReferenceSpec reference;
+    std::vector<std::pair<std::string, std::string>> overrides;  // --set key=value as given
+
+    int material_index(const std::string& name) const;
+    const MonitorSpec* find_monitor(const std::string& name) const;
+};
+
+// Reads and validates a case file. `overrides` are "dotted.key=value" strings (the --set option);
+// a value is parsed as TOML and taken as a string if that fails. Throws InputError listing every problem.
+CaseSpec load_case(const std::string& path, const std::vector<std::string>& overrides = {});
+
+// Checks that concern the mesh: every region has a material, every group a case refers to exists.
+// `groups` are the mesh's physical group names, `regions` its 2D physical groups. Throws InputError.
+struct MeshNames {
+    std::vector<std::string> regions;
+    std::vector<std::string> groups;
+    std::vector<int> group_dims;
+};
+void check_against_mesh(const CaseSpec& spec, const MeshNames& names);
+
+}  // namespace fdem

@@ -1,0 +1,114 @@
+// fdem/model.cpp: Mesh + CaseSpec -> Model (masses, reference data, incidence).
+#include "fdem/model.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "fdem/errors.hpp"
+
+namespace fdem {
+
+const mesh::PhysicalGroup& Model::group(const std::string& name) const {
+    const auto* g = mesh.find_group(name);
+    if (!g) throw InputError("no group named '" + name + "' in the mesh");
+    return *g;
+}
+
+double p_wave_speed(const Material& m, Plane plane) {
+    // Plane stress: sqrt(E / (rho (1 - nu^2))); plane strain: sqrt(E (1 - nu) / (rho (1 + nu)(1 - 2 nu))).
+    if (plane == Plane::stress) return std::sqrt(m.E / (m.density * (1 - m.nu * m.nu)));
+    return std::sqrt(m.E * (1 - m.nu) / (m.density * (1 + m.nu) * (1 - 2 * m.nu)));
+}
+
+Model build_model(const CaseSpec& spec, mesh::Mesh mesh) {
+    Model md;
+    md.thickness = spec.thickness;
+    md.plane = spec.plane;
+    const int nn = mesh.n_nodes(), nt = mesh.n_triangles();
+
+    // Material constants, indexed like spec.materials.
+    for (const auto& m : spec.materials) {
+        MaterialConst c;
+        c.mu = m.E / (2 * (1 + m.nu));
+        c.lambda = spec.plane == Plane::stress ? m.E * m.nu / (1 - m.nu * m.nu) : m.E * m.nu / ((1 + m.nu) * (1 - 2 * m.nu));
+        md.mat.push_back(c);
+    }
+    std::vector<int> region_mat(mesh.regions.size(), -1);
+    for (std::size_t r = 0; r < mesh.regions.size(); ++r) {
+        auto it = spec.region_material.find(mesh.regions[r]);
+        if (it == spec.region_material.end())
+            throw InputError(spec.file + ": key 'regions." + mesh.regions[r] + "': missing; every region needs a material");
+        region_mat[r] = spec.material_index(it->second);
+    }
+
+    md.X = mesh.xy;
+    md.x = mesh.xy;
+    md.v.assign(2 * nn, 0.0);
+    md.mass.assign(nn, 0.0);
+    md.tris.resize(nt);
+    md.tri_material.resize(nt);
+    md.tri_altitude.resize(nt);
+    for (int e = 0; e < nt; ++e) {
+        const int* n = &mesh.tri[3 * e];
+        const double* p = mesh.xy.data();
+        const double d00 = p[2 * n[1]] - p[2 * n[0]], d10 = p[2 * n[1] + 1] - p[2 * n[0] + 1];
+        const double d01 = p[2 * n[2]] - p[2 * n[0]], d11 = p[2 * n[2] + 1] - p[2 * n[0] + 1];
+        const double det = d00 * d11 - d01 * d10;  // 2 A0
+        const int r = mesh.tri_region[e];
+        if (!(det > 0))
+            throw mesh::MeshError("triangle " + std::to_string(e) + " in region '" + mesh.regions[r] +
+                                  "' has a non-positive reference area");
+        const int mi = region_mat[r];
+        const Material& mat = spec.materials[mi];
+        TriangleRef& t = md.tris[e];
+        t.n[0] = n[0], t.n[1] = n[1], t.n[2] = n[2];
+        t.mat = mi;
+        t.Dinv[0] = d11 / det, t.Dinv[1] = -d01 / det, t.Dinv[2] = -d10 / det, t.Dinv[3] = d00 / det;
+        const double A0 = 0.5 * det;
+        t.A0t = A0 * spec.thickness;
+        // Smallest altitude = 2 A0 / longest edge.
+        const double l0 = std::hypot(d00, d10), l1 = std::hypot(d01, d11), l2 = std::hypot(d01 - d00, d11 - d10);
+        const double h = det / std::max({l0, l1, l2});
+        md.tri_altitude[e] = h;
+        // [M04]: eta = xi 2 h sqrt(E rho), xi = 1 critical.
+        t.eta = mat.viscous_damping * 2 * h * std::sqrt(mat.E * mat.density);
+        md.tri_material[e] = mi;
+        const double m3 = mat.density * t.A0t / 3.0;  // lumped mass, FORMULATION §1
+        for (int k = 0; k < 3; ++k) md.mass[n[k]] += m3;
+    }
+    md.inv_mass.resize(nn);
+    for (int k = 0; k < nn; ++k) {
+        if (!(md.mass[k] > 0)) throw mesh::MeshError("node " + std::to_string(k) + " belongs to no triangle");
+        md.inv_mass[k] = 1.0 / md.mass[k];
+    }
+    // Incidence CSR in increasing (triangle, local) order.
+    md.inc_ptr.assign(nn + 1, 0);
+    for (int e = 0; e < nt; ++e)
+        for (int k = 0; k < 3; ++k) ++md.inc_ptr[md.tris[e].n[k] + 1];
+    for (int k = 0; k < nn; ++k) md.inc_ptr[k + 1] += md.inc_ptr[k];
+    md.inc_idx.resize(3 * nt);
+    std::vector<int> fill(md.inc_ptr.begin(), md.inc_ptr.end() - 1);
+    for (int e = 0; e < nt; ++e)
+        for (int k = 0; k < 3; ++k) md.inc_idx[fill[md.tris[e].n[k]]++] = 3 * e + k;
+    md.mesh = std::move(mesh);
+    return md;
+}
+
+StepLimit triangle_step_limit(const CaseSpec& spec, const Model& model) {
+    StepLimit lim;
+    lim.dt = 1e300;
+    std::vector<double> factor(spec.materials.size());
+    for (std::size_t i = 0; i < spec.materials.size(); ++i) {
+        const double xi = spec.materials[i].viscous_damping;
+        // Damped central difference: dt <= (2 / omega) (sqrt(1 + xi^2) - xi).
+        factor[i] = (std::sqrt(1 + xi * xi) - xi) / p_wave_speed(spec.materials[i], spec.plane);
+    }
+    for (int e = 0; e < model.n_triangles(); ++e) {
+        const double dt = model.tri_altitude[e] * factor[model.tri_material[e]];
+        if (dt < lim.dt) lim.dt = dt, lim.element = e;
+    }
+    return lim;
+}
+
+}  // namespace fdem

@@ -1,0 +1,55 @@
+// fdem/model.hpp: the model state the integrator advances.
+//
+// DATA LAYOUT
+//   Hot node state, structure of arrays, 2 doubles per node (x then y): X (reference), x (current),
+//   v (velocity at the half step), plus mass and inv_mass (one per node; inv_mass = 0 never happens for a
+//   node of a triangle). Triangles: TriangleRef records (64 bytes). Node -> triangle-force incidence as CSR
+//   (inc_ptr, inc_idx): inc_idx holds 3 * triangle + local node, in increasing order, so the gather of the
+//   per-triangle forces adds them in the same order whatever the thread count.
+//   Cold data (names, groups, regions) stays in `mesh`.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "fdem/case.hpp"
+#include "fdem/triangle.hpp"
+#include "mesh/mesh.hpp"
+
+namespace fdem {
+
+struct Model {
+    mesh::Mesh mesh;  // cold: regions, groups (node and edge lists by name)
+    double thickness = 1;  // m
+    Plane plane = Plane::stress;
+
+    std::vector<double> X, x, v;        // 2 per node: m, m, m/s
+    std::vector<double> mass, inv_mass;  // per node: kg, 1/kg
+    std::vector<TriangleRef> tris;
+    std::vector<MaterialConst> mat;
+    std::vector<int> tri_material;       // per triangle, index into CaseSpec::materials
+    std::vector<double> tri_altitude;    // per triangle: smallest altitude in the reference configuration, m
+    std::vector<int> inc_ptr, inc_idx;   // node -> 3 * triangle + local
+
+    int n_nodes() const { return static_cast<int>(mass.size()); }
+    int n_triangles() const { return static_cast<int>(tris.size()); }
+    const mesh::PhysicalGroup& group(const std::string& name) const;
+};
+
+// Builds the model: lumped masses rho t A0 / 3 per node (FORMULATION §1), precomputed D0^-1, A0, altitudes,
+// material constants (plane stress or strain), viscous coefficients. Throws InputError for a region without
+// material and mesh::MeshError for a triangle with non-positive reference area.
+Model build_model(const CaseSpec& spec, mesh::Mesh mesh);
+
+// Stable time step of the triangles alone (FORMULATION §3): min over triangles of h_e / c_p, reduced for
+// viscous damping by (sqrt(1 + xi^2) - xi). Returns the limit (s) and the triangle that sets it.
+struct StepLimit {
+    double dt = 0;  // s
+    int element = -1;
+};
+StepLimit triangle_step_limit(const CaseSpec& spec, const Model& model);
+
+// P-wave speed of a material in the plane model, m/s.
+double p_wave_speed(const Material& m, Plane plane);
+
+}  // namespace fdem

@@ -1,0 +1,780 @@
+// fdem/simulation.cpp: the explicit central-difference integrator and everything around it.
+//
+// One step (FORMULATION §3, §4), with x^n, v^{n-1/2} known:
+//   1. loads, gravity and prescribed velocities at time t^n (ramps, protocols, tilting);
+//   2. triangle forces f_int(x^n, v^{n-1/2}) in parallel, one 6-double record per triangle;
+//   3. node loop in parallel: gather the triangle records in CSR order, add applied loads and gravity,
+//      local damping f_d = -alpha |f| sign(v) on free DOFs ([C79]), then
+//      v^{n+1/2} = v^{n-1/2} + dt (f + f_d) / m, or the prescribed value (reaction = m dv/dt - f),
+//      x^{n+1} = x^n + dt v^{n+1/2}.
+// Determinism: every parallel loop writes per-item results or per-block partial sums over fixed blocks of
+// kBlock items; partials are added serially in block order. No result depends on the thread count.
+// Energy: with vbar = (v^{n-1/2} + v^{n+1/2}) / 2, the kinetic energy change over a step is exactly
+// sum dt f . vbar, so external work and damping are accumulated as dt f . vbar and the balance
+// W_ext = K + E_el + D_damp + D_visc holds up to the O(dt^2) error of E_el alone.
+#include "fdem/simulation.hpp"
+
+#include <omp.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <map>
+#include <set>
+#include <sstream>
+
+#include "fdem/errors.hpp"
+#include "mesh/gmsh_source.hpp"
+
+namespace fdem {
+
+namespace {
+constexpr int kBlock = 4096;
+constexpr double kPi = 3.14159265358979323846;
+
+double wall_clock() {
+    using namespace std::chrono;
+    return duration<double>(steady_clock::now().time_since_epoch()).count();
+}
+
+std::string human_time(double s) {
+    char b[64];
+    if (s < 60) std::snprintf(b, sizeof b, "%.1f s", s);
+    else if (s < 3600) std::snprintf(b, sizeof b, "%dm%02ds", static_cast<int>(s / 60), static_cast<int>(s) % 60);
+    else std::snprintf(b, sizeof b, "%dh%02dm", static_cast<int>(s / 3600), (static_cast<int>(s) % 3600) / 60);
+    return b;
+}
+
+std::string sci(double v, int prec = 4) {
+    char b[48];
+    std::snprintf(b, sizeof b, "%.*g", prec, v);
+    return b;
+}
+}  // namespace
+
+double Energies::balance_error() const {
+    const double lhs = external, rhs = kinetic + elastic + damping + viscous;
+    const double scale = std::max({std::abs(external), std::abs(kinetic) + std::abs(elastic) + damping + viscous, 1e-300});
+    return std::abs(lhs - rhs) / scale;
+}
+
+mesh::Mesh make_mesh(const CaseSpec& spec) {
+    const GeometrySpec& g = spec.geometry;
+    mesh::Mesh m;
+    try {
+        if (g.type == "rectangle") m = mesh::mesh_rectangle(g.x0, g.y0, g.width, g.height, g.mesh_size);
+        else if (g.type == "gmsh") m = mesh::mesh_geo_file(g.file, g.size_factor);
+        else if (g.type == "msh") m = mesh::read_msh_file(g.file);
+        else throw InputError(spec.file + ": key 'geometry.type': unsupported geometry '" + g.type + "'");
+    } catch (const mesh::MeshError& e) {
+        throw InputError(spec.file + ":" + std::to_string(g.line) + ": [geometry]: " + e.what());
+    }
+    MeshNames names;
+    names.regions = m.regions;
+    for (const auto& grp : m.groups) names.groups.push_back(grp.name), names.group_dims.push_back(grp.dim);
+    check_against_mesh(spec, names);
+    return m;
+}
+
+Simulation::Simulation(CaseSpec spec, Model model, RunOptions options)
+    : spec_(std::move(spec)), model_(std::move(model)), opt_(std::move(options)) {
+    if (opt_.threads > 0) omp_set_num_threads(opt_.threads);
+    const int nn = model_.n_nodes(), nt = model_.n_triangles();
+    dof_kind_.assign(2 * nn, 0);
+    dof_owner_.assign(2 * nn, -1);
+    dof_vel_.assign(2 * nn, 0.0);
+    reaction_.assign(2 * nn, 0.0);
+    f_ext_.assign(2 * nn, 0.0);
+    f_mod_.assign(2 * nn, 0.0);
+    tf_.assign(6 * static_cast<std::size_t>(nt), 0.0);
+    const int nb = std::max((nn + kBlock - 1) / kBlock, (nt + kBlock - 1) / kBlock);
+    block_a_.assign(nb, 0), block_b_.assign(nb, 0), block_c_.assign(nb, 0), block_d_.assign(nb, 0);
+    block_bad_.assign(nb, -1);
+    mon_ext_.assign(spec_.monitors.size(), {0, 0, 0});
+    compute_dt();
+    wall_start_ = wall_clock();
+    if (!opt_.out_dir.empty()) {
+        std::filesystem::create_directories(std::filesystem::path(opt_.out_dir) / "snapshots");
+        // History header: time, step, stage, monitors, energies.
+        history_ = "time,step,stage";
+        for (const auto& m : spec_.monitors) history_ += "," + m.name;
+        history_ += ",E_kin,E_el,W_ext,D_damp,D_visc,E_balance\n";
+    }
+}
+
+void Simulation::compute_dt() {
+    const StepLimit lim = triangle_step_limit(spec_, model_);
+    dt_limit_ = lim.dt;
+    dt_element_ = lim.element;
+    dt_ = spec_.dt_override ? *spec_.dt_override : spec_.safety * lim.dt;
+}
+
+void Simulation::log(const std::string& line) {
+    log_ += line + "\n";
+    if (!opt_.quiet) std::cout << line << std::endl;
+}
+
+double Simulation::protocol_displacement(const ActiveSupport& s, double tau) const {
+    if (tau <= s.pt.front()) return s.pu.front();
+    if (tau >= s.pt.back()) return s.pu.back();
+    const auto it = std::upper_bound(s.pt.begin(), s.pt.end(), tau);
+    const std::size_t i = static_cast<std::size_t>(it - s.pt.begin());
+    const double w = (tau - s.pt[i - 1]) / (s.pt[i] - s.pt[i - 1]);
+    return s.pu[i - 1] + w * (s.pu[i] - s.pu[i - 1]);
+}
+
+void Simulation::begin_stage(int s) {
+    const StageSpec& st = spec_.stages[s];
+    stage_ = s;
+    stage_t0_ = time_;
+    stage_steps0_ = steps_;
+    stage_ramp_end_ = time_;
+    const int nn = model_.n_nodes();
+
+    if (st.local_damping) alpha_ = *st.local_damping;
+    if (st.gravity) {
+        gravity_start_ = gravity_;
+        gravity_target_ = *st.gravity;
+        gravity_ramp_ = st.gravity_ramp;
+        stage_ramp_end_ = std::max(stage_ramp_end_, time_ + st.gravity_ramp);
+    } else {
+        gravity_start_ = gravity_target_ = gravity_;
+        gravity_ramp_ = 0;
+    }
+    tilt_rate_ = st.tilt_rate;
+
+    // Supports: a new block takes over the DOFs it names; the others keep their previous support.
+    for (const SupportSpec& sp : st.supports) {
+        const auto& grp = model_.group(sp.group);
+        for (int c = 0; c < 2; ++c) {
+            if (sp.mode[c] == DofMode::inherit) continue;
+            ActiveSupport a;
+            a.nodes = grp.nodes;
+            a.comp = c;
+            a.mode = sp.mode[c];
+            a.group = sp.group;
+            a.t0 = time_;
+            a.ramp = sp.ramp;
+            if (a.mode == DofMode::velocity) {
+                // Smooth ramp from the group's current prescribed velocity (0 if it was fixed or free).
+                const int d0 = 2 * a.nodes.front() + c;
+                a.v_start = dof_kind_[d0] == 2 ? dof_vel_[d0] : 0.0;
+                a.v_target = sp.velocity[c];
+                stage_ramp_end_ = std::max(stage_ramp_end_, time_ + sp.ramp);
+            }
+            if (a.mode == DofMode::protocol) a.pt = sp.protocol_t, a.pu = sp.protocol_u;
+            const int id = static_cast<int>(supports_.size());
+            for (int k : a.nodes) {
+                const int d = 2 * k + c;
+                dof_owner_[d] = a.mode == DofMode::free ? -1 : id;
+                dof_kind_[d] = a.mode == DofMode::free ? 0 : a.mode == DofMode::fixed ? 1 : 2;
+                dof_vel_[d] = 0;
+                reaction_[d] = 0;
+            }
+            supports_.push_back(std::move(a));
+        }
+    }
+    // Drop supports that no longer own any DOF (keeps the per-step loop short).
+    {
+        std::vector<int> remap(supports_.size(), -1);
+        std::vector<ActiveSupport> kept;
+        std::vector<char> owns(supports_.size(), 0);
+        for (int d = 0; d < 2 * nn; ++d)
+            if (dof_owner_[d] >= 0) owns[dof_owner_[d]] = 1;
+        for (std::size_t i = 0; i < supports_.size(); ++i)
+            if (owns[i]) remap[i] = static_cast<int>(kept.size()), kept.push_back(std::move(supports_[i]));
+        for (int d = 0; d < 2 * nn; ++d)
+            if (dof_owner_[d] >= 0) dof_owner_[d] = remap[dof_owner_[d]];
+        supports_ = std::move(kept);
+    }
+
+    // Loads: a block on a group replaces that group's previous load of the same kind, ramping from its value.
+    for (const LoadSpec& ls : st.loads) {
+        const auto& grp = model_.group(ls.group);
+        ActiveLoad l;
+        l.group = ls.group;
+        l.is_pressure = ls.is_pressure;
+        l.t0 = time_;
+        l.ramp = ls.ramp;
+        l.target = ls.is_pressure ? std::array<double, 2>{ls.pressure, 0} : ls.force;
+        for (auto it = loads_.begin(); it != loads_.end(); ++it)
+            if (it->group == ls.group && it->is_pressure == ls.is_pressure) {
+                const double w = it->ramp > 0 ? std::min(1.0, (time_ - it->t0) / it->ramp) : 1.0;
+                for (int c = 0; c < 2; ++c) l.start[c] = it->start[c] + w * (it->target[c] - it->start[c]);
+                loads_.erase(it);
+                break;
+            }
+        stage_ramp_end_ = std::max(stage_ramp_end_, time_ + ls.ramp);
+        if (ls.is_pressure) {
+            // Orient each edge as it runs counter-clockwise around its triangle, so the outward normal is on its right.
+            std::map<std::pair<int, int>, int> directed;
+            for (int e = 0; e < model_.n_triangles(); ++e)
+                for (int k = 0; k < 3; ++k) directed[{model_.tris[e].n[k], model_.tris[e].n[(k + 1) % 3]}] = e;
+            for (auto ed : grp.edges) {
+                if (directed.count({ed[0], ed[1]})) l.edges.push_back(ed);
+                else if (directed.count({ed[1], ed[0]})) l.edges.push_back({ed[1], ed[0]});
+                else throw InputError(spec_.file + ":" + std::to_string(ls.line) + ": group '" + ls.group +
+                                      "' has an edge that lies on no triangle");
+            }
+        } else {
+            // Total force shared by tributary length along the group's edges, or equally among its nodes.
+            std::map<int, double> share;
+            double total = 0;
+            for (auto ed : grp.edges) {
+                const double L = std::hypot(model_.X[2 * ed[1]] - model_.X[2 * ed[0]], model_.X[2 * ed[1] + 1] - model_.X[2 * ed[0] + 1]);
+                share[ed[0]] += 0.5 * L, share[ed[1]] += 0.5 * L, total += L;
+            }
+            if (grp.edges.empty())
+                for (int k : grp.nodes) share[k] += 1.0, total += 1.0;
+            for (auto& [k, w] : share) l.nodes.push_back(k), l.weight.push_back(w / total);
+        }
+        loads_.push_back(std::move(l));
+    }
+
+    // Termination state.
+    until_monitor_ = -1;
+    if (st.until_monitor) {
+        for (std::size_t i = 0; i < spec_.monitors.size(); ++i)
+            if (spec_.monitors[i].name == *st.until_monitor) until_monitor_ = static_cast<int>(i);
+        until_start_ = monitor_value(until_monitor_);
+        // A target behind a driven displacement can never be reached.
+        const MonitorSpec& m = spec_.monitors[until_monitor_];
+        if (m.type == "displacement")
+            for (const auto& sp : st.supports)
+                if (sp.group == m.group && sp.mode[m.component] == DofMode::velocity &&
+                    (st.until_value - until_start_) * sp.velocity[m.component] <= 0 && !st.max_duration && !st.duration)
+                    throw InputError(spec_.file + ":" + std::to_string(st.line) + ": key 'stages." + std::to_string(s) +
+                                     ".until': this stage can never end: monitor '" + m.name + "' is at " +
+                                     sci(until_start_) + " and the prescribed velocity moves it away from " +
+                                     sci(st.until_value));
+    }
+    const double hi = st.history_interval ? *st.history_interval : spec_.history_interval;
+    next_history_ = hi > 0 ? time_ : 0;
+    const double si = st.snapshot_interval ? *st.snapshot_interval : spec_.snapshot_interval;
+    next_snapshot_ = si > 0 ? time_ + si : 1e300;
+    log("stage " + std::to_string(s + 1) + "/" + std::to_string(spec_.stages.size()) + " '" + st.name + "' starts at t = " +
+        sci(time_) + " s (local damping " + sci(alpha_) + ")");
+    if (s == 0 && !opt_.out_dir.empty()) write_history_row();
+}
+
+void Simulation::apply_time_dependent(double t) {
+    // Gravity: ramp, then the tilt rotation (counter-clockwise, deg).
+    {
+        const double w = gravity_ramp_ > 0 ? std::min(1.0, (t - stage_t0_) / gravity_ramp_) : 1.0;
+        double g0 = gravity_start_[0] + w * (gravity_target_[0] - gravity_start_[0]);
+        double g1 = gravity_start_[1] + w * (gravity_target_[1] - gravity_start_[1]);
+        const double a = tilt_deg_ * kPi / 180;
+        gravity_ = {gravity_start_[0] + w * (gravity_target_[0] - gravity_start_[0]),
+                    gravity_start_[1] + w * (gravity_target_[1] - gravity_start_[1])};
+        applied_gravity_ = {std::cos(a) * g0 - std::sin(a) * g1, std::sin(a) * g0 + std::cos(a) * g1};
+    }
+    // Loads.
+    for (int d : loaded_dofs_) f_ext_[d] = 0;
+    loaded_dofs_.clear();
+    for (const ActiveLoad& l : loads_) {
+        const double w = l.ramp > 0 ? std::min(1.0, (t - l.t0) / l.ramp) : 1.0;
+        const double v0 = l.start[0] + w * (l.target[0] - l.start[0]);
+        const double v1 = l.start[1] + w * (l.target[1] - l.start[1]);
+        if (l.is_pressure) {
+            // Pressure p on edge a->b (body on its left): force -p t L n_out = -p t (dy, -dx), half to each node.
+            for (auto ed : l.edges) {
+                const double dx = model_.x[2 * ed[1]] - model_.x[2 * ed[0]], dy = model_.x[2 * ed[1] + 1] - model_.x[2 * ed[0] + 1];
+                const double fx = -0.5 * v0 * model_.thickness * dy, fy = 0.5 * v0 * model_.thickness * dx;
+                for (int k : {ed[0], ed[1]}) {
+                    f_ext_[2 * k] += fx, f_ext_[2 * k + 1] += fy;
+                    loaded_dofs_.push_back(2 * k), loaded_dofs_.push_back(2 * k + 1);
+                }
+            }
+        } else {
+            for (std::size_t i = 0; i < l.nodes.size(); ++i) {
+                const int k = l.nodes[i];
+                f_ext_[2 * k] += l.weight[i] * v0, f_ext_[2 * k + 1] += l.weight[i] * v1;
+                loaded_dofs_.push_back(2 * k), loaded_dofs_.push_back(2 * k + 1);
+            }
+        }
+    }
+    // Prescribed velocities for the update to t + dt (evaluated at the half step).
+    const double th = t + 0.5 * dt_;
+    for (std::size_t id = 0; id < supports_.size(); ++id) {
+        const ActiveSupport& s = supports_[id];
+        if (s.mode == DofMode::fixed) continue;
+        double v = 0;
+        if (s.mode == DofMode::velocity) {
+            const double tau = th - s.t0;
+            v = s.ramp > 0 && tau < s.ramp ? s.v_start + (s.v_target - s.v_start) * 0.5 * (1 - std::cos(kPi * tau / s.ramp)) : s.v_target;
+        } else {
+            // Displacement protocol: the velocity that lands exactly on u(t + dt) from u(t).
+            v = (protocol_displacement(s, t + dt_ - s.t0) - protocol_displacement(s, t - s.t0)) / dt_;
+        }
+        for (int k : s.nodes) {
+            const int d = 2 * k + s.comp;
+            if (dof_owner_[d] == static_cast<int>(id)) dof_vel_[d] = v;
+        }
+    }
+}
+
+void Simulation::step() {
+    const double dt = dt_;
+    apply_time_dependent(time_);
+    const int nt = model_.n_triangles(), nn = model_.n_nodes();
+    const TriangleRef* tris = model_.tris.data();
+    const MaterialConst* mats = model_.mat.data();
+    const double* x = model_.x.data();
+    const double* v = model_.v.data();
+    double* tf = tf_.data();
+
+    // 2. Triangle forces; per block: viscous power and the first inverted triangle.
+    const int ntb = (nt + kBlock - 1) / kBlock;
+#pragma omp parallel for schedule(static)
+    for (int b = 0; b < ntb; ++b) {
+        double pv = 0;
+        int bad = -1;
+        const int e1 = std::min(nt, (b + 1) * kBlock);
+        for (int e = b * kBlock; e < e1; ++e) {
+            double p;
+            const double J = triangle_forces(tris[e], mats[tris[e].mat], x, v, tf + 6 * static_cast<std::size_t>(e), p);
+            if (!(J > 0) && bad < 0) bad = e;
+            pv += p;
+        }
+        block_a_[b] = pv;
+        block_bad_[b] = bad;
+    }
+    double visc_power = 0;
+    for (int b = 0; b < ntb; ++b) {
+        visc_power += block_a_[b];
+        if (block_bad_[b] >= 0) {
+            const int e = block_bad_[b];
+            const TriangleRef& t = tris[e];
+            const double cx = (x[2 * t.n[0]] + x[2 * t.n[1]] + x[2 * t.n[2]]) / 3, cy = (x[2 * t.n[0] + 1] + x[2 * t.n[1] + 1] + x[2 * t.n[2] + 1]) / 3;
+            fail("triangle " + std::to_string(e) + " (region '" + model_.mesh.regions[model_.mesh.tri_region[e]] +
+                 "') inverted (J <= 0) at (" + sci(cx, 6) + ", " + sci(cy, 6) + ") m");
+        }
+    }
+
+    // 3. Node loop.
+    const int nnb = (nn + kBlock - 1) / kBlock;
+    const double alpha = alpha_;
+    const double gx = applied_gravity_[0], gy = applied_gravity_[1];
+    const int* inc_ptr = model_.inc_ptr.data();
+    const int* inc_idx = model_.inc_idx.data();
+    const double* mass = model_.mass.data();
+    const double* inv_mass = model_.inv_mass.data();
+    double* xw = model_.x.data();
+    double* vw = model_.v.data();
+    const double* fext = f_ext_.data();
+    double* fmod = f_mod_.data();
+    const uint8_t* kind = dof_kind_.data();
+    const double* vpres = dof_vel_.data();
+    double* reac = reaction_.data();
+#pragma omp parallel for schedule(static)
+    for (int b = 0; b < nnb; ++b) {
+        double dW = 0, dD = 0, unb = 0, scale = 0;
+        int bad = -1;
+        const int k1 = std::min(nn, (b + 1) * kBlock);
+        for (int k = b * kBlock; k < k1; ++k) {
+            double fi0 = fmod[2 * k], fi1 = fmod[2 * k + 1];
+            fmod[2 * k] = 0, fmod[2 * k + 1] = 0;
+            for (int j = inc_ptr[k]; j < inc_ptr[k + 1]; ++j) {
+                const double* r = tf + 2 * static_cast<std::size_t>(inc_idx[j]);
+                fi0 += r[0], fi1 += r[1];
+            }
+            const double fe[2] = {fext[2 * k] + mass[k] * gx, fext[2 * k + 1] + mass[k] * gy};
+            const double fin[2] = {fi0, fi1};
+            for (int c = 0; c < 2; ++c) {
+                const int d = 2 * k + c;
+                const double f = fin[c] + fe[c];
+                const double vold = vw[d];
+                double vnew;
+                if (kind[d] == 0) {
+                    // [C79] local damping: -alpha |f| sign(v).
+                    const double fd = vold > 0 ? -alpha * std::abs(f) : vold < 0 ? alpha * std::abs(f) : 0.0;
+                    vnew = vold + dt * (f + fd) * inv_mass[k];
+                    const double vbar = 0.5 * (vold + vnew);
+                    dW += dt * fe[c] * vbar;
+                    dD -= dt * fd * vbar;
+                    unb += std::abs(f);
+                    scale += std::abs(fin[c]) + std::abs(fe[c]);
+                } else {
+                    vnew = kind[d] == 1 ? 0.0 : vpres[d];
+                    const double R = mass[k] * (vnew - vold) / dt - f;
+                    reac[d] = R;
+                    dW += dt * (fe[c] + R) * 0.5 * (vold + vnew);
+                    scale += std::abs(fin[c]) + std::abs(fe[c]);
+                }
+                if (!std::isfinite(vnew) && bad < 0) bad = k;
+                vw[d] = vnew;
+                xw[d] += dt * vnew;
+            }
+        }
+        block_a_[b] = dW, block_b_[b] = dD, block_c_[b] = unb, block_d_[b] = scale;
+        block_bad_[b] = bad;
+    }
+    double dW = 0, dD = 0, unb = 0, scale = 0;
+    for (int b = 0; b < nnb; ++b) {
+        dW += block_a_[b], dD += block_b_[b], unb += block_c_[b], scale += block_d_[b];
+        if (block_bad_[b] >= 0) {
+            const int k = block_bad_[b];
+            fail("node " + std::to_string(k) + " has a non-finite velocity (NaN/inf) near (" + sci(model_.X[2 * k], 6) + ", " +
+                 sci(model_.X[2 * k + 1], 6) + ") m");
+        }
+    }
+    W_ext_ += dW;
+    D_damp_ += dD;
+    D_visc_ += dt * visc_power;
+    unbalanced_ratio_ = scale > 0 ? unb / scale : 0;
+    time_ += dt;
+    tilt_deg_ += tilt_rate_ * dt;
+    ++steps_;
+
+    // Outputs.
+    if (!opt_.out_dir.empty()) {
+        const double hi = spec_.stages[stage_].history_interval ? *spec_.stages[stage_].history_interval : spec_.history_interval;
+        if (hi > 0 ? time_ + 1e-9 * dt >= next_history_ : (steps_ % history_every_steps_) == 0) {
+            write_history_row();
+            if (hi > 0) next_history_ += hi * std::max(1.0, std::floor((time_ - next_history_) / hi) + 1);
+        }
+        if (time_ + 1e-9 * dt >= next_snapshot_) {
+            write_snapshot();
+            const double si = spec_.stages[stage_].snapshot_interval ? *spec_.stages[stage_].snapshot_interval : spec_.snapshot_interval;
+            next_snapshot_ += si * std::max(1.0, std::floor((time_ - next_snapshot_) / si) + 1);
+        }
+        if ((steps_ & 255) == 0) {
+            const double now = wall_clock();
+            if (now - last_flush_ > 5) flush_files(true);
+        }
+    }
+    if (opt_.progress && (steps_ & 255) == 0) progress_line(false);
+}
+
+bool Simulation::stage_finished() {
+    const StageSpec& st = spec_.stages[stage_];
+    const double ts = time_ - stage_t0_;
+    auto finish = [&](const char* why) {
+        stage_results_.push_back({st.name, why, time_, steps_ - stage_steps0_});
+        return true;
+    };
+    if (st.duration && ts + 0.5 * dt_ >= *st.duration) return finish("duration");
+    if (until_monitor_ >= 0) {
+        const double m = monitor_value(until_monitor_);
+        const double dir = st.until_value >= until_start_ ? 1.0 : -1.0;
+        if (dir * (m - st.until_value) >= 0) return finish("until");
+    }
+    if (st.equilibrium && time_ >= stage_ramp_end_ && steps_ - stage_steps0_ > 10 && unbalanced_ratio_ <= *st.equilibrium)
+        return finish("equilibrium");
+    if (st.max_duration && ts + 0.5 * dt_ >= *st.max_duration) return finish("max_duration");
+    return false;
+}
+
+double Simulation::monitor_value(int i) const {
+    const MonitorSpec& m = spec_.monitors[i];
+    if (m.type == "tilt") return tilt_deg_;
+    const auto& grp = model_.group(m.group);
+    const int c = m.component;
+    double s = 0;
+    if (m.type == "displacement" || m.type == "velocity") {
+        for (int k : grp.nodes) s += m.type == "displacement" ? model_.x[2 * k + c] - model_.X[2 * k + c] : model_.v[2 * k + c];
+        return grp.nodes.empty() ? 0.0 : s / static_cast<double>(grp.nodes.size());
+    }
+    if (m.type == "reaction") {
+        for (int k : grp.nodes) s += dof_kind_[2 * k + c] ? reaction_[2 * k + c] : 0.0;
+        return s;
+    }
+    for (int k : grp.nodes) s += f_ext_[2 * k + c];  // load
+    return s;
+}
+
+Energies Simulation::energies() const {
+    Energies e;
+    const int nn = model_.n_nodes(), nt = model_.n_triangles();
+    const int nnb = (nn + kBlock - 1) / kBlock, ntb = (nt + kBlock - 1) / kBlock;
+    std::vector<double> pk(nnb, 0.0), pe(ntb, 0.0);
+#pragma omp parallel for schedule(static)
+    for (int b = 0; b < nnb; ++b) {
+        double s = 0;
+        for (int k = b * kBlock; k < std::min(nn, (b + 1) * kBlock); ++k)
+            s += 0.5 * model_.mass[k] * (model_.v[2 * k] * model_.v[2 * k] + model_.v[2 * k + 1] * model_.v[2 * k + 1]);
+        pk[b] = s;
+    }
+#pragma omp parallel for schedule(static)
+    for (int b = 0; b < ntb; ++b) {
+        double s = 0;
+        for (int t = b * kBlock; t < std::min(nt, (b + 1) * kBlock); ++t)
+            s += triangle_energy(model_.tris[t], model_.mat[model_.tris[t].mat], model_.x.data());
+        pe[b] = s;
+    }
+    for (double s : pk) e.kinetic += s;
+    for (double s : pe) e.elastic += s;
+    e.external = W_ext_;
+    e.damping = D_damp_;
+    e.viscous = D_visc_;
+    return e;
+}
+
+void Simulation::write_history_row() {
+    const Energies e = energies();
+    std::string row = format_double(time_) + "," + std::to_string(steps_) + "," + std::to_string(stage_ + 1);
+    for (std::size_t i = 0; i < spec_.monitors.size(); ++i) {
+        const double m = monitor_value(static_cast<int>(i));
+        row += "," + format_double(m);
+        auto& ext = mon_ext_[i];
+        if (!mon_ext_init_) ext = {m, m, m};
+        ext = {std::min(ext[0], m), std::max(ext[1], m), m};
+    }
+    mon_ext_init_ = true;
+    row += "," + format_double(e.kinetic) + "," + format_double(e.elastic) + "," + format_double(e.external) + "," +
+           format_double(e.damping) + "," + format_double(e.viscous) + "," + format_double(e.balance_error()) + "\n";
+    history_ += row;
+}
+
+void Simulation::write_snapshot() {
+    if (opt_.out_dir.empty()) return;
+    const int nn = model_.n_nodes(), nt = model_.n_triangles();
+    VtuArray disp{"displacement", 3, {}, {}, false}, vel{"velocity", 3, {}, {}, false};
+    disp.f64.resize(3 * nn), vel.f64.resize(3 * nn);
+    for (int k = 0; k < nn; ++k) {
+        disp.f64[3 * k] = model_.x[2 * k] - model_.X[2 * k], disp.f64[3 * k + 1] = model_.x[2 * k + 1] - model_.X[2 * k + 1], disp.f64[3 * k + 2] = 0;
+        vel.f64[3 * k] = model_.v[2 * k], vel.f64[3 * k + 1] = model_.v[2 * k + 1], vel.f64[3 * k + 2] = 0;
+    }
+    VtuArray stress{"stress", 3, {}, {}, false}, mat{"material", 1, {}, {}, true}, region{"region", 1, {}, {}, true};
+    stress.f64.resize(3 * nt), mat.i32.resize(nt), region.i32.resize(nt);
+    std::vector<int> tri(3 * nt);
+    for (int e = 0; e < nt; ++e) {
+        triangle_stress(model_.tris[e], model_.mat[model_.tris[e].mat], model_.x.data(), &stress.f64[3 * e]);
+        mat.i32[e] = model_.tri_material[e];
+        region.i32[e] = model_.mesh.tri_region[e];
+        for (int k = 0; k < 3; ++k) tri[3 * e + k] = model_.tris[e].n[k];
+    }
+    char name[64];
+    std::snprintf(name, sizeof name, "snapshots/step_%09ld.vtu", steps_);
+    write_file_atomic((std::filesystem::path(opt_.out_dir) / name).string(),
+                      vtu_document(model_.X, tri, {}, {disp, vel}, {stress, mat, region}));
+    snapshots_.emplace_back(time_, name);
+    write_file_atomic((std::filesystem::path(opt_.out_dir) / "run.pvd").string(), pvd_document(snapshots_));
+}
+
+void Simulation::flush_files(bool /*force*/) {
+    if (opt_.out_dir.empty()) return;
+    last_flush_ = wall_clock();
+    const std::filesystem::path dir(opt_.out_dir);
+    write_file_atomic((dir / "history.csv").string(), history_);
+    write_file_atomic((dir / "run.log").string(), log_);
+}
+
+void Simulation::progress_line(bool final) {
+    const double now = wall_clock();
+    if (!final && now - last_progress_ < 1.0) return;
+    last_progress_ = now;
+    const StageSpec& st = spec_.stages[stage_];
+    const double ts = time_ - stage_t0_;
+    double frac = -1;
+    if (st.duration) frac = ts / *st.duration;
+    if (until_monitor_ >= 0 && st.until_value != until_start_)
+        frac = std::max(frac, (monitor_value(until_monitor_) - until_start_) / (st.until_value - until_start_));
+    if (frac < 0 && st.max_duration) frac = ts / *st.max_duration;
+    const double el = now - wall_start_;
+    const double rate = static_cast<double>(steps_) / std::max(el, 1e-9);
+    char b[256];
+    std::string eta = "?";
+    if (frac > 0.001) eta = human_time((now - wall_start_) * 0 + (1 - frac) * (ts / std::max(frac, 1e-9)) / dt_ / std::max(rate, 1.0));
+    std::snprintf(b, sizeof b, "\r[stage %d/%zu %s] %5.1f%%  t = %.4g s  %.3g steps/s  left %s   ", stage_ + 1,
+                  spec_.stages.size(), st.name.c_str(), 100 * std::clamp(frac, 0.0, 1.0), time_, rate, eta.c_str());
+    std::cerr << b << (final ? "\n" : "") << std::flush;
+}
+
+void Simulation::fail(const std::string& what) {
+    const std::string msg = what + "; stage " + std::to_string(stage_ + 1) + " '" + spec_.stages[stage_].name + "', step " +
+                            std::to_string(steps_) + ", t = " + sci(time_, 6) + " s (dt = " + sci(dt_) +
+                            " s, stable limit " + sci(dt_limit_) + " s)";
+    wall_time_ = wall_clock() - wall_start_;
+    log("error: run failed: " + msg);
+    if (!opt_.out_dir.empty()) {
+        flush_files(true);
+        write_summary("failed", msg);
+    }
+    throw RunError(msg);
+}
+
+void Simulation::run() {
+    const Energies e0 = energies();
+    (void)e0;
+    log("fdem " FDEM_VERSION ": case '" + spec_.name + "' (" + spec_.file + ")");
+    log("mesh: " + std::to_string(model_.n_triangles()) + " triangles, " + std::to_string(model_.n_nodes()) + " nodes");
+    log("time step: " + sci(dt_) + " s = " + (spec_.dt_override ? std::string("fixed by numerics.dt") : sci(spec_.safety) + " x stable limit") +
+        " " + sci(dt_limit_) + " s (set by triangle " + std::to_string(dt_element_) + ")");
+    log("threads: " + std::to_string(omp_get_max_threads()));
+    if (!opt_.out_dir.empty()) write_summary("running", "");
+    for (std::size_t s = 0; s < spec_.stages.size(); ++s) {
+        begin_stage(static_cast<int>(s));
+        while (!stage_finished()) step();
+        if (opt_.progress) progress_line(true);
+        const StageResult& r = stage_results_.back();
+        std::string how = r.ended_by;
+        if (r.ended_by == "max_duration") how = "max_duration reached before its until/equilibrium criterion (warning)";
+        log("stage " + std::to_string(s + 1) + " '" + r.name + "' ended by " + how + " at t = " + sci(r.time) + " s after " +
+            std::to_string(r.steps) + " steps");
+        if (!opt_.out_dir.empty()) {
+            if (history_.empty() || history_.compare(history_.size() - 1, 1, "\n") == 0) write_history_row();
+            write_snapshot();
+            flush_files(true);
+        }
+    }
+    wall_time_ = wall_clock() - wall_start_;
+    const double tps = static_cast<double>(steps_) * model_.n_triangles() / std::max(wall_time_, 1e-9);
+    log("done: " + std::to_string(steps_) + " steps in " + human_time(wall_time_) + " (" + sci(tps, 3) + " triangle-steps/s)");
+    const Energies e = energies();
+    log("energy: kinetic " + sci(e.kinetic) + " J, elastic " + sci(e.elastic) + " J, external work " + sci(e.external) +
+        " J, damping " + sci(e.damping) + " J, viscous " + sci(e.viscous) + " J, balance error " + sci(100 * e.balance_error(), 3) + " %");
+    if (!opt_.out_dir.empty()) {
+        flush_files(true);
+        write_summary("completed", "");
+    }
+}
+
+void Simulation::write_summary(const std::string& status, const std::string& message) {
+    Json j = Json::object();
+    j["case"] = spec_.name;
+    j["case_file"] = spec_.file;
+    j["description"] = spec_.description;
+    j["status"] = status;
+    j["message"] = message;
+    j["fdem_version"] = FDEM_VERSION;
+    Json cols = Json::object();
+    cols["time"] = "s";
+    cols["step"] = "-";
+    cols["stage"] = "-";
+    for (const auto& m : spec_.monitors) cols[m.name] = m.unit();
+    for (const char* c : {"E_kin", "E_el", "W_ext", "D_damp", "D_visc"}) cols[c] = "J";
+    cols["E_balance"] = "-";
+    j["columns"] = cols;
+    if (!spec_.curve_x.empty()) {
+        Json c = Json::object();
+        c["x"] = spec_.curve_x;
+        c["y"] = spec_.curve_y;
+        j["curve"] = c;
+    }
+    j["n_triangles"] = model_.n_triangles();
+    j["n_nodes"] = model_.n_nodes();
+    j["dt"] = dt_;
+    j["dt_stable_limit"] = dt_limit_;
+    j["dt_limiting_triangle"] = dt_element_;
+    j["steps"] = static_cast<long long>(steps_);
+    const double wall = status == "running" ? 0.0 : wall_time_;
+    j["wall_time_s"] = wall;
+    j["triangle_steps_per_s"] = wall > 0 ? static_cast<double>(steps_) * model_.n_triangles() / wall : 0.0;
+    j["threads"] = omp_get_max_threads();
+    j["time"] = time_;
+    Json mons = Json::object();
+    for (std::size_t i = 0; i < spec_.monitors.size(); ++i) {
+        Json m = Json::object();
+        m["min"] = mon_ext_[i][0];
+        m["max"] = mon_ext_[i][1];
+        m["final"] = mon_ext_[i][2];
+        m["unit"] = spec_.monitors[i].unit();
+        mons[spec_.monitors[i].name] = m;
+    }
+    j["monitors"] = mons;
+    Json stages = Json::array();
+    for (const auto& r : stage_results_) {
+        Json s = Json::object();
+        s["name"] = r.name;
+        s["ended_by"] = r.ended_by;
+        s["time"] = r.time;
+        s["steps"] = static_cast<long long>(r.steps);
+        stages.push_back(s);
+    }
+    j["stages"] = stages;
+    const Energies e = energies();
+    Json en = Json::object();
+    en["kinetic"] = e.kinetic;
+    en["elastic"] = e.elastic;
+    en["external_work"] = e.external;
+    en["damping"] = e.damping;
+    en["viscous"] = e.viscous;
+    en["balance_error"] = e.balance_error();
+    j["energy"] = en;
+    Json set = Json::object();
+    set["thickness_m"] = spec_.thickness;
+    set["plane"] = spec_.plane == Plane::stress ? "stress" : "strain";
+    set["geometry"] = spec_.geometry.type;
+    if (spec_.geometry.type == "rectangle") set["mesh_size_m"] = spec_.geometry.mesh_size;
+    if (!spec_.geometry.file.empty()) set["geometry_file"] = spec_.geometry.file;
+    set["safety"] = spec_.safety;
+    if (spec_.dt_override) set["dt_fixed_s"] = *spec_.dt_override;
+    Json mats = Json::object();
+    for (const auto& m : spec_.materials) {
+        Json o = Json::object();
+        o["E_Pa"] = m.E;
+        o["nu"] = m.nu;
+        o["density_kg_m3"] = m.density;
+        o["viscous_damping"] = m.viscous_damping;
+        mats[m.name] = o;
+    }
+    set["materials"] = mats;
+    Json sd = Json::array();
+    for (const auto& s : spec_.stages) {
+        Json o = Json::object();
+        o["name"] = s.name;
+        if (s.local_damping) o["local_damping"] = *s.local_damping;
+        if (s.duration) o["duration_s"] = *s.duration;
+        if (s.equilibrium) o["equilibrium"] = *s.equilibrium;
+        sd.push_back(o);
+    }
+    set["stages"] = sd;
+    Json ov = Json::object();
+    for (const auto& [k, v] : spec_.overrides) ov[k] = v;
+    set["overrides"] = ov;
+    j["settings"] = set;
+    if (spec_.reference.present) {
+        const ReferenceSpec& ref = spec_.reference;
+        Json r = Json::object();
+        r["monitor"] = ref.monitor;
+        r["quantity"] = ref.quantity;
+        r["value"] = ref.value;
+        r["source"] = ref.source;
+        for (std::size_t i = 0; i < spec_.monitors.size(); ++i)
+            if (spec_.monitors[i].name == ref.monitor) {
+                const double got = ref.quantity == "final" ? mon_ext_[i][2]
+                                                           : (std::abs(mon_ext_[i][0]) > std::abs(mon_ext_[i][1]) ? mon_ext_[i][0] : mon_ext_[i][1]);
+                r["computed"] = got;
+                r["relative_error"] = ref.value != 0 ? (std::abs(got) - std::abs(ref.value)) / std::abs(ref.value) : 0.0;
+            }
+        j["reference"] = r;
+    }
+    write_file_atomic((std::filesystem::path(opt_.out_dir) / "summary.json").string(), j.dump());
+}
+
+int run_case(const std::string& case_file, const std::vector<std::string>& overrides, const RunOptions& options) {
+    CaseSpec spec = load_case(case_file, overrides);
+    RunOptions opt = options;
+    if (opt.out_dir.empty()) opt.out_dir = (std::filesystem::path("runs") / spec.name).string();
+    mesh::Mesh m = make_mesh(spec);
+    Model model = build_model(spec, std::move(m));
+    Simulation sim(spec, std::move(model), opt);
+    sim.run();
+    // The result against the reference, on stdout.
+    if (spec.reference.present) {
+        const ReferenceSpec& ref = spec.reference;
+        const auto ext = sim.monitor_extrema();
+        for (std::size_t i = 0; i < spec.monitors.size(); ++i) {
+            if (spec.monitors[i].name != ref.monitor) continue;
+            const double got = ref.quantity == "final" ? ext[i][2] : (std::abs(ext[i][0]) > std::abs(ext[i][1]) ? ext[i][0] : ext[i][1]);
+            const double err = ref.value != 0 ? (std::abs(got) - std::abs(ref.value)) / std::abs(ref.value) : 0.0;
+            char b[512];
+            std::snprintf(b, sizeof b, "result: %s %s = %.5g %s; reference %.5g %s (%s); error %+.2f %%; run time %.2f s",
+                          ref.quantity.c_str(), ref.monitor.c_str(), got, spec.monitors[i].unit().c_str(), ref.value,
+                          spec.monitors[i].unit().c_str(), ref.source.c_str(), 100 * err, sim.wall_time());
+            std::cout << b << std::endl;
+            if (ref.tolerance > 0)
+                std::cout << (std::abs(err) <= ref.tolerance ? "within" : "OUTSIDE") << " the stated tolerance of "
+                          << 100 * ref.tolerance << " %" << std::endl;
+        }
+    }
+    std::cout << "run folder: " << opt.out_dir << std::endl;
+    return 0;
+}
+
+}  // namespace fdem

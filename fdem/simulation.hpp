@@ -1,0 +1,155 @@
+// fdem/simulation.hpp: stages, loads and supports, the explicit central-difference integrator, monitors,
+// energy bookkeeping, failure detection and the run folder.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "fdem/case.hpp"
+#include "fdem/model.hpp"
+#include "fdem/output.hpp"
+
+namespace fdem {
+
+// Builds the mesh the case's [geometry] describes (Gmsh API) and checks the case's names against it.
+mesh::Mesh make_mesh(const CaseSpec& spec);
+
+struct RunOptions {
+    std::string out_dir;     // run folder; empty: no files are written (tests)
+    int threads = 0;         // 0: OpenMP's default
+    bool quiet = false;      // no log lines on stdout
+    bool progress = false;   // progress line on stderr
+};
+
+struct Energies {
+    double kinetic = 0;     // J
+    double elastic = 0;     // J, triangles
+    double external = 0;    // J, work of loads, gravity and supports (cumulative)
+    double damping = 0;     // J, dissipated by local damping (cumulative)
+    double viscous = 0;     // J, dissipated by viscous element damping (cumulative)
+    double balance_error() const;  // |W - (K + E + D)| relative to the largest term
+};
+
+struct StageResult {
+    std::string name;
+    std::string ended_by;  // "duration", "until", "equilibrium", "max_duration"
+    double time = 0;       // s, at the end of the stage (run time)
+    long steps = 0;
+};
+
+class Simulation {
+public:
+    Simulation(CaseSpec spec, Model model, RunOptions options);
+
+    // Runs every stage. Throws RunError on instability (after writing what it has), InputError for a stage
+    // that cannot end with the state reached.
+    void run();
+
+    // Finer control, for tests: set up stage s (0-based), then step.
+    void begin_stage(int s);
+    void step();
+    bool stage_finished();  // evaluates the termination rule of the current stage
+
+    const Model& model() const { return model_; }
+    Model& model() { return model_; }
+    double dt() const { return dt_; }
+    double time() const { return time_; }
+    long steps() const { return steps_; }
+    double monitor_value(int i) const;
+    Energies energies() const;  // computes the elastic energy now
+    const std::vector<StageResult>& stage_results() const { return stage_results_; }
+    double wall_time() const { return wall_time_; }
+    const std::vector<double>& reactions() const { return reaction_; }
+    // Largest |value| and final value of each monitor over the history rows written.
+    std::vector<std::array<double, 3>> monitor_extrema() const { return mon_ext_; }  // min, max, final
+
+private:
+    struct ActiveLoad {
+        std::vector<int> nodes;
+        std::vector<double> weight;                  // force share per node (sums to 1)
+        std::vector<std::array<int, 2>> edges;       // pressure: edges oriented counter-clockwise around the body
+        bool is_pressure = false;
+        std::array<double, 2> start{0, 0}, target{0, 0};  // force N or pressure Pa (component 0)
+        double ramp = 0, t0 = 0;
+        std::string group;
+    };
+    struct ActiveSupport {
+        std::vector<int> nodes;
+        int comp = 0;
+        DofMode mode = DofMode::fixed;
+        double v_start = 0, v_target = 0, ramp = 0, t0 = 0;
+        std::vector<double> pt, pu;  // protocol
+        std::string group;
+    };
+
+    void compute_dt();
+    void apply_time_dependent(double t);
+    double protocol_displacement(const ActiveSupport& s, double tau) const;
+    void fail(const std::string& what);
+    void write_history_row();
+    void flush_files(bool force);
+    void write_snapshot();
+    void write_summary(const std::string& status, const std::string& message);
+    void log(const std::string& line);
+    void progress_line(bool final);
+
+    CaseSpec spec_;
+    Model model_;
+    RunOptions opt_;
+    double dt_ = 0;
+    double dt_limit_ = 0;
+    int dt_element_ = -1;
+    double time_ = 0;
+    long steps_ = 0;
+    int stage_ = -1;
+    double stage_t0_ = 0;
+    long stage_steps0_ = 0;
+
+    // boundary conditions, per DOF
+    std::vector<uint8_t> dof_kind_;  // 0 free, 1 fixed, 2 prescribed velocity
+    std::vector<int> dof_owner_;     // index into supports_, -1 none
+    std::vector<double> dof_vel_;    // m/s
+    std::vector<double> reaction_;   // N, force the supports exert on each constrained DOF (last step)
+    std::vector<ActiveSupport> supports_;
+    std::vector<ActiveLoad> loads_;
+    std::vector<double> f_ext_;      // N, applied loads (no gravity), 2 per node
+    std::vector<int> loaded_dofs_;   // DOFs with a nonzero f_ext_ entry
+    std::array<double, 2> gravity_{0, 0}, gravity_start_{0, 0}, gravity_target_{0, 0};
+    std::array<double, 2> applied_gravity_{0, 0};  // m/s^2, after the tilt rotation
+    double gravity_ramp_ = 0, tilt_rate_ = 0, tilt_deg_ = 0;
+    double alpha_ = 0;  // local damping
+
+    // per-step scratch
+    std::vector<double> tf_;  // 6 per triangle
+    std::vector<double> f_mod_;  // module forces (contact, joints), 2 per node
+    std::vector<double> block_a_, block_b_, block_c_, block_d_;
+    std::vector<int> block_bad_;
+    double unbalanced_ratio_ = 1;
+
+    // energies (cumulative)
+    double W_ext_ = 0, D_damp_ = 0, D_visc_ = 0;
+
+    // stage termination state
+    double until_start_ = 0;
+    int until_monitor_ = -1;
+    double stage_ramp_end_ = 0;
+
+    // outputs
+    std::string history_;
+    std::vector<std::array<double, 3>> mon_ext_;
+    bool mon_ext_init_ = false;
+    double next_history_ = 0, next_snapshot_ = 0;
+    long history_every_steps_ = 100;
+    std::vector<std::pair<double, std::string>> snapshots_;
+    std::vector<StageResult> stage_results_;
+    std::string log_;
+    double wall_start_ = 0, wall_time_ = 0, last_flush_ = 0, last_progress_ = 0;
+    double dt_report_triangles_ = 0;
+};
+
+// Run a case file end to end (the `fdem run` command). Returns the exit code.
+int run_case(const std::string& case_file, const std::vector<std::string>& overrides, const RunOptions& options);
+
+}  // namespace fdem

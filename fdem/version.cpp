@@ -1,1 +1,0 @@
-namespace fdem { const char* version() { return FDEM_VERSION; } }
