@@ -1,0 +1,199 @@
+"""Command line: `fdem-tools COMMAND ...`, one sub-command per post-processing task.
+
+Errors from bad input end the command with one line on stderr and exit code 1 (2 for a failed batch or study
+run), never with a traceback; FDEM_TOOLS_DEBUG=1 shows the traceback of unexpected errors.
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+
+from .common import (FORCE_UNITS, LENGTH_UNITS, STRESS_UNITS, ToolError, check_finite, load_curve, output_prefix,
+                     read_table, write_json)
+
+PROG = "fdem-tools"
+COMMAND_MODULES = []  # modules with an add_parser(subparsers) function
+
+
+def _units_args(p, x_default="m", y_default="N"):
+    p.add_argument("--x", help="displacement column (default: the run's curve, or the first CSV column)")
+    p.add_argument("--y", help="load column (default: the run's curve, or the second CSV column)")
+    p.add_argument("--x-unit", default=x_default, choices=list(LENGTH_UNITS),
+                   help=f"unit of the CSV displacement column (default {x_default}; run folders are SI)")
+    p.add_argument("--y-unit", default=y_default, choices=list(FORCE_UNITS),
+                   help=f"unit of the CSV load column (default {y_default}; run folders are SI)")
+    p.add_argument("--report-x-unit", default="mm", choices=list(LENGTH_UNITS), help="displacement unit of the report (default mm)")
+    p.add_argument("--report-y-unit", default="kN", choices=list(FORCE_UNITS), help="load unit of the report (default kN)")
+    p.add_argument("--stage", type=int, help="keep only the rows of this stage (1-based; run folders)")
+    p.add_argument("--partial", action="store_true", help="accept a run whose summary is not 'completed'")
+    p.add_argument("-o", "--out", help="output prefix: writes PREFIX.json/.png/.svg (default: RUN/post/NAME or CSV_STEM_NAME)")
+
+
+def _ru(args):
+    return (args.report_x_unit, LENGTH_UNITS[args.report_x_unit]), (args.report_y_unit, FORCE_UNITS[args.report_y_unit])
+
+
+# ----------------------------------------------------------------------------------------------
+
+
+def cmd_eeep(args):
+    from . import eeep
+    c = load_curve(args.source, args.x, args.y, args.x_unit, args.y_unit, args.stage, args.partial)
+    check_finite(c)
+    res = eeep.eeep(c.x, c.y, fraction=args.limit, ultimate=args.ultimate, drop=args.drop, stiffness=args.stiffness,
+                    source=c.source)
+    (xu, fx), (yu, fy) = _ru(args)
+    prefix = output_prefix(args.source, "eeep", args.out)
+    report = {
+        "source": c.source, "x_column": c.x_name, "y_column": c.y_name,
+        "units": {"displacement": xu, "load": yu, "stiffness": f"{yu}/{xu}", "energy": "J"},
+        "K_e": res["K_e"] * fx / fy,
+        "P_peak": res["P_peak"] / fy, "Delta_peak": res["Delta_peak"] / fx,
+        "Delta_u": res["Delta_u"] / fx, "P_u": res["P_u"] / fy,
+        "P_y": res["P_y"] / fy, "Delta_y": res["Delta_y"] / fx,
+        "ductility": res["ductility"],
+        "area_J": res["area"], "eeep_area_J": res["eeep_area"],
+        "regression_limit": res["regression_limit"], "regression_points": res["regression_points"],
+        "stiffness_rule": res["stiffness_rule"], "ultimate_rule": res["ultimate_rule"],
+        "ultimate_note": res["ultimate_note"], "yield_note": res["yield_note"],
+        "mirrored": res["mirrored"], "origin_added": res["origin_added"],
+        "si": {k: res[k] for k in ("K_e", "P_peak", "Delta_peak", "Delta_u", "P_y", "Delta_y", "area")},
+    }
+    files = [write_json(prefix + ".json", report)]
+    if not args.no_plot:
+        files += eeep.plot(c.x, c.y, res, prefix, c.label, (xu, fx), (yu, fy))
+    print(f"{c.label}: K_e = {report['K_e']:.5g} {yu}/{xu}, P_peak = {report['P_peak']:.5g} {yu}, "
+          f"P_y = {report['P_y']:.5g} {yu}, Delta_y = {report['Delta_y']:.5g} {xu}, "
+          f"Delta_u = {report['Delta_u']:.5g} {xu}, ductility = {report['ductility']:.4g}")
+    print("wrote " + ", ".join(files))
+
+
+def cmd_ductility_fit(args):
+    from . import ductility
+    tab = read_table(args.source)
+    xn = args.x or tab.names[0]
+    yn = args.y or (tab.names[1] if len(tab.names) > 1 else None)
+    if yn is None:
+        raise ToolError(f"{args.source}: needs two columns (axial stress, ductility)")
+    x, y = tab.numeric(xn), tab.numeric(yn)
+    res = ductility.fit(x, y, level=args.level, source=args.source)
+    res.update({"source": args.source, "x_column": xn, "y_column": yn, "x_unit": args.x_unit,
+                "note": f"b and d are per {args.x_unit}"})
+    prefix = args.out or os.path.splitext(args.source)[0] + "_fit"
+    files = [write_json(prefix + ".json", res)]
+    if not args.no_plot:
+        files += ductility.plot(x, y, res, prefix, f"axial stress ({args.x_unit})", "ductility $\\mu$ (-)")
+    b = res["bounds"]
+    def fmt(k):
+        return f"{k} = {res[k]:.6g}" + (f" [{b[k][0]:.4g}, {b[k][1]:.4g}]" if b else "")
+    print(", ".join(fmt(k) for k in "abcd") + (f"; R^2 = {res['r2']:.4f}" if res["r2"] is not None else ""))
+    if not b:
+        print(res["bounds_note"])
+    print("wrote " + ", ".join(files))
+
+
+def cmd_hysteresis(args):
+    from . import hysteresis
+    from .common import write_csv
+    c = load_curve(args.source, args.x, args.y, args.x_unit, args.y_unit, args.stage, args.partial)
+    check_finite(c)
+    (xu, fx), (yu, fy) = _ru(args)
+    k_el = args.k_el * fy / fx if args.k_el is not None else None
+    res = hysteresis.analyse(c.x, c.y, k_el=k_el, e_h=args.e_h, deadband=args.deadband, source=c.source)
+    prefix = output_prefix(args.source, "hysteresis", args.out)
+    rows = []
+    for cy in res["cycles"]:
+        rows.append([cy["cycle"], int(cy["complete"]), cy["d_plus"] / fx, cy["P_plus"] / fy, cy["d_minus"] / fx,
+                     cy["P_minus"] / fy, cy["k_i"] * fx / fy, cy["k_d"], cy["W_i"], cy["E_i"], cy["E_d"]])
+    header = ["cycle", "complete", f"d_plus_{xu}", f"P_plus_{yu}", f"d_minus_{xu}", f"P_minus_{yu}",
+              f"k_i_{yu}_per_{xu}", "k_d", "W_i_J", "E_i_J", "E_d"]
+    report = {"source": c.source, "units": {"displacement": xu, "load": yu, "stiffness": f"{yu}/{xu}", "energy": "J"},
+              "k_el": res["k_el"] * fx / fy, "k_el_rule": res["k_el_rule"], "E_h_J": res["E_h"],
+              "E_h_rule": res["E_h_rule"], "E_total_J": res["E_total"], "n_cycles": res["n_cycles"],
+              "columns": header, "cycles": rows}
+    files = [write_json(prefix + ".json", report), write_csv(prefix + ".csv", header, rows)]
+    if not args.no_plot:
+        files += hysteresis.plot(c.x, c.y, res, prefix, c.label, (xu, fx), (yu, fy))
+    print(f"{c.label}: {res['n_cycles']} cycles, k_el = {report['k_el']:.5g} {yu}/{xu}, "
+          f"E_total = {res['E_total']:.5g} J")
+    for r in rows:
+        print("  cycle {:3d}{}: P+ {:9.4g} P- {:9.4g} {}  k_i {:9.4g}  k_d {:6.3f}  E_i {:9.4g} J  E_d {:6.3f}".format(
+            r[0], " " if r[1] else "*", r[3], r[5], yu, r[6], r[7], r[9], r[10]))
+    print("wrote " + ", ".join(files))
+
+
+# ----------------------------------------------------------------------------------------------
+
+
+def build_parser():
+    ap = argparse.ArgumentParser(prog=PROG, description="Post-processing of fdem run folders and measured curves.")
+    sub = ap.add_subparsers(dest="command", metavar="COMMAND")
+
+    p = sub.add_parser("eeep", help="EEEP bilinear curve and ductility (FORMULATION §9)",
+                       description="EEEP bilinear idealisation and ductility of a monotonic load-displacement curve "
+                                   "(FORMULATION §9, [K25] Eq. 14, ASTM E2126). SOURCE is an fdem run folder or a CSV.")
+    p.add_argument("source", metavar="SOURCE", help="run folder or CSV file")
+    _units_args(p)
+    p.add_argument("--limit", type=float, default=0.7,
+                   help="regression limit: fit K_e to the ascending branch up to this fraction of the peak (default 0.7)")
+    p.add_argument("--stiffness", choices=["regression", "secant"], default="regression",
+                   help="K_e by least squares through the origin (default) or as the secant at LIMIT x peak")
+    p.add_argument("--ultimate", choices=["peak", "drop"], default="peak",
+                   help="ultimate displacement: at peak load ([K25], default) or at the post-peak drop (ASTM E2126)")
+    p.add_argument("--drop", type=float, default=0.8, help="post-peak load level for --ultimate drop (default 0.8)")
+    p.add_argument("--no-plot", action="store_true", help="write the JSON only")
+    p.set_defaults(func=cmd_eeep)
+
+    p = sub.add_parser("ductility-fit", help="fit a e^{bx} + c e^{dx} to (axial stress, ductility) with 95 %% bounds",
+                       description="Fits f(x) = a exp(b x) + c exp(d x) to (axial stress, ductility) points "
+                                   "([K25] Eq. 15) and reports 95 %% confidence bounds (needs >= 5 points for bounds).")
+    p.add_argument("source", metavar="CSV", help="CSV with the axial stress and ductility columns")
+    p.add_argument("--x", help="axial stress column (default: first)")
+    p.add_argument("--y", help="ductility column (default: second)")
+    p.add_argument("--x-unit", default="MPa", choices=list(STRESS_UNITS),
+                   help="unit of the stress column, used for labels; b and d are per this unit (default MPa)")
+    p.add_argument("--level", type=float, default=0.95, help="confidence level (default 0.95)")
+    p.add_argument("-o", "--out", help="output prefix (default: CSV_STEM_fit)")
+    p.add_argument("--no-plot", action="store_true", help="write the JSON only")
+    p.set_defaults(func=cmd_ductility_fit)
+
+    p = sub.add_parser("hysteresis", help="per-cycle peaks, secant stiffness and dissipated energy of a cyclic curve",
+                       description="Per-cycle peaks, secant stiffness k_i, k_d = k_i / k_el, cumulative dissipated "
+                                   "energy E_i and E_d = E_i / E_h of a cyclic load-displacement curve (FORMULATION §9).")
+    p.add_argument("source", metavar="SOURCE", help="run folder or CSV file")
+    _units_args(p)
+    p.add_argument("--k-el", type=float, help="reference elastic stiffness in report units (default: k of the first cycle)")
+    p.add_argument("--e-h", type=float, help="reference energy E_h in J (default: the total at the end)")
+    p.add_argument("--deadband", type=float, default=1e-3,
+                   help="zero band for cycle detection, fraction of the largest displacement (default 1e-3)")
+    p.add_argument("--no-plot", action="store_true", help="write the JSON and CSV only")
+    p.set_defaults(func=cmd_hysteresis)
+
+    import importlib
+    for name in COMMAND_MODULES:  # each adds its own sub-command(s)
+        importlib.import_module(f".{name}", __package__).add_parser(sub)
+    return ap
+
+
+def main(argv=None) -> int:
+    ap = build_parser()
+    args = ap.parse_args(argv)
+    if not getattr(args, "func", None):
+        ap.print_help()
+        return 1
+    try:
+        rc = args.func(args)
+        return int(rc or 0)
+    except ToolError as e:
+        print(f"{PROG} {args.command}: error: {e}", file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        print(f"{PROG} {args.command}: interrupted", file=sys.stderr)
+        return 130
+    except Exception as e:  # a bug or an unforeseen input: still one line unless debugging
+        if os.environ.get("FDEM_TOOLS_DEBUG"):
+            raise
+        print(f"{PROG} {args.command}: error: {type(e).__name__}: {e} (FDEM_TOOLS_DEBUG=1 shows the traceback)",
+              file=sys.stderr)
+        return 3

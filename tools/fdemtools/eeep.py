@@ -1,0 +1,184 @@
+"""Equivalent energy elastic-plastic (EEEP) bilinear curve and ductility. FORMULATION §9, [K25] Eq. 14, ASTM E2126.
+
+Continuous definitions, for a monotonic load-displacement curve P(Delta) starting at the origin:
+  K_e      elastic stiffness: least-squares line through the origin fitted to the ascending branch
+           for P <= f P_peak (f = 0.7 by default, 0.4 is the ASTM E2126 choice), or the secant at f P_peak;
+  Delta_u  ultimate displacement: at the peak (the [K25] choice) or where the load has dropped after the
+           peak to 0.8 P_peak (ASTM E2126);
+  A        = int_0^Delta_u P dDelta, the area under the curve;
+  the EEEP curve (0,0)-(Delta_y,P_y)-(Delta_u,P_y) has the same area A:
+           P_y Delta_u - P_y^2 / (2 K_e) = A  =>  P_y = K_e (Delta_u - sqrt(Delta_u^2 - 2 A / K_e))
+  Delta_y  = P_y / K_e,  mu = Delta_u / Delta_y.
+Discrete form coded here: the sampled curve is taken as piecewise linear between its points, so A is the
+trapezoidal rule (exact for the polyline) and the 70 % and 80 % crossings are linear interpolations.
+P_y is evaluated as 2 A / (Delta_u + sqrt(Delta_u^2 - 2 A / K_e)), the same value without the cancellation of
+the difference form. When Delta_u^2 < 2 A / K_e (the curve holds more energy than any elastic-plastic line
+of stiffness K_e can), ASTM E2126 allows P_y = 0.85 P_peak; that fallback is used and flagged.
+All quantities are in whatever consistent units the arrays carry (SI from the command line).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .common import ToolError
+
+
+def _interp_x(x0, y0, x1, y1, y):
+    """x where the segment (x0,y0)-(x1,y1) reaches load y."""
+    if y1 == y0:
+        return x1
+    return x0 + (y - y0) * (x1 - x0) / (y1 - y0)
+
+
+def eeep(d, p, fraction: float = 0.7, ultimate: str = "peak", drop: float = 0.8, stiffness: str = "regression",
+         source: str = "curve") -> dict:
+    """EEEP analysis of the curve (d, p). Returns a dict of results (same units as the input).
+
+    fraction: regression limit as a fraction of the peak load (0 < fraction <= 1).
+    ultimate: "peak" ([K25]) or "drop" (ASTM E2126: post-peak drop to `drop` x peak).
+    stiffness: "regression" (least squares through the origin) or "secant" (at fraction x peak).
+    """
+    if not 0 < fraction <= 1:
+        raise ToolError(f"regression limit must be in (0, 1], got {fraction}")
+    if not 0 < drop < 1:
+        raise ToolError(f"post-peak drop level must be in (0, 1), got {drop}")
+    if ultimate not in ("peak", "drop"):
+        raise ToolError(f"ultimate displacement rule must be 'peak' or 'drop', got '{ultimate}'")
+    if stiffness not in ("regression", "secant"):
+        raise ToolError(f"stiffness rule must be 'regression' or 'secant', got '{stiffness}'")
+    d = np.asarray(d, dtype=float)
+    p = np.asarray(p, dtype=float)
+    if d.shape != p.shape or d.ndim != 1:
+        raise ToolError(f"{source}: displacement and load must be two columns of equal length")
+    if len(d) < 2:
+        raise ToolError(f"{source}: the curve needs at least two points")
+    if not (np.isfinite(d).all() and np.isfinite(p).all()):
+        raise ToolError(f"{source}: the curve contains non-finite values")
+
+    # A curve loaded in the negative direction is analysed as its mirror image.
+    sign = 1.0
+    if abs(p.min()) > abs(p.max()):
+        sign = -1.0
+        d, p = -d, -p
+    # The bilinear idealisation starts at the origin, so the curve must too.
+    origin_added = not (d[0] == 0.0 and p[0] == 0.0)
+    if origin_added:
+        d = np.concatenate(([0.0], d))
+        p = np.concatenate(([0.0], p))
+
+    p_peak = float(p.max())
+    if p_peak <= 0:
+        raise ToolError(f"{source}: the curve has no peak (the load is never positive)")
+    # On a plateau the peak is its far end: an elastic-perfectly-plastic curve peaks at its last point.
+    i_peak = int(len(p) - 1 - np.argmax(p[::-1] == p_peak))
+    d_peak = float(d[i_peak])
+    if d_peak <= 0:
+        raise ToolError(f"{source}: the curve has no peak at positive displacement")
+
+    # Ultimate displacement.
+    ultimate_note = "displacement at peak load ([K25])"
+    n_u = i_peak  # last full point before the end of the integration
+    d_u, p_u = d_peak, p_peak
+    if ultimate == "drop":
+        level = drop * p_peak
+        below = np.nonzero(p[i_peak + 1:] < level)[0]
+        if len(below):
+            j = i_peak + 1 + int(below[0])
+            d_u = float(_interp_x(d[j - 1], p[j - 1], d[j], p[j], level))
+            p_u = level
+            n_u = j - 1
+            ultimate_note = f"post-peak drop to {drop:g} x peak load (ASTM E2126)"
+        else:
+            n_u = len(d) - 1
+            d_u, p_u = float(d[-1]), float(p[-1])
+            ultimate_note = f"last point: the load never drops to {drop:g} x peak (ASTM E2126 failure limit not reached)"
+
+    # Area under the polyline up to Delta_u (path integral, so a non-monotonic displacement counts correctly).
+    dd = np.concatenate((d[:n_u + 1], [d_u]))
+    pp = np.concatenate((p[:n_u + 1], [p_u]))
+    area = float(np.sum(0.5 * (pp[1:] + pp[:-1]) * np.diff(dd)))
+    if area <= 0:
+        raise ToolError(f"{source}: the area under the curve up to the ultimate displacement is not positive")
+
+    # Elastic stiffness from the ascending branch up to fraction x peak.
+    level = fraction * p_peak
+    over = np.nonzero(p[:i_peak + 1] > level)[0]
+    if len(over):
+        k = int(over[0])
+        d_lim = float(_interp_x(d[k - 1], p[k - 1], d[k], p[k], level))
+        bd = np.concatenate((d[:k], [d_lim]))
+        bp = np.concatenate((p[:k], [level]))
+    else:  # fraction == 1
+        d_lim = d_peak
+        bd, bp = d[:i_peak + 1], p[:i_peak + 1]
+    if stiffness == "secant":
+        if d_lim <= 0:
+            raise ToolError(f"{source}: the curve reaches {fraction:g} x peak at non-positive displacement")
+        k_e = level / d_lim
+    else:
+        sxx = float(np.dot(bd, bd))
+        if sxx <= 0 or np.count_nonzero(bd) < 1:
+            raise ToolError(f"{source}: no points on the ascending branch below {fraction:g} x peak for the regression")
+        k_e = float(np.dot(bd, bp)) / sxx
+    if k_e <= 0:
+        raise ToolError(f"{source}: the elastic stiffness from the ascending branch is not positive ({k_e:g})")
+
+    disc = d_u * d_u - 2.0 * area / k_e
+    if disc >= 0:
+        p_y = 2.0 * area / (d_u + np.sqrt(disc))
+        yield_note = "equal energy ([K25] Eq. 14)"
+    else:
+        p_y = 0.85 * p_peak
+        yield_note = "0.85 x peak load (ASTM E2126 when Delta_u^2 < 2 A / K_e): EEEP area differs from A"
+    d_y = p_y / k_e
+    mu = d_u / d_y
+    eeep_area = p_y * d_u - 0.5 * p_y * d_y
+
+    return {
+        "K_e": k_e,
+        "P_peak": p_peak,
+        "Delta_peak": d_peak,
+        "Delta_u": d_u,
+        "P_u": p_u,
+        "area": area,
+        "P_y": float(p_y),
+        "Delta_y": float(d_y),
+        "ductility": float(mu),
+        "eeep_area": float(eeep_area),
+        "regression_limit": fraction,
+        "regression_points": int(len(bd)),
+        "stiffness_rule": stiffness,
+        "ultimate_rule": ultimate,
+        "ultimate_note": ultimate_note,
+        "yield_note": yield_note,
+        "mirrored": sign < 0,
+        "origin_added": origin_added,
+        "bilinear": {"x": [0.0, float(d_y), float(d_u)], "y": [0.0, float(p_y), float(p_y)]},
+    }
+
+
+def plot(curve_d, curve_p, res: dict, prefix: str, label: str, x_unit=("mm", 1e-3), y_unit=("kN", 1e3)) -> list:
+    """The curve, its EEEP bilinear idealisation and the markers of yield, peak and ultimate points."""
+    from .figures import new_figure, save
+    sx, sy = 1.0 / x_unit[1], 1.0 / y_unit[1]
+    s = -1.0 if res["mirrored"] else 1.0
+    fig, ax = new_figure()
+    ax.plot(s * np.asarray(curve_d) * sx, s * np.asarray(curve_p) * sy, color="0.2", lw=1.4, label=label)
+    bx = np.array(res["bilinear"]["x"]) * sx
+    by = np.array(res["bilinear"]["y"]) * sy
+    ax.plot(bx, by, color="#d62728", lw=1.8, ls="--",
+            label=f"EEEP: $K_e$={res['K_e'] * sx / sy:.4g} {y_unit[0]}/{x_unit[0]}, "
+                  f"$P_y$={res['P_y'] * sy:.4g} {y_unit[0]}, $\\mu$={res['ductility']:.3g}")
+    ax.plot([res["Delta_y"] * sx], [res["P_y"] * sy], "o", color="#d62728", ms=5)
+    ax.plot([res["Delta_peak"] * sx], [res["P_peak"] * sy], "^", color="0.2", ms=6,
+            label=f"peak {res['P_peak'] * sy:.4g} {y_unit[0]}")
+    ax.axvline(res["Delta_u"] * sx, color="0.5", lw=0.8, ls=":")
+    ax.annotate(r"$\Delta_u$", (res["Delta_u"] * sx, 0), xytext=(3, 3), textcoords="offset points", color="0.3")
+    ax.set_xlabel(f"displacement ({x_unit[0]})" + (" [mirrored]" if res["mirrored"] else ""))
+    ax.set_ylabel(f"load ({y_unit[0]})")
+    ax.set_title(f"EEEP idealisation, ultimate: {res['ultimate_rule']}, regression to {res['regression_limit']:g} P_peak",
+                 fontsize=9)
+    ax.set_xlim(left=0)
+    ax.set_ylim(bottom=0)
+    ax.legend(loc="lower right", fontsize=8)
+    return save(fig, prefix)

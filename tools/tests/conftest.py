@@ -1,0 +1,31 @@
+"""Puts tools/ on sys.path so the tests import fdemtools from any working directory, and gives helpers."""
+import os
+import subprocess
+import sys
+
+import pytest
+
+TOOLS = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+if TOOLS not in sys.path:
+    sys.path.insert(0, TOOLS)
+os.environ.setdefault("MPLBACKEND", "Agg")
+
+ENTRY = os.path.join(TOOLS, "fdem-tools")
+DATA = os.path.join(os.path.dirname(os.path.abspath(__file__)), "data")
+
+
+def run_cli(*args, cwd=None, env=None):
+    """Runs the fdem-tools entry as a user would; returns (exit code, stdout, stderr)."""
+    e = dict(os.environ)
+    e["MPLBACKEND"] = "Agg"
+    e.pop("FDEM_TOOLS_DEBUG", None)
+    if env:
+        e.update(env)
+    r = subprocess.run([sys.executable, ENTRY, *map(str, args)], capture_output=True, text=True, cwd=cwd, env=e,
+                       timeout=300)
+    return r.returncode, r.stdout, r.stderr
+
+
+@pytest.fixture
+def cli():
+    return run_cli

@@ -1,0 +1,158 @@
+import json
+
+import numpy as np
+import pytest
+
+from fdemtools import eeep
+from fdemtools.common import ToolError
+
+
+def epp_curve(k, dy, du, n_el=7, n_pl=11):
+    """Elastic-perfectly-plastic curve: stiffness k up to yield displacement dy, plateau to du."""
+    d = np.concatenate((np.linspace(0, dy, n_el), np.linspace(dy, du, n_pl)[1:]))
+    p = np.minimum(k * d, k * dy)
+    return d, p
+
+
+@pytest.mark.parametrize("ultimate", ["peak", "drop"])
+@pytest.mark.parametrize("limit", [0.4, 0.7])
+def test_ideal_epp_returns_itself(ultimate, limit):
+    k, dy, du = 3.7e6, 1.3e-3, 11.9e-3  # N/m, m, m
+    d, p = epp_curve(k, dy, du)
+    r = eeep.eeep(d, p, fraction=limit, ultimate=ultimate)
+    assert r["K_e"] == pytest.approx(k, rel=1e-9)
+    assert r["P_y"] == pytest.approx(k * dy, rel=1e-9)
+    assert r["Delta_y"] == pytest.approx(dy, rel=1e-9)
+    assert r["Delta_u"] == pytest.approx(du, rel=1e-9)
+    assert r["ductility"] == pytest.approx(du / dy, rel=1e-9)
+    assert r["eeep_area"] == pytest.approx(r["area"], rel=1e-9)
+
+
+def test_ideal_epp_secant_and_mirrored():
+    k, dy, du = 2.0e7, 0.5e-3, 4e-3
+    d, p = epp_curve(k, dy, du)
+    r = eeep.eeep(-d, -p, stiffness="secant")
+    assert r["mirrored"]
+    assert r["K_e"] == pytest.approx(k, rel=1e-9)
+    assert r["ductility"] == pytest.approx(du / dy, rel=1e-9)
+
+
+def softening_curve(n=400, seed=0):
+    """A smooth curve with hardening, a peak and softening, sampled irregularly, with a little noise."""
+    rng = np.random.default_rng(seed)
+    d = np.sort(rng.uniform(0, 20e-3, n))
+    d[0] = 0.0
+    p = 60e3 * (1 - np.exp(-d / 2.5e-3)) * np.exp(-((d / 14e-3) ** 2)) + 300.0 * rng.standard_normal(n)
+    p[0] = 0.0
+    return d, p
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+@pytest.mark.parametrize("ultimate", ["peak", "drop"])
+@pytest.mark.parametrize("limit", [0.4, 0.7])
+def test_area_equivalence_any_curve(seed, ultimate, limit):
+    d, p = softening_curve(seed=seed)
+    r = eeep.eeep(d, p, fraction=limit, ultimate=ultimate)
+    assert r["yield_note"].startswith("equal energy")
+    # independent area: trapezoid of the curve up to Delta_u with the end point interpolated by np.interp
+    # on the branch that contains Delta_u
+    du = r["Delta_u"]
+    keep = d < du
+    if ultimate == "peak":
+        keep = np.arange(len(d)) <= int(np.nonzero(p == p.max())[0][-1])
+        xs, ys = d[keep], p[keep]
+    else:
+        xs = np.append(d[keep], du)
+        ys = np.append(p[keep], r["P_u"])
+    area = np.trapz(ys, xs)
+    assert r["area"] == pytest.approx(area, rel=1e-12)
+    assert r["eeep_area"] == pytest.approx(r["area"], rel=1e-9)
+    bil = r["bilinear"]
+    assert np.trapz(bil["y"], bil["x"]) == pytest.approx(r["area"], rel=1e-9)
+    assert r["Delta_y"] < r["Delta_u"]
+    if ultimate == "drop":
+        assert r["P_u"] == pytest.approx(0.8 * r["P_peak"], rel=1e-12)
+        assert r["Delta_u"] > r["Delta_peak"]
+
+
+def test_drop_interpolates_crossing():
+    # peak 10 at d=2, then falls linearly 10 -> 0 over d 2 -> 4: 80 % at d = 2.4
+    d = np.array([0, 1, 2, 3, 4.0])
+    p = np.array([0, 5, 10, 5, 0.0])
+    r = eeep.eeep(d, p, ultimate="drop")
+    assert r["Delta_u"] == pytest.approx(2.4, rel=1e-14)
+    assert r["area"] == pytest.approx(10.0 + 0.4 * (10 + 8) / 2, rel=1e-14)
+    # regression up to 70 %: points (0,0), (1,5), (1.4,7) on the line k = 5
+    assert r["K_e"] == pytest.approx(5.0, rel=1e-14)
+
+
+def test_regression_limit_matters():
+    # a curve stiffer at first: K from the first 40 % is higher than from the first 70 %
+    d = np.linspace(0, 10, 201)
+    p = 10 * np.tanh(d / 2)
+    r4 = eeep.eeep(d, p, fraction=0.4)
+    r7 = eeep.eeep(d, p, fraction=0.7)
+    assert r4["K_e"] > r7["K_e"]
+    assert r4["regression_points"] < r7["regression_points"]
+
+
+@pytest.mark.parametrize("d,p", [
+    ([0, 1, 2], [0, 0, 0]),        # never loaded
+    ([0, 1, 2], [0, -1, -2]),      # load opposes the displacement: mirrored, the peak is at negative displacement
+    ([0, 1, 2], [5, 3, 1]),        # peak at the origin, nothing ascends
+])
+def test_no_peak_is_an_error(d, p):
+    with pytest.raises(ToolError, match="no peak"):
+        eeep.eeep(np.array(d, float), np.array(p, float))
+
+
+def test_negative_loading_is_mirrored():
+    d, p = epp_curve(2.0, 1.0, 5.0)
+    r = eeep.eeep(-d, -p)
+    assert r["mirrored"] and r["ductility"] == pytest.approx(5.0, rel=1e-12)
+
+
+def test_cli_csv_units_and_files(tmp_path, cli):
+    k, dy, du = 4.0, 1.5, 12.0  # kN/mm, mm, mm
+    d, p = epp_curve(k, dy, du)
+    f = tmp_path / "exp.csv"
+    f.write_text("disp_mm,load_kN,other\n" + "".join(f"{a!r},{b!r},1\n" for a, b in zip(d, p)))
+    rc, out, err = cli("eeep", f, "--x", "disp_mm", "--y", "load_kN", "--x-unit", "mm", "--y-unit", "kN",
+                       "--ultimate", "drop")
+    assert rc == 0, err
+    res = json.loads((tmp_path / "exp_eeep.json").read_text())
+    assert res["K_e"] == pytest.approx(k, rel=1e-9)  # kN/mm
+    assert res["P_y"] == pytest.approx(k * dy, rel=1e-9)  # kN
+    assert res["Delta_y"] == pytest.approx(dy, rel=1e-9)  # mm
+    assert res["ductility"] == pytest.approx(du / dy, rel=1e-9)
+    assert res["si"]["K_e"] == pytest.approx(k * 1e6, rel=1e-9)  # N/m
+    for ext in ("png", "svg"):
+        assert (tmp_path / f"exp_eeep.{ext}").stat().st_size > 1000
+
+
+@pytest.mark.parametrize("content,args,needle", [
+    ("a,b\n0,0\n1,1\n2,2\n", ["--x", "u", "--y", "b"], "no column 'u'"),
+    ("a,b\n0,0\n1,-0.5\n2,0\n", [], "no peak"),
+    ("a,b\n0,0\n1,x\n", [], "not numeric"),
+    ("", [], "empty file"),
+    ("a,b\n0,0\n1\n", [], "has 1 fields"),
+])
+def test_cli_bad_input_one_line(tmp_path, cli, content, args, needle):
+    f = tmp_path / "c.csv"
+    f.write_text(content)
+    rc, out, err = cli("eeep", f, *args)
+    assert rc == 1
+    assert needle in err
+    assert len(err.strip().splitlines()) == 1
+    assert "Traceback" not in err
+
+
+def test_cli_missing_file_and_unfinished_run(tmp_path, cli):
+    rc, out, err = cli("eeep", tmp_path / "nope.csv")
+    assert rc == 1 and "no such file" in err and len(err.strip().splitlines()) == 1
+    run = tmp_path / "run"
+    run.mkdir()
+    (run / "summary.json").write_text(json.dumps({"status": "running", "curve": {"x": "u", "y": "F"}}))
+    (run / "history.csv").write_text("time,step,stage,u,F\n0,0,1,0,0\n")
+    rc, out, err = cli("eeep", run)
+    assert rc == 1 and "not 'completed'" in err and len(err.strip().splitlines()) == 1
