@@ -606,6 +606,8 @@ void Simulation::run() {
     log("time step: " + sci(dt_) + " s = " + (spec_.dt_override ? std::string("fixed by numerics.dt") : sci(spec_.safety) + " x stable limit") +
         " " + sci(dt_limit_) + " s (set by triangle " + std::to_string(dt_element_) + ")");
     log("threads: " + std::to_string(omp_get_max_threads()));
+    if (!spec_.dt_override && spec_.safety > 1)
+        log("warning: numerics.safety = " + sci(spec_.safety) + " > 1: the time step exceeds the stability limit");
     if (!opt_.out_dir.empty()) write_summary("running", "");
     for (std::size_t s = 0; s < spec_.stages.size(); ++s) {
         begin_stage(static_cast<int>(s));

@@ -1,0 +1,67 @@
+// Helpers shared by the engine tests: temporary case files, running the fdem executable.
+#pragma once
+
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <sys/wait.h>
+
+#include "fdem/case.hpp"
+#include "fdem/model.hpp"
+#include "fdem/simulation.hpp"
+
+namespace testing {
+
+inline std::filesystem::path tmp_dir(const std::string& name) {
+    auto d = std::filesystem::path(FDEM_TEST_TMP) / name;
+    std::filesystem::remove_all(d);
+    std::filesystem::create_directories(d);
+    return d;
+}
+
+inline std::string write_text(const std::filesystem::path& p, const std::string& text) {
+    std::ofstream f(p);
+    f << text;
+    return p.string();
+}
+
+inline std::string read_text(const std::filesystem::path& p) {
+    std::ifstream f(p, std::ios::binary);
+    std::stringstream s;
+    s << f.rdbuf();
+    return s.str();
+}
+
+struct CliResult {
+    int code = -1;
+    std::string out, err;
+};
+
+// Runs the fdem executable with `args` (already quoted as needed) and captures its exit code and output.
+inline CliResult run_fdem(const std::string& args, const std::filesystem::path& dir) {
+    const auto out = dir / "stdout.txt", err = dir / "stderr.txt";
+    const std::string cmd = std::string("\"") + FDEM_BIN + "\" " + args + " >\"" + out.string() + "\" 2>\"" + err.string() + "\"";
+    const int status = std::system(cmd.c_str());
+    CliResult r;
+    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    r.out = read_text(out);
+    r.err = read_text(err);
+    return r;
+}
+
+// Loads a case from text, meshes it and returns a Simulation that writes no files.
+inline fdem::Simulation make_simulation(const std::string& case_text, const std::string& name,
+                                        const std::vector<std::string>& overrides = {}) {
+    const auto dir = tmp_dir(name);
+    const std::string path = write_text(dir / "case.toml", case_text);
+    fdem::CaseSpec spec = fdem::load_case(path, overrides);
+    fdem::Model model = fdem::build_model(spec, fdem::make_mesh(spec));
+    fdem::RunOptions opt;
+    opt.quiet = true;
+    return fdem::Simulation(spec, std::move(model), opt);
+}
+
+}  // namespace testing

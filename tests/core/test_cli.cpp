@@ -1,0 +1,163 @@
+// The fdem command as users meet it: malformed case files, exit codes, run folder, determinism.
+#include <catch2/catch.hpp>
+
+#include <regex>
+
+#include "engine_helpers.hpp"
+
+namespace {
+
+const std::string kGood = R"([case]
+name = "good"
+thickness = 0.1
+plane = "stress"
+
+[geometry]
+type = "rectangle"
+width = 1.0
+height = 0.5
+mesh_size = 0.1
+
+[materials.stone]
+E = 1.0e9
+nu = 0.2
+density = 2400.0
+
+[regions]
+body = "stone"
+
+[[monitors]]
+name = "u_top"
+type = "displacement"
+group = "top"
+component = "x"
+
+[[stages]]
+name = "load"
+duration = 0.001
+  [[stages.supports]]
+  group = "bottom"
+  fix = "xy"
+  [[stages.loads]]
+  group = "top"
+  force = [100.0, 0.0]
+)";
+
+std::string replace(std::string s, const std::string& from, const std::string& to) {
+    const auto p = s.find(from);
+    REQUIRE(p != std::string::npos);
+    return s.replace(p, from.size(), to);
+}
+
+}  // namespace
+
+TEST_CASE("fdem check accepts a good case", "[unit]") {
+    const auto dir = testing::tmp_dir("cli_good");
+    const auto path = testing::write_text(dir / "case.toml", kGood);
+    const auto r = testing::run_fdem("check \"" + path + "\"", dir);
+    INFO(r.err);
+    CHECK(r.code == 0);
+    CHECK(r.out.find("ok") != std::string::npos);
+}
+
+TEST_CASE("malformed case files give exit code 1 and name the key and the line", "[unit]") {
+    struct Bad {
+        const char* what;
+        std::string text;
+        std::string key;  // must appear in the message
+        int line;         // must appear as ":line:" (0: not checked, e.g. a key that is missing)
+    };
+    const std::vector<Bad> bad = {
+        {"negative modulus", replace(kGood, "E = 1.0e9", "E = -1.0e9"), "materials.stone.E", 13},
+        {"Poisson ratio 0.5", replace(kGood, "nu = 0.2", "nu = 0.5"), "materials.stone.nu", 14},
+        {"zero thickness", replace(kGood, "thickness = 0.1", "thickness = 0.0"), "case.thickness", 3},
+        {"negative density", replace(kGood, "density = 2400.0", "density = -1.0"), "materials.stone.density", 15},
+        {"typo in a key", replace(kGood, "thickness = 0.1", "thicknes = 0.1"), "case.thicknes", 3},
+        {"wrong type", replace(kGood, "width = 1.0", "width = \"wide\""), "geometry.width", 8},
+        {"missing key", replace(kGood, "density = 2400.0\n", ""), "materials.stone.density", 0},
+        {"unknown group", replace(kGood, "group = \"bottom\"", "group = \"botom\""), "stages.0.supports.0.group", 0},
+        {"stage that never ends", replace(kGood, "duration = 0.001", "name2 = 1"), "stages.0", 0},
+        {"unknown material", replace(kGood, "body = \"stone\"", "body = \"granite\""), "regions.body", 18},
+        {"bad plane", replace(kGood, "plane = \"stress\"", "plane = \"stres\""), "case.plane", 4},
+        {"unknown geometry type", replace(kGood, "type = \"rectangle\"", "type = \"circle\""), "geometry.type", 7},
+        {"TOML syntax error", replace(kGood, "width = 1.0", "width = = 1.0"), "", 8},
+        {"monitor of unknown type", replace(kGood, "type = \"displacement\"", "type = \"strain\""), "monitors.0.type", 22},
+        {"until on a missing monitor", replace(kGood, "duration = 0.001", "until = { monitor = \"nope\", value = 1.0 }\nmax_duration = 1.0"),
+         "stages.0.until.monitor", 0},
+        {"negative ramp", replace(kGood, "force = [100.0, 0.0]", "force = [100.0, 0.0]\n  ramp = -1.0"), "stages.0.loads.0.ramp", 0},
+    };
+    for (const auto& b : bad) {
+        SECTION(b.what) {
+            const auto dir = testing::tmp_dir("cli_bad");
+            const auto path = testing::write_text(dir / "case.toml", b.text);
+            for (const char* cmd : {"check", "run"}) {
+                const auto r = testing::run_fdem(std::string(cmd) + " \"" + path + "\" --quiet --out \"" + (dir / "run").string() + "\"", dir);
+                INFO(b.what << " (" << cmd << "): " << r.err);
+                CHECK(r.code == 1);
+                CHECK(r.err.find("error") != std::string::npos);
+                CHECK(r.err.find(path) != std::string::npos);
+                if (!b.key.empty()) CHECK(r.err.find("'" + b.key) != std::string::npos);
+                if (b.line > 0) CHECK(r.err.find(":" + std::to_string(b.line) + ":") != std::string::npos);
+            }
+        }
+    }
+}
+
+TEST_CASE("bad command lines give exit code 1", "[unit]") {
+    const auto dir = testing::tmp_dir("cli_args");
+    const auto path = testing::write_text(dir / "case.toml", kGood);
+    CHECK(testing::run_fdem("", dir).code == 1);
+    CHECK(testing::run_fdem("fly \"" + path + "\"", dir).code == 1);
+    CHECK(testing::run_fdem("run \"" + path + "\" --threads zero", dir).code == 1);
+    CHECK(testing::run_fdem("run \"" + path + "\" --bogus", dir).code == 1);
+    CHECK(testing::run_fdem("run \"" + (dir / "missing.toml").string() + "\"", dir).code == 1);
+    auto r = testing::run_fdem("run \"" + path + "\" --set materials.stone.E=-5", dir);
+    CHECK(r.code == 1);
+    CHECK(r.err.find("--set materials.stone.E") != std::string::npos);
+    CHECK(testing::run_fdem("--help", dir).code == 0);
+}
+
+TEST_CASE("a run writes history, summary, snapshots and a pvd collection", "[unit]") {
+    const auto dir = testing::tmp_dir("cli_run");
+    const auto path = testing::write_text(dir / "case.toml", kGood);
+    const auto r = testing::run_fdem("run \"" + path + "\" --quiet --out \"" + (dir / "run").string() + "\"", dir);
+    INFO(r.err);
+    REQUIRE(r.code == 0);
+    const std::string hist = testing::read_text(dir / "run" / "history.csv");
+    CHECK(hist.rfind("time,step,stage,u_top,E_kin,E_el,W_ext,D_damp,D_visc,E_balance\n", 0) == 0);
+    const std::string summary = testing::read_text(dir / "run" / "summary.json");
+    CHECK(summary.find("\"status\": \"completed\"") != std::string::npos);
+    CHECK(summary.find("\"dt\"") != std::string::npos);
+    CHECK(summary.find("\"triangle_steps_per_s\"") != std::string::npos);
+    const std::string pvd = testing::read_text(dir / "run" / "run.pvd");
+    std::smatch m;
+    REQUIRE(std::regex_search(pvd, m, std::regex("file=\"([^\"]+)\"")));
+    const std::string vtu = testing::read_text(dir / "run" / m[1].str());
+    CHECK(vtu.find("<VTKFile type=\"UnstructuredGrid\"") != std::string::npos);
+    CHECK(vtu.find("Name=\"displacement\"") != std::string::npos);
+    CHECK(vtu.find("Name=\"stress\"") != std::string::npos);
+    // No temporary file is left behind.
+    for (const auto& e : std::filesystem::recursive_directory_iterator(dir / "run"))
+        CHECK(e.path().extension() != ".tmp");
+}
+
+TEST_CASE("the same case gives byte-identical history.csv with 1 and 2 threads", "[regression]") {
+    const auto dir = testing::tmp_dir("cli_threads");
+    // ~10,000 triangles, so that both loops are split over threads (blocks of 4096 items).
+    std::string text = replace(kGood, "mesh_size = 0.1", "mesh_size = 0.008");
+    text = replace(text, "duration = 0.001", "duration = 0.0002\nlocal_damping = 0.3\ngravity = [0.0, -9.81]");
+    text = replace(text, "[[stages]]", "[output]\nhistory_interval = 1e-5\n\n[[stages]]");
+    const auto path = testing::write_text(dir / "case.toml", text);
+    std::string h[3];
+    int i = 0;
+    for (int threads : {1, 2, 4}) {
+        const auto out = dir / ("t" + std::to_string(threads));
+        const auto r = testing::run_fdem("run \"" + path + "\" --quiet --threads " + std::to_string(threads) + " --out \"" + out.string() + "\"", dir);
+        INFO(r.err);
+        REQUIRE(r.code == 0);
+        h[i++] = testing::read_text(out / "history.csv");
+    }
+    REQUIRE(h[0].size() > 1000);
+    CHECK(h[0] == h[1]);
+    CHECK(h[0] == h[2]);
+}

@@ -1,0 +1,315 @@
+// Closed-form checks of the deformable triangle and the integrator: rigid rotation, patch test,
+// P-wave speed, energy conservation, cantilever convergence, stability limit.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <random>
+
+#include "engine_helpers.hpp"
+#include "fdem/errors.hpp"
+#include "fdem/triangle.hpp"
+#include "mesh/gmsh_source.hpp"
+
+using namespace fdem;
+
+namespace {
+
+const char* kBlockCase = R"(
+[case]
+name = "block"
+thickness = 0.1
+plane = "stress"
+[geometry]
+type = "rectangle"
+width = 1.0
+height = 0.6
+mesh_size = 0.1
+[materials.m]
+E = 1.0e9
+nu = 0.25
+density = 1000.0
+[regions]
+body = "m"
+[[stages]]
+duration = 1.0
+)";
+
+// Net internal force on every node (gathered like the integrator does), for the current x.
+std::vector<double> nodal_forces(const Model& md) {
+    std::vector<double> f(2 * md.n_nodes(), 0.0);
+    double f6[6], p;
+    for (int e = 0; e < md.n_triangles(); ++e) {
+        triangle_forces(md.tris[e], md.mat[md.tris[e].mat], md.x.data(), md.v.data(), f6, p);
+        for (int k = 0; k < 3; ++k) f[2 * md.tris[e].n[k]] += f6[2 * k], f[2 * md.tris[e].n[k] + 1] += f6[2 * k + 1];
+    }
+    return f;
+}
+
+}  // namespace
+
+TEST_CASE("a mesh rotated rigidly carries no stress", "[unit]") {
+    auto sim = testing::make_simulation(kBlockCase, "rigid");
+    Model& md = sim.model();
+    const double E = 1e9;
+    for (double deg : {90.0, 37.0, 180.0}) {
+        const double a = deg * M_PI / 180, c = std::cos(a), s = std::sin(a);
+        for (int k = 0; k < md.n_nodes(); ++k) {
+            const double X = md.X[2 * k], Y = md.X[2 * k + 1];
+            md.x[2 * k] = 0.3 + c * X - s * Y;
+            md.x[2 * k + 1] = -0.2 + s * X + c * Y;
+        }
+        double max_stress = 0, max_force = 0;
+        for (int e = 0; e < md.n_triangles(); ++e) {
+            double s3[3], f6[6], p;
+            triangle_stress(md.tris[e], md.mat[0], md.x.data(), s3);
+            triangle_forces(md.tris[e], md.mat[0], md.x.data(), md.v.data(), f6, p);
+            for (double v : s3) max_stress = std::max(max_stress, std::abs(v));
+            // Force scale of the triangle: E * t * (edge length) ~ E * A0t / h.
+            for (double v : f6) max_force = std::max(max_force, std::abs(v) / (E * md.tris[e].A0t / md.tri_altitude[e]));
+        }
+        INFO("rotation " << deg << " deg");
+        CHECK(max_stress / E < 1e-9);
+        CHECK(max_force < 1e-9);
+        CHECK(sim.energies().elastic < 1e-9 * E * 0.06);
+    }
+}
+
+TEST_CASE("patch test: a uniform strain on the boundary of an unstructured mesh is reproduced inside", "[unit]") {
+    const std::string text = std::string(kBlockCase) + R"(
+[[stages.supports]]
+group = "left"
+fix = "xy"
+[[stages.supports]]
+group = "right"
+fix = "xy"
+[[stages.supports]]
+group = "top"
+fix = "xy"
+[[stages.supports]]
+group = "bottom"
+fix = "xy"
+)";
+    // duration replaced: damped relaxation to equilibrium.
+    auto sim = testing::make_simulation(text, "patch",
+                                        {"stages.0.duration=0.5", "stages.0.local_damping=0.7"});
+    Model& md = sim.model();
+    const double F[4] = {1.002, 0.0007, -0.0004, 0.9985};  // uniform deformation gradient (finite strain)
+    auto exact = [&](int k, int c) {
+        const double X = md.X[2 * k], Y = md.X[2 * k + 1];
+        return c == 0 ? F[0] * X + F[1] * Y : F[2] * X + F[3] * Y;
+    };
+    for (int k = 0; k < md.n_nodes(); ++k) md.x[2 * k] = exact(k, 0), md.x[2 * k + 1] = exact(k, 1);
+
+    // 1. At the exact field every interior node is in equilibrium and every triangle has the same stress.
+    const auto f = nodal_forces(md);
+    std::vector<char> boundary(md.n_nodes(), 0);
+    for (const char* side : {"left", "right", "top", "bottom"})
+        for (int k : md.group(side).nodes) boundary[k] = 1;
+    double fmax_int = 0, fscale = 0;
+    for (int k = 0; k < md.n_nodes(); ++k) {
+        fscale = std::max({fscale, std::abs(f[2 * k]), std::abs(f[2 * k + 1])});
+        if (!boundary[k]) fmax_int = std::max({fmax_int, std::abs(f[2 * k]), std::abs(f[2 * k + 1])});
+    }
+    REQUIRE(fscale > 0);
+    CHECK(fmax_int / fscale < 1e-10);
+    double s_ref[3];
+    triangle_stress(md.tris[0], md.mat[0], md.x.data(), s_ref);
+    for (int e = 1; e < md.n_triangles(); ++e) {
+        double s3[3];
+        triangle_stress(md.tris[e], md.mat[0], md.x.data(), s3);
+        for (int i = 0; i < 3; ++i) CHECK(s3[i] == Approx(s_ref[i]).epsilon(1e-9).margin(1e-9 * std::abs(s_ref[0])));
+    }
+
+    // 2. Perturb the interior nodes; damped dynamics must bring them back to the linear field.
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<double> u(-1e-3, 1e-3);
+    for (int k = 0; k < md.n_nodes(); ++k)
+        if (!boundary[k]) md.x[2 * k] += u(rng), md.x[2 * k + 1] += u(rng);
+    sim.run();
+    double err = 0;
+    for (int k = 0; k < md.n_nodes(); ++k)
+        for (int c = 0; c < 2; ++c) err = std::max(err, std::abs(md.x[2 * k + c] - exact(k, c)));
+    CHECK(err < 1e-9);  // m, on displacements of order 1e-3 m
+}
+
+TEST_CASE("plane-stress P wave arrives at sqrt(E / (rho (1 - nu^2)))", "[unit]") {
+    const std::string text = R"(
+[case]
+name = "wave"
+thickness = 0.05
+[geometry]
+type = "rectangle"
+width = 2.0
+height = 0.05
+mesh_size = 0.0125
+[materials.m]
+E = 1.0e9
+nu = 0.25
+density = 1000.0
+[regions]
+body = "m"
+[[monitors]]
+name = "v_end"
+type = "velocity"
+group = "right"
+component = "x"
+[[stages]]
+duration = 0.003
+  [[stages.supports]]
+  group = "bottom"
+  fix = "y"
+  [[stages.supports]]
+  group = "top"
+  fix = "y"
+  [[stages.supports]]
+  group = "left"
+  vx = 0.01
+)";
+    // Rollers top and bottom give a state of plane (uniaxial) strain in the plane of a plane-stress sheet, so the
+    // front travels at c_p = sqrt(E / (rho (1 - nu^2))). At the free end the particle velocity jumps to 2 v0:
+    // the arrival is when it crosses v0.
+    auto sim = testing::make_simulation(text, "wave");
+    const double c = std::sqrt(1e9 / (1000 * (1 - 0.0625)));
+    sim.begin_stage(0);
+    double arrival = -1;
+    while (!sim.stage_finished()) {
+        sim.step();
+        if (arrival < 0 && sim.monitor_value(0) >= 0.01) arrival = sim.time();
+    }
+    REQUIRE(arrival > 0);
+    CHECK(arrival == Approx(2.0 / c).epsilon(0.02));
+}
+
+TEST_CASE("undamped free vibration conserves energy over 100 periods", "[unit]") {
+    const std::string text = R"(
+[case]
+name = "vibration"
+thickness = 0.1
+[geometry]
+type = "rectangle"
+width = 1.0
+height = 0.1
+mesh_size = 0.05
+[materials.m]
+E = 1.0e9
+nu = 0.25
+density = 1000.0
+[regions]
+body = "m"
+[[stages]]
+duration = 0.4
+  [[stages.supports]]
+  group = "left"
+  fix = "x"
+  [[stages.supports]]
+  group = "bottom"
+  fix = "y"
+  [[stages.supports]]
+  group = "top"
+  fix = "y"
+)";
+    auto sim = testing::make_simulation(text, "vibration");
+    Model& md = sim.model();
+    // First axial mode of a fixed-free bar: v = v0 sin(pi X / 2L), period 4 L / c.
+    const double c = std::sqrt(1e9 / (1000 * (1 - 0.0625)));
+    const double period = 4.0 / c;
+    for (int k = 0; k < md.n_nodes(); ++k) md.v[2 * k] = 0.1 * std::sin(M_PI * md.X[2 * k] / 2);
+    sim.begin_stage(0);
+    // Total energy at whole steps: kinetic energy from the mean of the two half-step velocities.
+    auto total = [&](const std::vector<double>& v_before) {
+        double K = 0;
+        for (int k = 0; k < md.n_nodes(); ++k)
+            for (int d = 0; d < 2; ++d) {
+                const double vm = 0.5 * (v_before[2 * k + d] + md.v[2 * k + d]);
+                K += 0.5 * md.mass[k] * vm * vm;
+            }
+        return K;
+    };
+    double E0 = -1, drift = 0;
+    while (sim.time() < 100 * period) {
+        const double el = sim.energies().elastic;  // at x^n, before the step
+        const std::vector<double> v_before = md.v;
+        sim.step();
+        const double E = el + total(v_before);
+        if (E0 < 0) E0 = E;
+        drift = std::max(drift, std::abs(E - E0) / E0);
+        if (sim.steps() > 200000) break;
+    }
+    CHECK(sim.time() >= 100 * period);
+    CHECK(drift < 0.005);
+}
+
+TEST_CASE("cantilever tip deflection converges monotonically to Timoshenko-Goodier", "[convergence]") {
+    const std::string file = std::string(FDEM_CASES_DIR) + "/elastic/cantilever.toml";
+    const double exact = -4.02625e-3;  // m, P L^3 / (3 E I) + (4 + 5 nu) P L / (2 E D t)
+    double prev_err = 1e9;
+    for (double h : {0.05, 0.025, 0.0125}) {
+        CaseSpec spec = load_case(file, {"geometry.mesh_size=" + std::to_string(h)});
+        Model model = build_model(spec, make_mesh(spec));
+        RunOptions opt;
+        opt.quiet = true;
+        Simulation sim(spec, std::move(model), opt);
+        sim.run();
+        const double tip = sim.monitor_value(0);
+        const double err = std::abs(tip - exact) / std::abs(exact);
+        INFO("mesh " << h << " m: tip " << tip << " m, error " << 100 * err << " %");
+        CHECK(std::abs(tip) < std::abs(exact));  // CST is too stiff: converges from below
+        CHECK(err < prev_err);
+        CHECK(sim.energies().balance_error() < 1e-4);
+        // Equilibrium: the support carries the load.
+        CHECK(sim.monitor_value(1) == Approx(100.0).epsilon(1e-3));
+        prev_err = err;
+    }
+    CHECK(prev_err < 0.05);
+}
+
+TEST_CASE("1e5 steps at 0.9 of the computed time step stay stable; 3 x stops with exit code 2", "[unit]") {
+    const std::string text = R"(
+[case]
+name = "stability"
+thickness = 0.1
+[geometry]
+type = "rectangle"
+width = 0.4
+height = 0.1
+mesh_size = 0.05
+[materials.m]
+E = 1.0e9
+nu = 0.3
+density = 2000.0
+[regions]
+body = "m"
+[[monitors]]
+name = "tip"
+type = "displacement"
+group = "right"
+component = "y"
+[numerics]
+safety = 0.9
+[[stages]]
+duration = 1.0
+gravity = [0.0, -9.81]
+  [[stages.supports]]
+  group = "left"
+  fix = "xy"
+)";
+    {
+        auto sim = testing::make_simulation(text, "stable");
+        sim.begin_stage(0);
+        for (int i = 0; i < 100000; ++i) sim.step();
+        // Undamped oscillation about the static deflection stays bounded: the self-weight deflection is
+        // q L^4 / (8 E I) = 7.5e-5 m and a suddenly applied load at most doubles it.
+        CHECK(std::abs(sim.monitor_value(0)) < 3 * 7.5e-5);
+        CHECK(sim.energies().balance_error() < 1e-2);
+    }
+    const auto dir = testing::tmp_dir("unstable");
+    const std::string path = testing::write_text(dir / "case.toml", text);
+    const auto r = testing::run_fdem("run \"" + path + "\" --quiet --out \"" + (dir / "run").string() +
+                                     "\" --set numerics.safety=3 --set stages.0.duration=0.01", dir);
+    CHECK(r.code == 2);
+    CHECK(r.err.find("run failed") != std::string::npos);
+    CHECK(r.err.find("step") != std::string::npos);
+    // Everything written so far is kept.
+    CHECK(std::filesystem::exists(dir / "run" / "history.csv"));
+    CHECK(testing::read_text(dir / "run" / "summary.json").find("\"failed\"") != std::string::npos);
+}
