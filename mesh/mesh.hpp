@@ -47,6 +47,11 @@ struct Mesh {
             if (g.name == name) return &g;
         return nullptr;
     }
+    int find_region(const std::string& name) const {
+        for (std::size_t r = 0; r < regions.size(); ++r)
+            if (regions[r] == name) return static_cast<int>(r);
+        return -1;
+    }
 };
 
 // Thrown for geometry or mesh problems a user can fix (bad file, missing group, degenerate triangle).

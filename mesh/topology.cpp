@@ -1,0 +1,325 @@
+// mesh/topology.cpp: edge classification and node splitting (FORMULATION.md §1, [M04] ch. 7 for the cohesive
+// element's two coincident edges).
+//
+// DATA LAYOUT
+//   Corners: triangle t's local node i is corner 3t + i. Splitting is a union-find over corners: across every
+//   edge whose nodes stay shared (class interior) the corners of the two triangles at each end point are united.
+//   Each resulting class of corners is one node copy. That gives "as many copies as separated fans" directly,
+//   including pinched vertices (fans touching at one point only), without walking fans.
+//   Everything is serial and ordered by node, then triangle id: the output depends on the input alone.
+#include "mesh/topology.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <numeric>
+#include <tuple>
+#include <sstream>
+#include <utility>
+
+namespace fdem::mesh {
+
+const char* to_string(EdgeClass c) {
+    switch (c) {
+        case EdgeClass::interior: return "interior";
+        case EdgeClass::crackable: return "crackable";
+        case EdgeClass::bonded: return "bonded";
+        case EdgeClass::dry: return "dry";
+        case EdgeClass::free_boundary: return "free_boundary";
+    }
+    return "?";
+}
+
+const char* to_string(InterfaceKind k) {
+    switch (k) {
+        case InterfaceKind::tied: return "tied";
+        case InterfaceKind::bonded: return "bonded";
+        case InterfaceKind::dry: return "dry";
+    }
+    return "?";
+}
+
+namespace {
+
+std::string where(const Mesh& m, int node) {
+    std::ostringstream s;
+    s.precision(6);
+    s << "(" << m.xy[2 * node] << ", " << m.xy[2 * node + 1] << ") m";
+    return s.str();
+}
+
+std::string region_name(const Mesh& m, int r) {
+    return r >= 0 && r < static_cast<int>(m.regions.size()) ? "'" + m.regions[r] + "'" : "(no region)";
+}
+
+struct UnionFind {
+    std::vector<int> parent;
+    explicit UnionFind(int n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
+    int find(int a) {
+        while (parent[a] != a) a = parent[a] = parent[parent[a]];
+        return a;
+    }
+    void unite(int a, int b) {
+        a = find(a), b = find(b);
+        if (a != b) parent[std::max(a, b)] = std::min(a, b);
+    }
+};
+
+void check_input(const Mesh& m) {
+    const int nt = m.n_triangles(), nn = m.n_nodes();
+    if (nt == 0) throw MeshError("the mesh has no triangles");
+    if (static_cast<int>(m.tri_region.size()) != nt)
+        throw MeshError("the mesh has " + std::to_string(nt) + " triangles but " + std::to_string(m.tri_region.size()) +
+                        " region ids");
+    if (!m.tri_body.empty() && static_cast<int>(m.tri_body.size()) != nt)
+        throw MeshError("the mesh has " + std::to_string(nt) + " triangles but " + std::to_string(m.tri_body.size()) +
+                        " body ids");
+    for (int t = 0; t < nt; ++t) {
+        const int* n = &m.tri[3 * t];
+        for (int i = 0; i < 3; ++i)
+            if (n[i] < 0 || n[i] >= nn)
+                throw MeshError("triangle " + std::to_string(t) + " refers to node " + std::to_string(n[i]) +
+                                ", outside 0.." + std::to_string(nn - 1));
+        if (n[0] == n[1] || n[1] == n[2] || n[0] == n[2])
+            throw MeshError("degenerate triangle " + std::to_string(t) + " in region " + region_name(m, m.tri_region[t]) +
+                            " repeats a node at " + where(m, n[0]));
+        const double* p = m.xy.data();
+        const double a2 = (p[2 * n[1]] - p[2 * n[0]]) * (p[2 * n[2] + 1] - p[2 * n[0] + 1]) -
+                          (p[2 * n[2]] - p[2 * n[0]]) * (p[2 * n[1] + 1] - p[2 * n[0] + 1]);
+        if (!(a2 > 0))
+            throw MeshError(std::string(a2 < 0 ? "inverted" : "degenerate") + " triangle " + std::to_string(t) +
+                            " in region " + region_name(m, m.tri_region[t]) + " at " + where(m, n[0]) +
+                            " (nodes must be counter-clockwise with positive area)");
+    }
+}
+
+}  // namespace
+
+Topology build_topology(const Mesh& m, const TopologyOptions& opt) {
+    check_input(m);
+    const int nt = m.n_triangles(), nn = m.n_nodes(), nr = static_cast<int>(m.regions.size());
+    auto body_of = [&](int t) { return m.tri_body.empty() ? m.tri_region[t] : m.tri_body[t]; };
+
+    // Rules by region index. -1 = no rule.
+    std::vector<char> crackable(nr, 0);
+    for (const auto& r : opt.regions) {
+        const int i = m.find_region(r.region);
+        if (i < 0) {
+            std::string have;
+            for (const auto& name : m.regions) have += (have.empty() ? "" : ", ") + name;
+            throw MeshError("region '" + r.region + "' named by a crack rule does not exist in the mesh (regions: " +
+                            have + ")");
+        }
+        crackable[i] = r.crackable ? 1 : 0;
+    }
+    std::vector<int> pair_rule(static_cast<std::size_t>(nr) * nr, -1);
+    for (const auto& r : opt.interfaces) {
+        const int a = m.find_region(r.region_a), b = m.find_region(r.region_b);
+        for (const auto* name : {&r.region_a, &r.region_b})
+            if (m.find_region(*name) < 0) {
+                std::string have;
+                for (const auto& n : m.regions) have += (have.empty() ? "" : ", ") + n;
+                throw MeshError("region '" + *name + "' named by the interface rule '" + r.region_a + "' / '" +
+                                r.region_b + "' does not exist in the mesh (regions: " + have + ")");
+            }
+        int& ab = pair_rule[static_cast<std::size_t>(a) * nr + b];
+        if (ab >= 0 && ab != static_cast<int>(r.kind))
+            throw MeshError("conflicting interface rules for regions '" + r.region_a + "' / '" + r.region_b + "': " +
+                            to_string(static_cast<InterfaceKind>(ab)) + " and " + to_string(r.kind));
+        ab = static_cast<int>(r.kind);
+        pair_rule[static_cast<std::size_t>(b) * nr + a] = ab;
+    }
+
+    // Unique edges: sort the 3 * nt half-edges by their unordered node pair.
+    struct Half {
+        int lo, hi, tri, local;  // local: the half-edge runs from local node `local` to local node (local+1)%3
+    };
+    std::vector<Half> half;
+    half.reserve(3 * static_cast<std::size_t>(nt));
+    for (int t = 0; t < nt; ++t)
+        for (int i = 0; i < 3; ++i) {
+            const int a = m.tri[3 * t + i], b = m.tri[3 * t + (i + 1) % 3];
+            half.push_back({std::min(a, b), std::max(a, b), t, i});
+        }
+    std::sort(half.begin(), half.end(), [](const Half& x, const Half& y) {
+        return std::tie(x.lo, x.hi, x.tri) < std::tie(y.lo, y.hi, y.tri);
+    });
+
+    Topology topo;
+    topo.n_nodes_before = nn;
+    UnionFind corners(3 * nt);
+    auto corner_of = [&](int t, int node) {
+        for (int i = 0; i < 3; ++i)
+            if (m.tri[3 * t + i] == node) return 3 * t + i;
+        return -1;  // unreachable for a node of t
+    };
+    for (std::size_t i = 0; i < half.size();) {
+        std::size_t j = i;
+        while (j < half.size() && half[j].lo == half[i].lo && half[j].hi == half[i].hi) ++j;
+        const Half& A = half[i];
+        const int from = m.tri[3 * A.tri + A.local], to = m.tri[3 * A.tri + (A.local + 1) % 3];
+        if (j - i > 2)
+            throw MeshError("the edge " + where(m, from) + " - " + where(m, to) + " is shared by " +
+                            std::to_string(j - i) + " triangles (regions " + region_name(m, m.tri_region[half[i].tri]) +
+                            ", " + region_name(m, m.tri_region[half[i + 1].tri]) + ", " +
+                            region_name(m, m.tri_region[half[i + 2].tri]) + "): overlapping triangles or units");
+        EdgeClass cls = EdgeClass::free_boundary;
+        int tb = -1;
+        if (j - i == 2) {
+            const Half& B = half[i + 1];
+            tb = B.tri;
+            if (m.tri[3 * B.tri + B.local] == from)
+                throw MeshError("triangles " + std::to_string(A.tri) + " (region " + region_name(m, m.tri_region[A.tri]) +
+                                ") and " + std::to_string(B.tri) + " (region " + region_name(m, m.tri_region[B.tri]) +
+                                ") lie on the same side of their common edge at " + where(m, from) +
+                                ": overlapping or inverted triangles");
+            const int ra = m.tri_region[A.tri], rb = m.tri_region[B.tri];
+            const bool same_body = body_of(A.tri) == body_of(B.tri) && ra == rb;
+            bool tied = same_body;
+            if (!same_body) {
+                const int rule = (ra < 0 || rb < 0) ? -1 : pair_rule[static_cast<std::size_t>(ra) * nr + rb];
+                if (rule < 0)
+                    throw MeshError("no interface rule for regions " + region_name(m, ra) + " and " + region_name(m, rb) +
+                                    (ra == rb ? " (two different bodies of one region)" : "") + ", which touch at " +
+                                    where(m, from) + "; give one: tied, bonded or dry");
+                const auto kind = static_cast<InterfaceKind>(rule);
+                tied = kind == InterfaceKind::tied;
+                if (kind == InterfaceKind::bonded) cls = EdgeClass::bonded;
+                if (kind == InterfaceKind::dry) cls = EdgeClass::dry;
+            }
+            if (tied) {
+                const bool can_crack = ra >= 0 && rb >= 0 && crackable[ra] && crackable[rb];
+                cls = (opt.split_all || can_crack) ? EdgeClass::crackable : EdgeClass::interior;
+            }
+            if (cls == EdgeClass::interior) {
+                corners.unite(corner_of(A.tri, from), corner_of(B.tri, from));
+                corners.unite(corner_of(A.tri, to), corner_of(B.tri, to));
+            }
+        }
+        topo.edge_nodes.push_back(from);
+        topo.edge_nodes.push_back(to);
+        topo.edge_tri.push_back(A.tri);
+        topo.edge_tri.push_back(tb);
+        topo.edge_class.push_back(cls);
+        i = j;
+    }
+
+    // Node copies: corners of each node in triangle order; a new copy for each new union-find class.
+    std::vector<int> node_start(nn + 1, 0);
+    for (int c = 0; c < 3 * nt; ++c) ++node_start[m.tri[c] + 1];
+    std::partial_sum(node_start.begin(), node_start.end(), node_start.begin());
+    std::vector<int> node_corners(3 * static_cast<std::size_t>(nt));
+    {
+        std::vector<int> fill(node_start.begin(), node_start.end() - 1);
+        for (int c = 0; c < 3 * nt; ++c) node_corners[fill[m.tri[c]]++] = c;  // c increases: triangle order
+    }
+    std::vector<int> corner_node(3 * static_cast<std::size_t>(nt), -1);  // corner -> split node
+    std::vector<int> root_node(3 * static_cast<std::size_t>(nt), -1);    // union-find root -> split node
+    std::vector<int> copies_start(nn + 1, 0);
+    Mesh& out = topo.mesh;
+    for (int k = 0; k < nn; ++k) {
+        copies_start[k] = static_cast<int>(topo.node_origin.size());
+        for (int p = node_start[k]; p < node_start[k + 1]; ++p) {
+            const int c = node_corners[p];
+            const int r = corners.find(c);
+            if (root_node[r] < 0) {
+                root_node[r] = static_cast<int>(topo.node_origin.size());
+                topo.node_origin.push_back(k);
+                out.xy.push_back(m.xy[2 * k]);
+                out.xy.push_back(m.xy[2 * k + 1]);
+            }
+            corner_node[c] = root_node[r];
+        }
+    }
+    copies_start[nn] = static_cast<int>(topo.node_origin.size());
+    out.tri = corner_node;
+    out.tri_region = m.tri_region;
+    out.tri_body = m.tri_body.empty() ? m.tri_region : m.tri_body;
+    out.regions = m.regions;
+
+    // Cohesive elements in edge order.
+    for (int e = 0; e < topo.n_edges(); ++e) {
+        const EdgeClass cls = topo.edge_class[e];
+        if (cls != EdgeClass::crackable && cls != EdgeClass::bonded) continue;
+        CohesiveElement ce;
+        const int p = topo.edge_nodes[2 * e], q = topo.edge_nodes[2 * e + 1];
+        ce.tri_a = topo.edge_tri[2 * e];
+        ce.tri_b = topo.edge_tri[2 * e + 1];
+        ce.n = {corner_node[corner_of(ce.tri_a, p)], corner_node[corner_of(ce.tri_a, q)],
+                corner_node[corner_of(ce.tri_b, p)], corner_node[corner_of(ce.tri_b, q)]};
+        ce.body_a = out.tri_body[ce.tri_a];
+        ce.body_b = out.tri_body[ce.tri_b];
+        ce.region_a = m.tri_region[ce.tri_a];
+        ce.region_b = m.tri_region[ce.tri_b];
+        ce.kind = cls;
+        ce.edge = e;
+        topo.cohesive.push_back(ce);
+    }
+
+    // Contact-capable triangles.
+    std::vector<char> capable(nt, 0);
+    {
+        std::vector<char> exposed_node(nn, 0);
+        for (int e = 0; e < topo.n_edges(); ++e) {
+            const EdgeClass cls = topo.edge_class[e];
+            if (cls != EdgeClass::free_boundary && cls != EdgeClass::dry) continue;
+            if (opt.contact_by_node) {
+                exposed_node[topo.edge_nodes[2 * e]] = 1;
+                exposed_node[topo.edge_nodes[2 * e + 1]] = 1;
+            } else {
+                capable[topo.edge_tri[2 * e]] = 1;
+                if (topo.edge_tri[2 * e + 1] >= 0) capable[topo.edge_tri[2 * e + 1]] = 1;
+            }
+        }
+        if (opt.contact_by_node)
+            for (int t = 0; t < nt; ++t)
+                for (int i = 0; i < 3; ++i)
+                    if (exposed_node[m.tri[3 * t + i]]) capable[t] = 1;
+    }
+    for (int t = 0; t < nt; ++t)
+        if (capable[t]) topo.contact_capable.push_back(t);
+
+    // Groups on the split mesh.
+    auto find_edge = [&](int a, int b) {
+        const int lo = std::min(a, b), hi = std::max(a, b);
+        // edge_nodes are sorted by (lo, hi) because `half` was.
+        int first = 0, last = topo.n_edges();
+        while (first < last) {
+            const int mid = (first + last) / 2;
+            const int mlo = std::min(topo.edge_nodes[2 * mid], topo.edge_nodes[2 * mid + 1]);
+            const int mhi = std::max(topo.edge_nodes[2 * mid], topo.edge_nodes[2 * mid + 1]);
+            if (std::make_pair(mlo, mhi) < std::make_pair(lo, hi)) first = mid + 1;
+            else last = mid;
+        }
+        if (first < topo.n_edges() && std::min(topo.edge_nodes[2 * first], topo.edge_nodes[2 * first + 1]) == lo &&
+            std::max(topo.edge_nodes[2 * first], topo.edge_nodes[2 * first + 1]) == hi)
+            return first;
+        return -1;
+    };
+    for (const auto& g : m.groups) {
+        PhysicalGroup h;
+        h.name = g.name;
+        h.dim = g.dim;
+        h.triangles = g.triangles;
+        for (int k : g.nodes)
+            for (int c = copies_start[k]; c < copies_start[k + 1]; ++c) h.nodes.push_back(c);
+        for (const auto& ed : g.edges) {
+            const int e = find_edge(ed[0], ed[1]);
+            if (e < 0) continue;  // not an edge of any triangle (a curve outside the meshed regions)
+            std::array<int, 2> seen[2];
+            int n_seen = 0;
+            for (int side = 0; side < 2; ++side) {
+                const int t = topo.edge_tri[2 * e + side];
+                if (t < 0) continue;
+                const std::array<int, 2> copy{corner_node[corner_of(t, ed[0])], corner_node[corner_of(t, ed[1])]};
+                if (n_seen == 1 && seen[0] == copy) continue;
+                seen[n_seen++] = copy;
+                h.edges.push_back(copy);
+            }
+        }
+        out.groups.push_back(std::move(h));
+    }
+    return topo;
+}
+
+}  // namespace fdem::mesh
