@@ -167,18 +167,18 @@ def plot(curve_d, curve_p, res: dict, prefix: str, label: str, x_unit=("mm", 1e-
     bx = np.array(res["bilinear"]["x"]) * sx
     by = np.array(res["bilinear"]["y"]) * sy
     ax.plot(bx, by, color="#d62728", lw=1.8, ls="--",
-            label=f"EEEP: $K_e$={res['K_e'] * sx / sy:.4g} {y_unit[0]}/{x_unit[0]}, "
+            label=f"EEEP: $K_e$={res['K_e'] * sy / sx:.4g} {y_unit[0]}/{x_unit[0]}, "
                   f"$P_y$={res['P_y'] * sy:.4g} {y_unit[0]}, $\\mu$={res['ductility']:.3g}")
     ax.plot([res["Delta_y"] * sx], [res["P_y"] * sy], "o", color="#d62728", ms=5)
     ax.plot([res["Delta_peak"] * sx], [res["P_peak"] * sy], "^", color="0.2", ms=6,
             label=f"peak {res['P_peak'] * sy:.4g} {y_unit[0]}")
     ax.axvline(res["Delta_u"] * sx, color="0.5", lw=0.8, ls=":")
-    ax.annotate(r"$\Delta_u$", (res["Delta_u"] * sx, 0), xytext=(3, 3), textcoords="offset points", color="0.3")
+    ax.text(res["Delta_u"] * sx, 0.97, r" $\Delta_u$", transform=ax.get_xaxis_transform(), va="top", color="0.3")
     ax.set_xlabel(f"displacement ({x_unit[0]})" + (" [mirrored]" if res["mirrored"] else ""))
     ax.set_ylabel(f"load ({y_unit[0]})")
     ax.set_title(f"EEEP idealisation, ultimate: {res['ultimate_rule']}, regression to {res['regression_limit']:g} P_peak",
                  fontsize=9)
     ax.set_xlim(left=0)
     ax.set_ylim(bottom=0)
-    ax.legend(loc="lower right", fontsize=8)
+    ax.legend(loc="best", fontsize=8)
     return save(fig, prefix)

@@ -41,7 +41,7 @@ def save(fig, prefix: str) -> list:
         fig.tight_layout()
         for ext in ("png", "svg"):
             p = f"{prefix}.{ext}"
-            fig.savefig(p)
+            fig.savefig(p, bbox_inches="tight")  # keeps legends placed outside the axes
             paths.append(p)
     plt.close(fig)
     return paths

@@ -112,7 +112,7 @@ def plot(d, p, res: dict, prefix: str, label: str, x_unit=("mm", 1e-3), y_unit=(
     ax.plot(n, [c["E_d"] for c in cyc], "s-", color="#ff7f0e", label=r"$E_d = E_i / E_h$")
     ax.set_xlabel("cycle")
     ax.set_ylabel("normalised stiffness and energy (-)")
-    ax.set_title(f"$k_{{el}}$ = {res['k_el'] * sx / sy:.4g} {y_unit[0]}/{x_unit[0]}, $E_h$ = {res['E_h']:.4g} J",
+    ax.set_title(f"$k_{{el}}$ = {res['k_el'] * sy / sx:.4g} {y_unit[0]}/{x_unit[0]}, $E_h$ = {res['E_h']:.4g} J",
                  fontsize=9)
     ax.legend(fontsize=8)
     return save(fig, prefix)

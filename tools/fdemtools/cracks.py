@@ -1,0 +1,226 @@
+"""Crack-pattern image of a run at a chosen time: the deformed outline of the units and the broken cohesive
+elements coloured by mode (tension I, shear II, mixed), unit-interior and interface cracks told apart.
+
+Sources: cracks.csv (one row per broken element: time, control displacement, reference midpoint, class, mode)
+and the .vtu snapshot at or before the chosen time (reference points + displacement). A broken element is drawn
+as the mesh edge whose reference midpoint is nearest to its midpoint, at its deformed position; with no
+snapshot it is drawn as a marker at its reference midpoint.
+Unit outline: the edges of the triangulation that bound a unit, i.e. edges with one triangle only (free
+boundary) or whose two triangles differ in the cell array `unit` (if the snapshot has one), else `region`, else
+`material`. Edges are matched by their reference coordinates, so duplicated nodes on either side of a joint count
+as one edge; an opened joint shows as a gap in the grey deformed mesh drawn underneath.
+"""
+from __future__ import annotations
+
+import glob
+import os
+
+import numpy as np
+
+from .common import ToolError, load_run, read_table
+from .figures import MODE_COLOURS, MODE_NAMES, new_figure, save
+from .vtk import read_pvd, read_vtu, triangles
+
+CLASS_STYLE = {"unit": {"ls": "-", "lw": 2.0, "marker": "o"}, "interface": {"ls": (0, (2.0, 1.2)), "lw": 1.6, "marker": "s"}}
+CLASS_NAMES = {"unit": "in units", "interface": "at interfaces"}
+
+
+def read_cracks(run_dir: str):
+    path = os.path.join(run_dir, "cracks.csv")
+    if not os.path.isfile(path):
+        raise ToolError(f"{run_dir}: no cracks.csv (was fracture on in this run?)")
+    t = read_table(path)
+    for c in ("time", "x", "y", "class", "mode"):
+        t.col(c)
+    n = len(t)
+    if n == 0:
+        return {"time": np.zeros(0), "x": np.zeros(0), "y": np.zeros(0), "class": np.zeros(0, object),
+                "mode": np.zeros(0, object), "control_displacement": np.zeros(0)}
+    cls = np.array([str(v) for v in t.col("class")], dtype=object)
+    mode = np.array([str(v) for v in t.col("mode")], dtype=object)
+    bad = set(cls) - set(CLASS_STYLE)
+    if bad:
+        raise ToolError(f"{path}: unknown class {sorted(bad)} (expected unit or interface)")
+    bad = set(mode) - set(MODE_COLOURS)
+    if bad:
+        raise ToolError(f"{path}: unknown mode {sorted(bad)} (expected I, II or mixed)")
+    cd = t.numeric("control_displacement") if t.has("control_displacement") else np.full(n, np.nan)
+    return {"time": t.numeric("time"), "x": t.numeric("x"), "y": t.numeric("y"), "class": cls, "mode": mode,
+            "control_displacement": cd}
+
+
+def snapshots(run_dir: str) -> list:
+    pvd = os.path.join(run_dir, "run.pvd")
+    if os.path.isfile(pvd):
+        return [(t, f) for t, f in read_pvd(pvd) if os.path.isfile(f)]
+    files = sorted(glob.glob(os.path.join(run_dir, "snapshots", "*.vtu")))
+    return [(float("nan"), f) for f in files]
+
+
+def pick_snapshot(snaps: list, time: float | None):
+    if not snaps:
+        return None
+    if time is None:
+        return snaps[-1]
+    before = [s for s in snaps if s[0] <= time * (1 + 1e-12) + 1e-300]
+    return before[-1] if before else snaps[0]
+
+
+def _unit_ids(vtu: dict, sel):
+    for name in ("unit", "unit_id", "body", "block", "region", "material"):
+        a = vtu["cell_data"].get(name)
+        if a is not None and a.ndim == 1 and len(a) == len(vtu["types"]):
+            return name, a[sel]
+    return None, np.zeros(len(sel), np.int64)
+
+
+def geometry(vtu: dict, scale: float = 1.0):
+    """Deformed node positions, triangles, outline edges (pairs of node indices) and all edges keyed by their
+    reference midpoint, for matching cracks."""
+    X = vtu["points"][:, :2].astype(float)
+    u = vtu["point_data"].get("displacement")
+    x = X + scale * u[:, :2] if u is not None else X.copy()
+    sel, tri = triangles(vtu)
+    if len(tri) == 0:
+        raise ToolError("snapshot has no triangles")
+    _, uid = _unit_ids(vtu, sel)
+    # geometric edges: key = rounded reference coordinates of both ends (duplicated nodes coincide in X)
+    span = float(np.ptp(X, axis=0).max()) or 1.0
+    q = np.round(X / (span * 1e-9)).astype(np.int64)
+    e_nodes = np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]])
+    e_tri = np.tile(np.arange(len(tri)), 3)
+    ka, kb = q[e_nodes[:, 0]], q[e_nodes[:, 1]]
+    swap = (ka[:, 0] > kb[:, 0]) | ((ka[:, 0] == kb[:, 0]) & (ka[:, 1] > kb[:, 1]))
+    lo = np.where(swap[:, None], kb, ka)
+    hi = np.where(swap[:, None], ka, kb)
+    keys = np.concatenate([lo, hi], axis=1)
+    _, inv, counts = np.unique(keys, axis=0, return_inverse=True, return_counts=True)
+    inv = inv.reshape(-1)
+    order = np.argsort(inv, kind="stable")
+    outline = []
+    first = {}
+    for k in order:
+        g = inv[k]
+        if counts[g] == 1:
+            outline.append(e_nodes[k])
+        elif g in first:
+            j = first[g]
+            if uid[e_tri[j]] != uid[e_tri[k]]:
+                outline.append(e_nodes[k])
+                outline.append(e_nodes[j])
+        else:
+            first[g] = k
+    mid_ref = 0.5 * (X[e_nodes[:, 0]] + X[e_nodes[:, 1]])
+    return {"x": x, "X": X, "tri": tri, "outline": np.array(outline).reshape(-1, 2), "edges": e_nodes,
+            "edge_mid_ref": mid_ref}
+
+
+def draw(run_dir: str, prefix: str, time: float | None = None, displacement: float | None = None,
+         scale: float = 1.0, partial: bool = False) -> tuple:
+    run = load_run(run_dir, allow_unfinished=partial, need_history=False)
+    cr = read_cracks(run_dir)
+    if displacement is not None:
+        if not np.isfinite(cr["control_displacement"]).any():
+            raise ToolError(f"{run_dir}: cracks.csv has no control_displacement to select by displacement")
+        h = run.history
+        if h is not None and h.has("time"):
+            try:
+                cx, _ = run.curve_columns()
+                hx = h.numeric(cx)
+                reach = np.nonzero(np.abs(hx) >= abs(displacement))[0]
+                time = float(h.numeric("time")[reach[0]]) if len(reach) else None
+            except ToolError:
+                time = None
+        if time is None:
+            reach = np.nonzero(np.abs(cr["control_displacement"]) <= abs(displacement))[0]
+            time = float(cr["time"][reach].max()) if len(reach) else 0.0
+    snap = pick_snapshot(snapshots(run_dir), time)
+    if time is None:
+        time = snap[0] if snap and np.isfinite(snap[0]) else (float(cr["time"].max()) if len(cr["time"]) else 0.0)
+    keep = cr["time"] <= time * (1 + 1e-12) + 1e-300
+    fig, ax = new_figure(figsize=(7.5, 6.5))
+    geo = None
+    if snap is not None:
+        geo = geometry(read_vtu(snap[1]), scale)
+        x = geo["x"]
+        ax.tripcolor(x[:, 0], x[:, 1], geo["tri"], facecolors=np.ones(len(geo["tri"])), cmap="Greys", vmin=0, vmax=8,
+                     edgecolors="none", alpha=0.6)
+        o = geo["outline"]
+        if len(o):
+            from matplotlib.collections import LineCollection
+            ax.add_collection(LineCollection(x[o], colors="0.15", linewidths=0.7, zorder=2))
+    counts = {}
+    if keep.any():
+        from matplotlib.collections import LineCollection
+        from scipy.spatial import cKDTree
+        pts = np.column_stack((cr["x"][keep], cr["y"][keep]))
+        cls, mode = cr["class"][keep], cr["mode"][keep]
+        segs = None
+        if geo is not None:
+            _, idx = cKDTree(geo["edge_mid_ref"]).query(pts)
+            ends = geo["edges"][idx]
+            segs = geo["x"][ends]  # (k, 2, 2) deformed
+        for c in CLASS_STYLE:
+            for m in MODE_COLOURS:
+                s = (cls == c) & (mode == m)
+                n = int(s.sum())
+                counts[f"{c}_{m}"] = n
+                if not n:
+                    continue
+                lab = f"{MODE_NAMES[m]} {CLASS_NAMES[c]} ({n})"
+                if segs is not None:
+                    ax.add_collection(LineCollection(segs[s], colors=MODE_COLOURS[m], linewidths=CLASS_STYLE[c]["lw"],
+                                                     linestyles=[CLASS_STYLE[c]["ls"]], zorder=3, label=lab))
+                else:
+                    ax.plot(pts[s, 0], pts[s, 1], CLASS_STYLE[c]["marker"], color=MODE_COLOURS[m], ms=4, ls="none",
+                            label=lab, zorder=3)
+    else:
+        for c in CLASS_STYLE:
+            for m in MODE_COLOURS:
+                counts[f"{c}_{m}"] = 0
+    if geo is None and keep.any():
+        ax.autoscale_view()
+    ax.set_aspect("equal")
+    ax.autoscale_view()
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    ax.grid(False)
+    title = f"{run.name}: broken elements at t = {time:.4g} s"
+    if displacement is not None:
+        title += f" (control displacement {displacement * 1e3:.3g} mm)"
+    if scale != 1.0 and geo is not None:
+        title += f", displacements x{scale:g}"
+    ax.set_title(title, fontsize=9)
+    n_total = sum(counts.values())
+    if n_total:
+        ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, title=f"{n_total} broken elements",
+                  title_fontsize=8)
+    else:
+        ax.text(0.5, 0.02, "no broken elements at this time", transform=ax.transAxes, ha="center", fontsize=9)
+    files = save(fig, prefix)
+    return files, {"time": time, "snapshot": snap[1] if snap else None, "counts": counts}
+
+
+def cmd_cracks(args):
+    prefix = args.out or os.path.join(args.run, "post", "cracks")
+    disp = args.displacement * 1e-3 if args.displacement is not None else None
+    files, info = draw(args.run, prefix, time=args.time, displacement=disp, scale=args.scale, partial=args.partial)
+    c = info["counts"]
+    print(f"t = {info['time']:.6g} s, snapshot {info['snapshot'] or 'none (markers at reference midpoints)'}: "
+          + ", ".join(f"{k} {v}" for k, v in c.items()))
+    print("wrote " + ", ".join(files))
+
+
+def add_parser(sub):
+    p = sub.add_parser("cracks", help="crack-pattern image at a chosen time",
+                       description="Crack-pattern image: deformed unit outlines and broken cohesive elements coloured "
+                                   "by mode (tension, shear, mixed); unit-interior cracks solid, interface cracks "
+                                   "dashed. Uses cracks.csv and the .vtu snapshot at or before the chosen time.")
+    p.add_argument("run", metavar="RUN", help="fdem run folder")
+    g = p.add_mutually_exclusive_group()
+    g.add_argument("--time", type=float, help="time in s (default: the last snapshot)")
+    g.add_argument("--displacement", type=float, help="control displacement in mm (the first time it is reached)")
+    p.add_argument("--scale", type=float, default=1.0, help="displacement magnification of the drawing (default 1)")
+    p.add_argument("--partial", action="store_true", help="accept a run whose summary is not 'completed'")
+    p.add_argument("-o", "--out", help="output prefix (default RUN/post/cracks): writes PREFIX.png and PREFIX.svg")
+    p.set_defaults(func=cmd_cracks)

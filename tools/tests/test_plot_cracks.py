@@ -1,0 +1,87 @@
+import os
+
+import numpy as np
+import pytest
+
+from synth import make_run, two_blocks, write_vtu
+from fdemtools import cracks, vtk
+
+
+def test_vtu_reader_round_trip(tmp_path):
+    X, tri, unit = two_blocks()
+    disp = np.column_stack((X[:, 1] * 0.01, -X[:, 0] * 0.02))
+    p = tmp_path / "a.vtu"
+    write_vtu(p, X, tri, disp, {"region": unit})
+    v = vtk.read_vtu(str(p))
+    assert np.array_equal(v["points"][:, :2], X)
+    assert np.array_equal(v["point_data"]["displacement"][:, :2], disp)
+    sel, t = vtk.triangles(v)
+    assert np.array_equal(t, tri) and np.array_equal(v["cell_data"]["region"], unit)
+
+
+def test_outline_edges_of_two_blocks(tmp_path):
+    X, tri, unit = two_blocks()
+    p = tmp_path / "a.vtu"
+    write_vtu(p, X, tri, np.zeros_like(X), {"region": unit})
+    g = cracks.geometry(vtk.read_vtu(str(p)))
+    o = g["outline"]
+    # outer boundary: 2*(4+4) edges of 0.05 m = 16 edges (joint excluded), plus the joint drawn from both sides: 2*4
+    lengths = np.linalg.norm(X[o[:, 0]] - X[o[:, 1]], axis=1)
+    assert len(o) == 16 + 8
+    assert np.allclose(lengths, 0.05)
+
+
+def test_cracks_counts_and_files(tmp_path, cli):
+    run = make_run(str(tmp_path / "run"))
+    rc, out, err = cli("cracks", run, "--time", "0.65")
+    assert rc == 0, err
+    for ext in ("png", "svg"):
+        assert os.path.getsize(os.path.join(run, "post", f"cracks.{ext}")) > 2000
+    files, info = cracks.draw(run, str(tmp_path / "c"), time=0.65)
+    c = info["counts"]
+    assert (c["interface_I"], c["interface_II"], c["unit_mixed"], c["unit_I"], c["unit_II"]) == (1, 1, 1, 0, 0)
+    assert info["snapshot"].endswith("snap_0001.vtu")  # last snapshot at or before t = 0.65 s
+    files, info = cracks.draw(run, str(tmp_path / "d"), displacement=9.9e-3)
+    assert sum(info["counts"].values()) == 5
+
+
+def test_cracks_without_snapshots_and_bad_input(tmp_path, cli):
+    run = make_run(str(tmp_path / "run"), snapshots=False)
+    files, info = cracks.draw(run, str(tmp_path / "c"))
+    assert info["snapshot"] is None and sum(info["counts"].values()) == 5
+    nofrac = make_run(str(tmp_path / "nf"), fracture=False)
+    rc, out, err = cli("cracks", nofrac)
+    assert rc == 1 and "no cracks.csv" in err and len(err.strip().splitlines()) == 1
+    with open(os.path.join(run, "cracks.csv"), "a") as f:
+        f.write("1.0,0.01,0.1,0.1,unit,0,0,III\n")
+    rc, out, err = cli("cracks", run)
+    assert rc == 1 and "unknown mode" in err
+
+
+def test_plot_all_figures(tmp_path, cli):
+    a = make_run(str(tmp_path / "a"), case="wall A")
+    b = make_run(str(tmp_path / "b"), peak=50e3, case="wall B")
+    exp = tmp_path / "exp.csv"
+    u = np.linspace(0, 10, 30)
+    exp.write_text("d_mm,H_kN\n" + "".join(f"{x},{40 * np.tanh(x / 2)}\n" for x in u))
+    out = tmp_path / "figs"
+    rc, o, err = cli("plot", a, b, "--experiment", exp, "--out-dir", out)
+    assert rc == 0, err
+    for name in ("curves", "energy_wall_A", "energy_wall_B", "damage_wall_A", "damage_wall_B"):
+        for ext in ("png", "svg"):
+            assert (out / f"{name}.{ext}").stat().st_size > 2000, name
+    svg = (out / "curves.svg").read_text()
+    assert "control displacement (mm)" in svg and "load (kN)" in svg and "wall B" in svg
+
+
+def test_plot_bad_input(tmp_path, cli):
+    a = make_run(str(tmp_path / "a"), status="running")
+    rc, o, err = cli("plot", a)
+    assert rc == 1 and "not 'completed'" in err and len(err.strip().splitlines()) == 1
+    rc, o, err = cli("plot", a, "--partial", "--figures", "damage", "--out-dir", tmp_path / "o")
+    assert rc == 0, err
+    nf = make_run(str(tmp_path / "nf"), fracture=False)
+    rc, o, err = cli("plot", nf, "--figures", "damage")
+    assert rc == 1 and "fracture off" in err
+    rc, o, err = cli("plot", nf)  # default set: the damage figure is skipped with a note
+    assert rc == 0 and "no damage figure" in o
