@@ -327,8 +327,12 @@ Mesh generate_wall(const WallSpec& s) {
 
         gmsh::vectorpair out;
         std::vector<gmsh::vectorpair> map;
-        gmsh::model::occ::fragment(inputs, {}, out, map);
-        throw_on_gmsh_error("fragmenting the units, beam and base");
+        if (inputs.size() > 1) {
+            gmsh::model::occ::fragment(inputs, {}, out, map);
+            throw_on_gmsh_error("fragmenting the units, beam and base");
+        } else {
+            map = {inputs};  // OCC refuses to fragment a single shape; it is its own fragment
+        }
         std::map<int, std::vector<std::size_t>> owners;  // output surface -> inputs that contain it
         for (std::size_t i = 0; i < map.size() && i < inputs.size(); ++i)
             for (const auto& dt : map[i])
