@@ -1,0 +1,348 @@
+// contact/contact_system.cpp: detection schedule, pair bookkeeping, deterministic parallel force evaluation.
+// Layout and contract in contact_system.hpp; the pair physics in potential.hpp; detection in nbs.hpp.
+#include "contact/contact_system.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <omp.h>
+#include <sstream>
+#include <stdexcept>
+
+#include "contact/potential.hpp"
+
+namespace fdem::contact {
+
+namespace {
+
+inline double smallest_altitude(const double* T) {
+    const double area2 = std::fabs((T[2] - T[0]) * (T[5] - T[1]) - (T[4] - T[0]) * (T[3] - T[1]));
+    double lmax = 0.0;
+    for (int k = 0; k < 3; ++k) {
+        const int j = (k + 1) % 3;
+        lmax = std::max(lmax, std::hypot(T[2 * j] - T[2 * k], T[2 * j + 1] - T[2 * k + 1]));
+    }
+    return area2 / lmax;
+}
+
+inline void gather(const double* x, const int* t, double* out) {
+    for (int k = 0; k < 3; ++k) {
+        out[2 * k] = x[2 * t[k]];
+        out[2 * k + 1] = x[2 * t[k] + 1];
+    }
+}
+
+}  // namespace
+
+ContactSystem::ContactSystem(const int* tri, int n_tri, int n_nodes, double thickness, std::vector<int> tri_material,
+                             std::vector<int> tri_body, const ContactLaws& laws, ContactOptions options)
+    : tri_(tri),
+      n_tri_(n_tri),
+      n_nodes_(n_nodes),
+      thickness_(thickness),
+      material_(std::move(tri_material)),
+      body_(std::move(tri_body)),
+      opt_(options) {
+    if (n_tri < 0 || n_nodes < 0) throw std::invalid_argument("ContactSystem: negative sizes");
+    if (!(thickness > 0.0) || !std::isfinite(thickness))
+        throw std::invalid_argument("ContactSystem: thickness must be > 0 m");
+    if (static_cast<int>(material_.size()) != n_tri || static_cast<int>(body_.size()) != n_tri)
+        throw std::invalid_argument("ContactSystem: tri_material and tri_body need one entry per triangle");
+    if (!(opt_.buffer >= 0.0)) throw std::invalid_argument("ContactSystem: buffer must be >= 0 m");
+    n_mat_ = laws.n_materials();
+    for (int t = 0; t < n_tri; ++t) {
+        if (material_[t] < 0) throw std::invalid_argument("ContactSystem: negative material index");
+        n_mat_ = std::max(n_mat_, material_[t] + 1);
+        for (int k = 0; k < 3; ++k)
+            if (tri[3 * t + k] < 0 || tri[3 * t + k] >= n_nodes)
+                throw std::invalid_argument("ContactSystem: triangle node index out of range");
+    }
+    std::vector<char> present(n_mat_, 0);
+    for (int m : material_) present[m] = 1;
+    interface_law_.assign(static_cast<size_t>(n_mat_) * n_mat_, -1);
+    crack_law_.assign(n_mat_, -1);
+    for (int a = 0; a < n_mat_; ++a) {
+        if (!present[a]) continue;
+        for (int b = a; b < n_mat_; ++b) {
+            if (!present[b]) continue;
+            const ContactLaw* law = laws.interface(a, b);
+            if (!law) {
+                std::ostringstream os;
+                os << "no contact law for the interface between materials " << a << " and " << b;
+                throw std::invalid_argument(os.str());
+            }
+            laws_.push_back(resolve_law(*law));
+            interface_law_[a * n_mat_ + b] = interface_law_[b * n_mat_ + a] = static_cast<int>(laws_.size()) - 1;
+        }
+        // A crack inside a unit uses the material's crack law (residual friction); without one, the law of two
+        // units of that material.
+        if (const ContactLaw* law = laws.crack(a)) {
+            laws_.push_back(resolve_law(*law));
+            crack_law_[a] = static_cast<int>(laws_.size()) - 1;
+        } else {
+            crack_law_[a] = interface_law_[a * n_mat_ + a];
+        }
+    }
+    capable_.assign(n_tri, 0);
+    excluded_.resize(n_tri);
+}
+
+int ContactSystem::law_of(int ta, int tb) const {
+    const int ma = material_[ta], mb = material_[tb];
+    if (body_[ta] == body_[tb] && ma == mb) return crack_law_[ma];
+    return interface_law_[ma * n_mat_ + mb];
+}
+
+void ContactSystem::set_capable(int t, bool c) {
+    if (t < 0 || t >= n_tri_) throw std::out_of_range("ContactSystem::set_capable: triangle index");
+    if ((capable_[t] != 0) != c) dirty_ = true;
+    capable_[t] = c ? 1 : 0;
+}
+
+void ContactSystem::exclude_pair(int ta, int tb) {
+    if (ta < 0 || tb < 0 || ta >= n_tri_ || tb >= n_tri_)
+        throw std::out_of_range("ContactSystem::exclude_pair: triangle index");
+    auto add = [](std::vector<int>& v, int x) {
+        if (std::find(v.begin(), v.end(), x) == v.end()) v.push_back(x);
+    };
+    add(excluded_[ta], tb);
+    add(excluded_[tb], ta);
+    dirty_ = true;
+}
+
+void ContactSystem::include_pair(int ta, int tb) {
+    if (ta < 0 || tb < 0 || ta >= n_tri_ || tb >= n_tri_)
+        throw std::out_of_range("ContactSystem::include_pair: triangle index");
+    auto del = [](std::vector<int>& v, int x) { v.erase(std::remove(v.begin(), v.end(), x), v.end()); };
+    del(excluded_[ta], tb);
+    del(excluded_[tb], ta);
+    dirty_ = true;
+}
+
+double ContactSystem::stable_dt(const double* x, const double* node_mass) const {
+    // Per material: the stiffest stiffness-law slope (Pa/m) and the largest penalty (Pa) it can meet.
+    std::vector<double> k_max(n_mat_, 0.0), p_max(n_mat_, 0.0);
+    auto account = [&](int m, int li) {
+        if (li < 0) return;
+        const ResolvedLaw& L = laws_[li];
+        (L.normal_is_stiffness ? k_max[m] : p_max[m]) =
+            std::max(L.normal_is_stiffness ? k_max[m] : p_max[m], L.normal);
+        (L.tangential_is_stiffness ? k_max[m] : p_max[m]) =
+            std::max(L.tangential_is_stiffness ? k_max[m] : p_max[m], L.tangential);
+    };
+    for (int a = 0; a < n_mat_; ++a) {
+        account(a, crack_law_[a]);
+        for (int b = 0; b < n_mat_; ++b) account(a, interface_law_[a * n_mat_ + b]);
+    }
+    double dt = std::numeric_limits<double>::infinity();
+    for (int t = 0; t < n_tri_; ++t) {
+        double T[6];
+        gather(x, tri_ + 3 * t, T);
+        const double h = smallest_altitude(T);
+        double lmax = 0.0, m = std::numeric_limits<double>::infinity();
+        for (int k = 0; k < 3; ++k) {
+            const int j = (k + 1) % 3;
+            lmax = std::max(lmax, std::hypot(T[2 * j] - T[2 * k], T[2 * j + 1] - T[2 * k + 1]));
+            m = std::min(m, node_mass[tri_[3 * t + k]]);
+        }
+        // Penalty law: pressure/overlap slope 3 p (1/H_a + 1/H_b) <= 6 p / H ([MA00] phi = 3 min L_k).
+        const double slope = std::max(k_max[material_[t]], 6.0 * p_max[material_[t]] / h);  // Pa/m
+        const double k = slope * thickness_ * lmax;                                          // N/m
+        if (k > 0.0) dt = std::min(dt, 2.0 * std::sqrt(m / k));
+    }
+    return dt;
+}
+
+void ContactSystem::detect(const double* x) {
+    const double t0 = omp_get_wtime();
+    items_.clear();
+    for (int t = 0; t < n_tri_; ++t)
+        if (capable_[t]) items_.push_back(t);
+    const int n = static_cast<int>(items_.size());
+    if (buffer_ <= 0.0) {
+        buffer_ = opt_.buffer;
+        if (buffer_ <= 0.0) {
+            double lmin = std::numeric_limits<double>::infinity();
+            for (int t = 0; t < n_tri_; ++t) {
+                double T[6];
+                gather(x, tri_ + 3 * t, T);
+                for (int k = 0; k < 3; ++k) {
+                    const int j = (k + 1) % 3;
+                    lmin = std::min(lmin, std::hypot(T[2 * j] - T[2 * k], T[2 * j + 1] - T[2 * k + 1]));
+                }
+            }
+            buffer_ = std::isfinite(lmin) ? lmin / 5.0 : 0.0;  // FORMULATION §5 default
+        }
+    }
+    std::vector<double> icx(n), icy(n), ir(n);
+#pragma omp parallel for schedule(static)
+    for (int i = 0; i < n; ++i) {
+        double T[6];
+        gather(x, tri_ + 3 * items_[i], T);
+        const double cxv = (T[0] + T[2] + T[4]) / 3.0, cyv = (T[1] + T[3] + T[5]) / 3.0;
+        double r2 = 0.0;
+        for (int k = 0; k < 3; ++k)
+            r2 = std::max(r2, (T[2 * k] - cxv) * (T[2 * k] - cxv) + (T[2 * k + 1] - cyv) * (T[2 * k + 1] - cyv));
+        icx[i] = cxv;
+        icy[i] = cyv;
+        ir[i] = std::sqrt(r2);
+    }
+    nbs_detect(icx.data(), icy.data(), ir.data(), items_.data(), n, buffer_, cand_, ws_);
+
+    // Drop pairs that share a node or an intact cohesive element, in parallel into flags, then compact in order.
+    const int nc = cand_.size();
+    std::vector<char> keep(nc);
+#pragma omp parallel for schedule(static)
+    for (int p = 0; p < nc; ++p) {
+        const int a = cand_.a[p], b = cand_.b[p];
+        bool ok = true;
+        for (int i = 0; i < 3 && ok; ++i)
+            for (int j = 0; j < 3; ++j)
+                if (tri_[3 * a + i] == tri_[3 * b + j]) {
+                    ok = false;
+                    break;
+                }
+        if (ok)
+            for (int e : excluded_[a])
+                if (e == b) {
+                    ok = false;
+                    break;
+                }
+        keep[p] = ok ? 1 : 0;
+    }
+    std::vector<int> na, nb;
+    na.reserve(nc);
+    nb.reserve(nc);
+    for (int p = 0; p < nc; ++p)
+        if (keep[p]) {
+            na.push_back(cand_.a[p]);
+            nb.push_back(cand_.b[p]);
+        }
+    const int np = static_cast<int>(na.size());
+
+    // Carry the sliding history of pairs that persist ([K25] Eq. 4 needs the accumulated delta_s): old pairs
+    // bucketed by their first triangle (counting sort, O(P)), each new pair looks in its bucket.
+    std::vector<double> nh(6 * static_cast<size_t>(np), 0.0);
+    const int op = static_cast<int>(pair_a_.size());
+    if (op > 0) {
+        std::vector<int> start(n_tri_ + 1, 0), order(op);
+        for (int p = 0; p < op; ++p) ++start[pair_a_[p] + 1];
+        for (int t = 0; t < n_tri_; ++t) start[t + 1] += start[t];
+        std::vector<int> fill(start.begin(), start.end() - 1);
+        for (int p = 0; p < op; ++p) order[fill[pair_a_[p]]++] = p;
+#pragma omp parallel for schedule(static)
+        for (int p = 0; p < np; ++p) {
+            const int a = na[p], b = nb[p];
+            for (int q = start[a]; q < start[a + 1]; ++q) {
+                const int o = order[q];
+                if (pair_b_[o] == b) {
+                    for (int s = 0; s < 6; ++s) nh[6 * static_cast<size_t>(p) + s] = hist_[6 * static_cast<size_t>(o) + s];
+                    break;
+                }
+            }
+        }
+    }
+    pair_a_.swap(na);
+    pair_b_.swap(nb);
+    hist_.swap(nh);
+    pair_law_.resize(np);
+    for (int p = 0; p < np; ++p) pair_law_[p] = law_of(pair_a_[p], pair_b_[p]);
+    pair_f_.resize(12 * static_cast<size_t>(np));
+    pair_e_.resize(3 * static_cast<size_t>(np));
+    pair_on_.resize(np);
+    dirty_ = false;
+    travel_ = 0.0;
+    ++stats_.detections;
+    stats_.candidate_pairs = np;
+    stats_.time_detection += omp_get_wtime() - t0;
+}
+
+void ContactSystem::step(const double* x, const double* v, double dt, double* f) {
+    double vmax = 0.0;
+#pragma omp parallel for schedule(static) reduction(max : vmax)
+    for (int k = 0; k < n_nodes_; ++k) vmax = std::max(vmax, std::hypot(v[2 * k], v[2 * k + 1]));
+    // [MA98]: a pair can only appear once two triangles have moved towards each other by the buffer; each moved
+    // at most the accumulated dt max|v|. Anticipate this step's motion so the list is valid until the next call.
+    if (dirty_ || 2.0 * (travel_ + dt * vmax) > buffer_) detect(x);
+    travel_ += dt * vmax;
+
+    const double t0 = omp_get_wtime();
+    const int np = static_cast<int>(pair_a_.size());
+    const bool want_energy = opt_.compute_energy;
+#pragma omp parallel for schedule(dynamic, 512)
+    for (int p = 0; p < np; ++p) {
+        const int a = pair_a_[p], b = pair_b_[p];
+        double xa[6], xb[6];
+        gather(x, tri_ + 3 * a, xa);
+        gather(x, tri_ + 3 * b, xb);
+        pair_on_[p] = 0;
+        // Quick rejection: disjoint bounding boxes cannot overlap.
+        const double axmin = std::min({xa[0], xa[2], xa[4]}), axmax = std::max({xa[0], xa[2], xa[4]});
+        const double bxmin = std::min({xb[0], xb[2], xb[4]}), bxmax = std::max({xb[0], xb[2], xb[4]});
+        if (axmax <= bxmin || bxmax <= axmin) {
+            for (int s = 0; s < 6; ++s) hist_[6 * static_cast<size_t>(p) + s] = 0.0;
+            continue;
+        }
+        const double aymin = std::min({xa[1], xa[3], xa[5]}), aymax = std::max({xa[1], xa[3], xa[5]});
+        const double bymin = std::min({xb[1], xb[3], xb[5]}), bymax = std::max({xb[1], xb[3], xb[5]});
+        if (aymax <= bymin || bymax <= aymin) {
+            for (int s = 0; s < 6; ++s) hist_[6 * static_cast<size_t>(p) + s] = 0.0;
+            continue;
+        }
+        double va[6], vb[6];
+        gather(v, tri_ + 3 * a, va);
+        gather(v, tri_ + 3 * b, vb);
+        const ResolvedLaw& L = laws_[pair_law_[p]];
+        PairParams prm;
+        prm.thickness = thickness_;
+        prm.distance_potential = L.normal_is_stiffness;
+        prm.c = L.normal_is_stiffness ? 0.5 * L.normal : L.normal;
+        // p_t (Pa) becomes a traction slope with the same rule as the normal one: 3 p_t (1/H_a + 1/H_b) (Pa/m).
+        prm.k_s = L.tangential_is_stiffness
+                      ? L.tangential
+                      : 3.0 * L.tangential * (1.0 / smallest_altitude(xa) + 1.0 / smallest_altitude(xb));
+        prm.mu = L.mu;
+        prm.dt = dt;
+        PairResult r;
+        if (pair_contact(xa, xb, va, vb, prm, want_energy, &hist_[6 * static_cast<size_t>(p)], r)) {
+            pair_on_[p] = 1;
+            double* pf = &pair_f_[12 * static_cast<size_t>(p)];
+            for (int s = 0; s < 6; ++s) {
+                pf[s] = r.fa[s];
+                pf[6 + s] = r.fb[s];
+            }
+            double* pe = &pair_e_[3 * static_cast<size_t>(p)];
+            pe[0] = r.energy_normal;
+            pe[1] = r.energy_tangential;
+            pe[2] = r.dissipation;
+        }
+    }
+    // Serial scatter and sums in pair order: the same bits for any thread count.
+    double en = 0.0, et = 0.0, ed = 0.0;
+    int active = 0;
+    for (int p = 0; p < np; ++p) {
+        if (!pair_on_[p]) continue;
+        ++active;
+        const int* ta = tri_ + 3 * pair_a_[p];
+        const int* tb = tri_ + 3 * pair_b_[p];
+        const double* pf = &pair_f_[12 * static_cast<size_t>(p)];
+        for (int k = 0; k < 3; ++k) {
+            f[2 * ta[k]] += pf[2 * k];
+            f[2 * ta[k] + 1] += pf[2 * k + 1];
+            f[2 * tb[k]] += pf[6 + 2 * k];
+            f[2 * tb[k] + 1] += pf[6 + 2 * k + 1];
+        }
+        const double* pe = &pair_e_[3 * static_cast<size_t>(p)];
+        en += pe[0];
+        et += pe[1];
+        ed += pe[2];
+    }
+    energy_normal_ = en;
+    energy_tangential_ = et;
+    dissipation_ += ed;
+    stats_.active_pairs = active;
+    stats_.pair_evaluations += np;
+    stats_.time_forces += omp_get_wtime() - t0;
+}
+
+}  // namespace fdem::contact

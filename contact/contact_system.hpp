@@ -1,0 +1,110 @@
+// contact/contact_system.hpp: the contact module as the engine sees it: NBS detection when the buffer is used up,
+// distributed-potential normal forces, Coulomb friction with history, energies and statistics.
+//
+// DATA LAYOUT
+//   Mesh (constant): tri[3 n_tri] node indices, counter-clockwise; tri_material[n_tri], tri_body[n_tri].
+//   State passed in each step (owned by the engine): x[2 n_nodes] positions (m), v[2 n_nodes] velocities (m/s),
+//   f[2 n_nodes] forces (N) to which contact forces are ADDED; node k at (2k, 2k+1).
+//   Pairs (structure of arrays, index p): pair_a[p] < pair_b[p] triangle indices, pair_law[p] index into the
+//   resolved law table, hist[6 p] sliding distances (m) (slots as in potential.hpp). Per-pair scratch
+//   (forces 12 p, energies) is written by one thread per pair in parallel and then added serially in pair order,
+//   so the result has the same bits for any thread count.
+//   "No index" is -1.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "contact/contact_law.hpp"
+#include "contact/nbs.hpp"
+
+namespace fdem::contact {
+
+struct ContactOptions {
+    double buffer = 0.0;  // NBS buffer (m); 0 = smallest edge of the contact-capable triangles / 5 at first use
+    bool compute_energy = true;  // evaluate the normal contact energy each step (one polygon clip per active pair)
+};
+
+struct ContactStats {
+    long long detections = 0;      // NBS runs so far
+    int candidate_pairs = 0;       // pairs in the current list
+    int active_pairs = 0;          // pairs that carried load in the last step
+    long long pair_evaluations = 0;  // candidate pairs evaluated, cumulative
+    double time_detection = 0.0;   // s, cumulative wall time in detection
+    double time_forces = 0.0;      // s, cumulative wall time in the force evaluation and scatter
+};
+
+class ContactSystem {
+public:
+    // thickness: out-of-plane thickness t (m). Throws std::invalid_argument when a law is invalid or missing for
+    // a material combination present in the mesh (the message names the law or the materials).
+    ContactSystem(const int* tri, int n_tri, int n_nodes, double thickness, std::vector<int> tri_material,
+                  std::vector<int> tri_body, const ContactLaws& laws, ContactOptions options = {});
+
+    // Contact-capable set (starts empty): free boundary, dry interface, broken joint. Changing it forces a
+    // re-detection at the next step.
+    void set_capable(int t, bool capable);
+    bool capable(int t) const { return capable_[t] != 0; }
+    // Triangles joined by an intact cohesive element never form a pair; include_pair when it breaks.
+    void exclude_pair(int ta, int tb);
+    void include_pair(int ta, int tb);
+
+    // FORMULATION §3: min over triangles that can ever touch (all triangles, since any may become capable) of
+    // 2 sqrt(m / k), m the lightest node mass of the triangle (kg), k = (stiffest normal or tangential slope of
+    // the laws its material can meet, Pa/m) * t * (longest edge). x: positions (m) for the element sizes.
+    double stable_dt(const double* x, const double* node_mass) const;
+
+    // One step: re-detects when 2 * (sum of dt max|v| since the last detection) would exceed the buffer, then
+    // evaluates all pairs and adds the contact forces (N) to f. dt in s.
+    void step(const double* x, const double* v, double dt, double* f);
+    // Forces a detection at the next step (e.g. after the engine moved nodes by other means).
+    void invalidate() { dirty_ = true; }
+
+    double elastic_energy() const { return energy_normal_ + energy_tangential_; }  // J, current
+    double normal_energy() const { return energy_normal_; }                        // J
+    double tangential_energy() const { return energy_tangential_; }                // J
+    double friction_dissipation() const { return dissipation_; }                   // J, cumulative
+    const ContactStats& stats() const { return stats_; }
+    double buffer() const { return buffer_; }
+
+    // Read access for monitors and tests.
+    const std::vector<int>& pair_a() const { return pair_a_; }
+    const std::vector<int>& pair_b() const { return pair_b_; }
+    const std::vector<double>& sliding_history() const { return hist_; }  // 6 per pair (m)
+
+private:
+    void detect(const double* x);
+    int law_of(int ta, int tb) const;
+
+    const int* tri_;
+    int n_tri_, n_nodes_;
+    double thickness_;  // m
+    std::vector<int> material_, body_;
+    ContactOptions opt_;
+    int n_mat_ = 0;
+    std::vector<int> interface_law_;  // n_mat^2 -> law index
+    std::vector<int> crack_law_;      // n_mat -> law index
+    std::vector<ResolvedLaw> laws_;
+
+    std::vector<char> capable_;
+    std::vector<std::vector<int>> excluded_;  // per triangle, partners joined by an intact cohesive element
+    bool dirty_ = true;
+    double buffer_ = 0.0;        // m
+    double travel_ = 0.0;        // m, sum of dt max|v| since the last detection
+
+    std::vector<int> pair_a_, pair_b_, pair_law_;
+    std::vector<double> hist_;  // 6 per pair
+    // scratch
+    std::vector<int> items_;
+    std::vector<double> cx_, cy_, cr_;  // per triangle (only capable ones meaningful)
+    CandidatePairs cand_;
+    NbsWorkspace ws_;
+    std::vector<double> pair_f_;   // 12 per pair
+    std::vector<double> pair_e_;   // 3 per pair: normal energy, tangential energy, dissipation
+    std::vector<char> pair_on_;
+
+    double energy_normal_ = 0.0, energy_tangential_ = 0.0, dissipation_ = 0.0;
+    ContactStats stats_;
+};
+
+}  // namespace fdem::contact

@@ -1,0 +1,257 @@
+// contact/potential.cpp: pair kernel of the distributed-potential contact (formulas in potential.hpp).
+#include "contact/potential.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace fdem::contact {
+
+namespace {
+
+// Area coordinates of T as affine functions: L_k(P) = g[3k] + g[3k+1] P.x + g[3k+2] P.y.
+inline void area_coordinates(const double* T, double* g) {
+    const double area2 = (T[2] - T[0]) * (T[5] - T[1]) - (T[4] - T[0]) * (T[3] - T[1]);
+    const double inv = 1.0 / area2;
+    for (int k = 0; k < 3; ++k) {
+        const int i = (k + 1) % 3, j = (k + 2) % 3;
+        const double xi = T[2 * i], yi = T[2 * i + 1], xj = T[2 * j], yj = T[2 * j + 1];
+        g[3 * k] = (xi * yj - xj * yi) * inv;
+        g[3 * k + 1] = (yi - yj) * inv;
+        g[3 * k + 2] = (xj - xi) * inv;
+    }
+}
+
+inline double affine(const double* g, double x, double y) { return g[0] + g[1] * x + g[2] * y; }
+
+// Sutherland-Hodgman clip of a convex polygon by the half-plane g(P) >= 0.
+int clip(const double* in, int n, const double* g, double* out) {
+    int m = 0;
+    for (int i = 0; i < n; ++i) {
+        const int j = (i + 1) % n;
+        const double xi = in[2 * i], yi = in[2 * i + 1], xj = in[2 * j], yj = in[2 * j + 1];
+        const double di = affine(g, xi, yi), dj = affine(g, xj, yj);
+        if (di >= 0.0) {
+            out[2 * m] = xi;
+            out[2 * m + 1] = yi;
+            ++m;
+        }
+        if ((di >= 0.0) != (dj >= 0.0)) {
+            const double s = di / (di - dj);
+            out[2 * m] = xi + s * (xj - xi);
+            out[2 * m + 1] = yi + s * (yj - yi);
+            ++m;
+        }
+    }
+    return m;
+}
+
+// INT over a convex polygon of an affine function f (exact: fan of triangles, f at each centroid).
+double integrate_affine(const double* poly, int n, const double* f) {
+    double sum = 0.0;
+    for (int i = 1; i + 1 < n; ++i) {
+        const double x0 = poly[0], y0 = poly[1], x1 = poly[2 * i], y1 = poly[2 * i + 1], x2 = poly[2 * i + 2],
+                     y2 = poly[2 * i + 3];
+        const double area = 0.5 * ((x1 - x0) * (y2 - y0) - (x2 - x0) * (y1 - y0));
+        sum += area * affine(f, (x0 + x1 + x2) / 3.0, (y0 + y1 + y2) / 3.0);
+    }
+    return sum;
+}
+
+// INT over polygon omega of phi_X = min_k w_k L_k: split omega where each branch is the minimum.
+double integrate_potential(const double* omega, int n, const double* T, const double* w) {
+    double g[9];
+    area_coordinates(T, g);
+    double total = 0.0;
+    double buf1[2 * 16], buf2[2 * 16];
+    for (int k = 0; k < 3; ++k) {
+        const double* src = omega;
+        int m = n;
+        double* dst = buf1;
+        for (int j = 0; j < 3 && m > 0; ++j) {
+            if (j == k) continue;
+            const double h[3] = {w[j] * g[3 * j] - w[k] * g[3 * k], w[j] * g[3 * j + 1] - w[k] * g[3 * k + 1],
+                                 w[j] * g[3 * j + 2] - w[k] * g[3 * k + 2]};
+            m = clip(src, m, h, dst);
+            src = dst;
+            dst = (dst == buf1) ? buf2 : buf1;
+        }
+        if (m < 3) continue;
+        const double f[3] = {w[k] * g[3 * k], w[k] * g[3 * k + 1], w[k] * g[3 * k + 2]};
+        total += integrate_affine(src, m, f);
+    }
+    return total;
+}
+
+// One loaded edge: the edge (nodes e, e+1) of triangle O ("owner") lies partly inside triangle Q ("other").
+// Normal load c * phi_Q on the owner's edge along -n_O; the reaction on Q through its area coordinates.
+// Friction: one tangential spring per edge at the centre of pressure ([K25] Eqs. 4-5, FORMULATION §5).
+void load_edge(const double* xo, const double* vo, double* fo, const double* vq, double* fq, int e, const double* I,
+               const PairParams& p, double& hist, PairResult& r) {
+    const int e1 = (e + 1) % 3;
+    const double dx = xo[2 * e1] - xo[2 * e], dy = xo[2 * e1 + 1] - xo[2 * e + 1];
+    const double len = std::sqrt(dx * dx + dy * dy);
+    const double nx = dy / len, ny = -dx / len, tx = dx / len, ty = dy / len;
+    const double ct = p.c * p.thickness;
+    fo[2 * e] -= ct * I[0] * nx;
+    fo[2 * e + 1] -= ct * I[0] * ny;
+    fo[2 * e1] -= ct * I[1] * nx;
+    fo[2 * e1 + 1] -= ct * I[1] * ny;
+    for (int k = 0; k < 3; ++k) {
+        fq[2 * k] += ct * I[2 + k] * nx;
+        fq[2 * k + 1] += ct * I[2 + k] * ny;
+    }
+    const double total = I[0] + I[1];
+    const double fn = ct * total;  // N
+    const double k_t = 0.5 * p.k_s * p.thickness * I[5];  // N/m; each of the two faces carries half the contact
+    if (!(p.mu > 0.0) || !(k_t > 0.0)) {
+        hist = 0.0;
+        return;
+    }
+    const double s = I[1] / total;  // centre of pressure along the edge
+    double lq[3];
+    for (int k = 0; k < 3; ++k) lq[k] = I[2 + k] / total;
+    const double vox = (1.0 - s) * vo[2 * e] + s * vo[2 * e1], voy = (1.0 - s) * vo[2 * e + 1] + s * vo[2 * e1 + 1];
+    const double vqx = lq[0] * vq[0] + lq[1] * vq[2] + lq[2] * vq[4];
+    const double vqy = lq[0] * vq[1] + lq[1] * vq[3] + lq[2] * vq[5];
+    // [K25] Eq. 4: delta_s += v_rel,t dt; Eq. 5: F_t = min(k_t |delta_s|, mu |F_n|), opposing the slip.
+    const double trial = hist + ((vox - vqx) * tx + (voy - vqy) * ty) * p.dt;
+    double ft = -k_t * trial;
+    const double cap = p.mu * fn;
+    double kept = trial;
+    if (std::fabs(ft) > cap) {
+        kept = (trial > 0.0 ? 1.0 : -1.0) * cap / k_t;
+        ft = -k_t * kept;
+        r.dissipation += cap * std::fabs(trial - kept);
+    }
+    hist = kept;
+    r.energy_tangential += 0.5 * k_t * kept * kept;
+    fo[2 * e] += (1.0 - s) * ft * tx;
+    fo[2 * e + 1] += (1.0 - s) * ft * ty;
+    fo[2 * e1] += s * ft * tx;
+    fo[2 * e1 + 1] += s * ft * ty;
+    for (int k = 0; k < 3; ++k) {
+        fq[2 * k] -= lq[k] * ft * tx;
+        fq[2 * k + 1] -= lq[k] * ft * ty;
+    }
+}
+
+}  // namespace
+
+void potential_weights(const double* x, bool distance_potential, double* w) {
+    if (!distance_potential) {
+        w[0] = w[1] = w[2] = 3.0;
+        return;
+    }
+    const double area2 = std::fabs((x[2] - x[0]) * (x[5] - x[1]) - (x[4] - x[0]) * (x[3] - x[1]));
+    for (int k = 0; k < 3; ++k) {
+        const int i = (k + 1) % 3, j = (k + 2) % 3;
+        const double ex = x[2 * j] - x[2 * i], ey = x[2 * j + 1] - x[2 * i + 1];
+        w[k] = area2 / std::sqrt(ex * ex + ey * ey);  // altitude from vertex k onto the opposite edge (m)
+    }
+}
+
+bool edge_in_triangle(const double* p0, const double* p1, const double* T, const double* w, double* out) {
+    double g[9];
+    area_coordinates(T, g);
+    double a[3], b[3];
+    double lo = 0.0, hi = 1.0;
+    for (int k = 0; k < 3; ++k) {
+        a[k] = affine(g + 3 * k, p0[0], p0[1]);
+        b[k] = affine(g + 3 * k, p1[0], p1[1]) - a[k];
+        if (b[k] == 0.0) {
+            if (a[k] < 0.0) return false;
+        } else if (b[k] > 0.0) {
+            lo = std::max(lo, -a[k] / b[k]);
+        } else {
+            hi = std::min(hi, -a[k] / b[k]);
+        }
+    }
+    if (!(hi > lo)) return false;
+    // breakpoints of min_k w_k L_k(s) inside (lo, hi)
+    double br[5];
+    int nb = 0;
+    br[nb++] = lo;
+    for (int j = 0; j < 3; ++j)
+        for (int k = j + 1; k < 3; ++k) {
+            const double den = w[j] * b[j] - w[k] * b[k];
+            if (den == 0.0) continue;
+            const double s = -(w[j] * a[j] - w[k] * a[k]) / den;
+            if (s > lo && s < hi) br[nb++] = s;
+        }
+    br[nb++] = hi;
+    std::sort(br + 1, br + nb - 1);
+    const double len = std::hypot(p1[0] - p0[0], p1[1] - p0[1]);
+    for (int i = 0; i < 6; ++i) out[i] = 0.0;
+    auto phi = [&](double s, double* L) {
+        double m = 1e300;
+        for (int k = 0; k < 3; ++k) {
+            L[k] = a[k] + b[k] * s;
+            m = std::min(m, w[k] * L[k]);
+        }
+        return std::max(0.0, m);
+    };
+    for (int i = 0; i + 1 < nb; ++i) {
+        const double s0 = br[i], s1 = br[i + 1], sm = 0.5 * (s0 + s1);
+        if (!(s1 > s0)) continue;
+        double L0[3], Lm[3], L1[3];
+        const double f0 = phi(s0, L0), fm = phi(sm, Lm), f1 = phi(s1, L1);
+        const double h = (s1 - s0) * len / 6.0;  // Simpson, exact for the product of two linear functions
+        out[0] += h * ((1.0 - s0) * f0 + 4.0 * (1.0 - sm) * fm + (1.0 - s1) * f1);
+        out[1] += h * (s0 * f0 + 4.0 * sm * fm + s1 * f1);
+        for (int k = 0; k < 3; ++k) out[2 + k] += h * (L0[k] * f0 + 4.0 * Lm[k] * fm + L1[k] * f1);
+    }
+    out[5] = (hi - lo) * len;
+    return out[0] + out[1] > 0.0;
+}
+
+double pair_energy(const double* xa, const double* xb, const PairParams& p) {
+    double gb[9];
+    area_coordinates(xb, gb);
+    double buf1[2 * 16], buf2[2 * 16];
+    int n = 3;
+    for (int i = 0; i < 6; ++i) buf1[i] = xa[i];
+    double* src = buf1;
+    double* dst = buf2;
+    for (int k = 0; k < 3 && n > 0; ++k) {
+        n = clip(src, n, gb + 3 * k, dst);
+        std::swap(src, dst);
+    }
+    if (n < 3) return 0.0;
+    double wa[3], wb[3];
+    potential_weights(xa, p.distance_potential, wa);
+    potential_weights(xb, p.distance_potential, wb);
+    const double ia = integrate_potential(src, n, xa, wa);
+    const double ib = integrate_potential(src, n, xb, wb);
+    return p.thickness * p.c * (ia + ib);
+}
+
+bool pair_contact(const double* xa, const double* xb, const double* va, const double* vb, const PairParams& p,
+                  bool want_energy, double* hist, PairResult& r) {
+    for (int i = 0; i < 6; ++i) r.fa[i] = r.fb[i] = 0.0;
+    r.energy_normal = r.energy_tangential = r.dissipation = 0.0;
+    r.active_edges = 0;
+    double wa[3], wb[3];
+    potential_weights(xa, p.distance_potential, wa);
+    potential_weights(xb, p.distance_potential, wb);
+    double I[6];
+    for (int e = 0; e < 3; ++e) {
+        const int e1 = (e + 1) % 3;
+        if (edge_in_triangle(xa + 2 * e, xa + 2 * e1, xb, wb, I)) {
+            load_edge(xa, va, r.fa, vb, r.fb, e, I, p, hist[e], r);
+            ++r.active_edges;
+        } else {
+            hist[e] = 0.0;
+        }
+        if (edge_in_triangle(xb + 2 * e, xb + 2 * e1, xa, wa, I)) {
+            load_edge(xb, vb, r.fb, va, r.fa, e, I, p, hist[3 + e], r);
+            ++r.active_edges;
+        } else {
+            hist[3 + e] = 0.0;
+        }
+    }
+    if (r.active_edges == 0) return false;
+    if (want_energy) r.energy_normal = pair_energy(xa, xb, p);
+    return true;
+}
+
+}  // namespace fdem::contact

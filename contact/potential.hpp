@@ -1,0 +1,66 @@
+// contact/potential.hpp: distributed-potential contact force and Coulomb friction of one triangle pair
+// ([MA00]; [M04] ch. 2; [K25] Eqs. 2-5; FORMULATION §5). Pure functions on small fixed arrays.
+//
+// DATA LAYOUT
+//   A triangle is 6 doubles (x0, y0, x1, y1, x2, y2), counter-clockwise, current configuration (m).
+//   Velocities likewise (m/s). Forces out: 6 doubles per triangle, node-ordered like the coordinates (N, whole
+//   thickness). Friction history: 6 sliding distances (m) per pair, slot e = edge e of A (nodes e, e+1) inside B
+//   for e = 0..2, slot 3 + e = edge e of B inside A.
+//
+// THE POTENTIAL
+//   [MA00] phi(P) = 3 min_i A_i(P) / A = 3 min_k L_k(P): L_k is the area coordinate of vertex k, i.e. A_i / A for the
+//   edge i opposite k. We use the general form phi(P) = min_k w_k L_k(P):
+//     penalty law (p_n, Pa):      w_k = 3 (Munjiza's phi, 1 at the centroid), coefficient c = p_n;
+//     stiffness law (k_n, Pa/m):  w_k = H_k, the altitude from vertex k (m), so phi(P) is the distance from P to the
+//                                 triangle's boundary, coefficient c = k_n / 2. Near a flat face the pressure is
+//                                 then (k_n/2) d_A + (k_n/2) d_B = k_n * overlap exactly, whatever the element size:
+//                                 this is p_n = k_n H / 6 derived per element edge (issue 4 item 2).
+//   Energy of the pair (J):  E = t INT_{A∩B} (c_A phi_A + c_B phi_B) dA.
+//   Its derivative for a rigid translation/rotation of A, by the divergence theorem on A∩B (phi_A = 0 on dA,
+//   phi_B = 0 on dB), gives the force on A
+//       f_A = t [ c_A INT_{dB ∩ A} n_B phi_A dG  -  c_B INT_{dA ∩ B} n_A phi_B dG ],   f_B = -f_A,
+//   n_X the outward normal of X. (FORMULATION writes f_c = p t INT (grad phi_t - grad phi_c) dA with the opposite
+//   sign convention for grad phi; the force here is repulsive, checked against -dE/du in the tests.)
+//   Discrete: each edge segment inside the other triangle is split where the minimum in phi changes branch; on each
+//   piece phi is linear, so INT N_a phi dG (edge nodes, linear shape functions N) and INT L_k phi dG (the other
+//   triangle's nodes, area coordinates) are products of linear functions, integrated exactly by Simpson's rule.
+//   Both ends get the same distributed load at the same points: sum of forces and of moments are zero exactly.
+#pragma once
+
+namespace fdem::contact {
+
+struct PairParams {
+    double thickness = 0.0;  // out-of-plane thickness t (m)
+    double c = 0.0;          // potential coefficient: p_n (Pa) for w = 3, k_n / 2 (Pa/m) for w = H
+    bool distance_potential = false;  // false: w_k = 3 (penalty law); true: w_k = H_k (stiffness law)
+    double k_s = 0.0;        // tangential stiffness per unit contact area (Pa/m)
+    double mu = 0.0;         // friction coefficient (-)
+    double dt = 0.0;         // time step (s); the sliding increment is v_rel,t dt
+};
+
+struct PairResult {
+    double fa[6];               // force on A's nodes (N)
+    double fb[6];               // force on B's nodes (N)
+    double energy_normal = 0.0;      // t INT (c phi_A + c phi_B) dA (J); only when asked for
+    double energy_tangential = 0.0;  // sum 0.5 k_t delta_s^2 over the edges (J)
+    double dissipation = 0.0;        // friction work dissipated in this step (J)
+    int active_edges = 0;            // edges carrying a normal force
+};
+
+// Potential weights w_k of a triangle (see THE POTENTIAL).
+void potential_weights(const double* x, bool distance_potential, double* w);
+
+// The force, friction and energies of the pair (A, B). hist[6] (m) is read and updated. Returns true when the
+// triangles interact (some edge carries load); false leaves fa = fb = 0 and resets hist to 0.
+bool pair_contact(const double* xa, const double* xb, const double* va, const double* vb, const PairParams& p,
+                  bool want_energy, double* hist, PairResult& out);
+
+// t INT_{A∩B} (c phi_A + c phi_B) dA (J): the pair's normal contact energy, by polygon clipping.
+double pair_energy(const double* xa, const double* xb, const PairParams& p);
+
+// Integrals along the part of segment p0-p1 inside triangle T of phi_T (w): out[0] = INT N0 phi dG,
+// out[1] = INT N1 phi dG, out[2..4] = INT L_k phi dG (m^2 when w = 3), out[5] = length inside (m).
+// Returns false when the segment does not enter T.
+bool edge_in_triangle(const double* p0, const double* p1, const double* T, const double* w, double* out);
+
+}  // namespace fdem::contact

@@ -1,0 +1,444 @@
+// tests/contact/test_contact_unit.cpp: contact tests that need no time integration.
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <omp.h>
+#include <random>
+#include <set>
+#include <stdexcept>
+#include <string>
+
+#include "contact/contact_system.hpp"
+#include "contact/nbs.hpp"
+#include "contact/potential.hpp"
+#include "mesh/gmsh_source.hpp"
+
+using namespace fdem::contact;
+
+namespace {
+
+// Random circles with mixed sizes (radii over two decades) and densities (a dense cluster, a sparse field and a
+// strip of very close items) so that cells hold anything from 0 to dozens of items.
+void random_circles(int n, unsigned seed, std::vector<double>& cx, std::vector<double>& cy, std::vector<double>& r) {
+    std::mt19937_64 rng(seed);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    cx.resize(n);
+    cy.resize(n);
+    r.resize(n);
+    for (int i = 0; i < n; ++i) {
+        const int kind = i % 3;
+        if (kind == 0) {  // sparse field 10 m x 10 m
+            cx[i] = 10.0 * u(rng);
+            cy[i] = 10.0 * u(rng);
+        } else if (kind == 1) {  // dense cluster 1 m x 1 m
+            cx[i] = 3.0 + u(rng);
+            cy[i] = 3.0 + u(rng);
+        } else {  // thin strip
+            cx[i] = 5.0 + 4.0 * u(rng);
+            cy[i] = 8.0 + 0.05 * u(rng);
+        }
+        r[i] = 0.002 * std::pow(50.0, u(rng));  // 2 mm .. 100 mm
+    }
+}
+
+std::set<std::pair<int, int>> as_set(const CandidatePairs& p) {
+    std::set<std::pair<int, int>> s;
+    for (int i = 0; i < p.size(); ++i) s.emplace(p.a[i], p.b[i]);
+    return s;
+}
+
+double moment(const double* x, const double* f) {
+    double m = 0.0;
+    for (int k = 0; k < 3; ++k) m += x[2 * k] * f[2 * k + 1] - x[2 * k + 1] * f[2 * k];
+    return m;
+}
+
+void rotate_about(const double* x, double angle, double* out) {
+    const double cx = (x[0] + x[2] + x[4]) / 3.0, cy = (x[1] + x[3] + x[5]) / 3.0;
+    const double c = std::cos(angle), s = std::sin(angle);
+    for (int k = 0; k < 3; ++k) {
+        const double dx = x[2 * k] - cx, dy = x[2 * k + 1] - cy;
+        out[2 * k] = cx + c * dx - s * dy;
+        out[2 * k + 1] = cy + s * dx + c * dy;
+    }
+}
+
+const double kZero[6] = {0, 0, 0, 0, 0, 0};
+
+}  // namespace
+
+TEST_CASE("NBS finds exactly the brute-force pairs on 10,000 random circles", "[unit]") {
+    const int n = 10000;
+    std::vector<double> cx, cy, r;
+    random_circles(n, 12345, cx, cy, r);
+    std::vector<int> id(n);
+    for (int i = 0; i < n; ++i) id[i] = (i * 7919) % n;  // a permutation: ids need not be the item order
+    const double buffer = 0.004;
+    CandidatePairs nbs, brute;
+    NbsWorkspace ws;
+    nbs_detect(cx.data(), cy.data(), r.data(), id.data(), n, buffer, nbs, ws);
+    brute_force_pairs(cx.data(), cy.data(), r.data(), id.data(), n, buffer, brute);
+    const auto s_nbs = as_set(nbs), s_brute = as_set(brute);
+    REQUIRE(brute.size() > 10000);  // the test means something: many pairs
+    CHECK(static_cast<size_t>(nbs.size()) == s_nbs.size());  // no pair twice
+    CHECK(s_nbs == s_brute);
+    for (int i = 0; i < nbs.size(); ++i) REQUIRE(nbs.a[i] < nbs.b[i]);
+
+    // Same list, same order, for 1, 2 and 4 threads.
+    const int saved = omp_get_max_threads();
+    for (int th : {1, 2, 4}) {
+        omp_set_num_threads(th);
+        CandidatePairs again;
+        NbsWorkspace ws2;
+        nbs_detect(cx.data(), cy.data(), r.data(), id.data(), n, buffer, again, ws2);
+        CHECK(again.a == nbs.a);
+        CHECK(again.b == nbs.b);
+    }
+    omp_set_num_threads(saved);
+}
+
+TEST_CASE("NBS handles scattered items and degenerate inputs", "[unit]") {
+    // Two far clusters: the grid would be huge at d = 2 (r_max + buffer); the enlarged cell keeps it O(n).
+    std::vector<double> cx = {0.0, 0.01, 1e6, 1e6 + 0.01, 5e5}, cy = {0.0, 0.0, 1e6, 1e6, 0.0};
+    std::vector<double> r = {0.006, 0.006, 0.006, 0.006, 0.006};
+    std::vector<int> id = {0, 1, 2, 3, 4};
+    CandidatePairs p, b;
+    NbsWorkspace ws;
+    nbs_detect(cx.data(), cy.data(), r.data(), id.data(), 5, 0.001, p, ws);
+    brute_force_pairs(cx.data(), cy.data(), r.data(), id.data(), 5, 0.001, b);
+    CHECK(as_set(p) == as_set(b));
+    CHECK(p.size() == 2);
+    nbs_detect(cx.data(), cy.data(), r.data(), id.data(), 1, 0.001, p, ws);
+    CHECK(p.size() == 0);
+}
+
+TEST_CASE("Contact force is minus the gradient of the contact energy for rigid motions", "[unit]") {
+    const double xa[6] = {0.0, 0.0, 1.0, 0.1, 0.3, 0.9};
+    const double xb0[6] = {0.6, 0.5, 1.5, 0.3, 1.2, 1.4};  // overlaps A's edge 1-2 region
+    for (bool dist : {false, true}) {
+        PairParams p;
+        p.thickness = 0.2;
+        p.c = dist ? 5e9 : 1e9;
+        p.distance_potential = dist;
+        double hist[6] = {0, 0, 0, 0, 0, 0};
+        PairResult r;
+        REQUIRE(pair_contact(xa, xb0, kZero, kZero, p, true, hist, r));
+        REQUIRE(r.energy_normal > 0.0);
+        const double h = 1e-6;
+        double fmax = 0.0;
+        for (int s = 0; s < 6; ++s) fmax = std::max(fmax, std::fabs(r.fa[s]));
+        // translations of A and of B
+        for (int who = 0; who < 2; ++who)
+            for (int dir = 0; dir < 2; ++dir) {
+                double a1[6], a2[6], b1[6], b2[6];
+                std::memcpy(a1, xa, sizeof a1);
+                std::memcpy(a2, xa, sizeof a2);
+                std::memcpy(b1, xb0, sizeof b1);
+                std::memcpy(b2, xb0, sizeof b2);
+                double* m1 = who == 0 ? a1 : b1;
+                double* m2 = who == 0 ? a2 : b2;
+                for (int k = 0; k < 3; ++k) {
+                    m1[2 * k + dir] += h;
+                    m2[2 * k + dir] -= h;
+                }
+                const double dE = (pair_energy(a1, b1, p) - pair_energy(a2, b2, p)) / (2 * h);
+                const double* fw = who == 0 ? r.fa : r.fb;
+                const double F = fw[dir] + fw[2 + dir] + fw[4 + dir];
+                CHECK(F == Approx(-dE).margin(1e-6 * fmax).epsilon(1e-6));
+            }
+        // rotations about each triangle's centroid: moment about the centroid = -dE/dtheta
+        for (int who = 0; who < 2; ++who) {
+            double a1[6], a2[6], b1[6], b2[6];
+            std::memcpy(a1, xa, sizeof a1);
+            std::memcpy(a2, xa, sizeof a2);
+            std::memcpy(b1, xb0, sizeof b1);
+            std::memcpy(b2, xb0, sizeof b2);
+            const double hr = 1e-7;
+            if (who == 0) {
+                rotate_about(xa, hr, a1);
+                rotate_about(xa, -hr, a2);
+            } else {
+                rotate_about(xb0, hr, b1);
+                rotate_about(xb0, -hr, b2);
+            }
+            const double dE = (pair_energy(a1, b1, p) - pair_energy(a2, b2, p)) / (2 * hr);
+            const double* X = who == 0 ? xa : xb0;
+            const double* fw = who == 0 ? r.fa : r.fb;
+            const double gx = (X[0] + X[2] + X[4]) / 3.0, gy = (X[1] + X[3] + X[5]) / 3.0;
+            double M = 0.0;
+            for (int k = 0; k < 3; ++k) M += (X[2 * k] - gx) * fw[2 * k + 1] - (X[2 * k + 1] - gy) * fw[2 * k];
+            CHECK(M == Approx(-dE).margin(1e-6 * fmax).epsilon(1e-5));
+        }
+    }
+}
+
+TEST_CASE("Action equals reaction: forces and moments of a pair sum to zero; symmetry", "[unit]") {
+    std::mt19937_64 rng(7);
+    std::uniform_real_distribution<double> u(-0.5, 0.5);
+    int overlapping = 0;
+    for (int trial = 0; trial < 200; ++trial) {
+        double xa[6], xb[6], va[6], vb[6];
+        for (int s = 0; s < 6; ++s) {
+            xa[s] = u(rng);
+            xb[s] = u(rng) + 0.3;
+            va[s] = u(rng);
+            vb[s] = u(rng);
+        }
+        auto ccw = [](double* T) {
+            const double a2 = (T[2] - T[0]) * (T[5] - T[1]) - (T[4] - T[0]) * (T[3] - T[1]);
+            if (a2 < 0) {
+                std::swap(T[2], T[4]);
+                std::swap(T[3], T[5]);
+            }
+        };
+        ccw(xa);
+        ccw(xb);
+        PairParams p;
+        p.thickness = 0.1;
+        p.c = 1e8;
+        p.distance_potential = trial % 2 == 0;
+        p.k_s = 1e9;
+        p.mu = 0.6;
+        p.dt = 1e-3;
+        double h1[6] = {1e-4, -2e-4, 0, 3e-5, 0, 1e-4}, h2[6];
+        // B as A: swap roles, slots swap halves
+        for (int s = 0; s < 3; ++s) {
+            h2[s] = h1[3 + s];
+            h2[3 + s] = h1[s];
+        }
+        PairResult r1, r2;
+        const bool on1 = pair_contact(xa, xb, va, vb, p, true, h1, r1);
+        const bool on2 = pair_contact(xb, xa, vb, va, p, true, h2, r2);
+        REQUIRE(on1 == on2);
+        if (!on1) {
+            for (int s = 0; s < 6; ++s) CHECK(r1.fa[s] == 0.0);
+            continue;
+        }
+        ++overlapping;
+        double scale = 0.0, fx = 0.0, fy = 0.0;
+        for (int k = 0; k < 3; ++k) {
+            fx += r1.fa[2 * k] + r1.fb[2 * k];
+            fy += r1.fa[2 * k + 1] + r1.fb[2 * k + 1];
+            scale = std::max({scale, std::fabs(r1.fa[2 * k]), std::fabs(r1.fa[2 * k + 1])});
+        }
+        CHECK(std::fabs(fx) <= 1e-12 * scale);
+        CHECK(std::fabs(fy) <= 1e-12 * scale);
+        CHECK(std::fabs(moment(xa, r1.fa) + moment(xb, r1.fb)) <= 1e-12 * scale);
+        for (int s = 0; s < 6; ++s) {
+            CHECK(r2.fb[s] == Approx(r1.fa[s]).margin(1e-12 * scale));
+            CHECK(r2.fa[s] == Approx(r1.fb[s]).margin(1e-12 * scale));
+        }
+        CHECK(r2.energy_normal == Approx(r1.energy_normal).epsilon(1e-12));
+    }
+    CHECK(overlapping > 50);
+}
+
+TEST_CASE("No force without overlap, including touching triangles", "[unit]") {
+    const double xa[6] = {0, 0, 1, 0, 0, 1};
+    const double far[6] = {2, 2, 3, 2, 2, 3};
+    const double touching[6] = {1, 0, 1, 1, 0, 1};  // shares the hypotenuse, no overlap
+    PairParams p;
+    p.thickness = 1;
+    p.c = 1e9;
+    for (const double* xb : {far, touching}) {
+        double hist[6] = {1, 1, 1, 1, 1, 1};
+        PairResult r;
+        CHECK_FALSE(pair_contact(xa, xb, kZero, kZero, p, true, hist, r));
+        for (int s = 0; s < 6; ++s) {
+            CHECK(r.fa[s] == 0.0);
+            CHECK(r.fb[s] == 0.0);
+            CHECK(hist[s] == 0.0);  // history of a separated pair is forgotten
+        }
+        CHECK(pair_energy(xa, xb, p) == 0.0);
+    }
+}
+
+TEST_CASE("Flat overlap: pressure equals k_n times overlap for the distance potential", "[unit]") {
+    // A wide triangle pressed into a wide triangle by delta through a flat face: exact k_n * delta * length.
+    const double d = 1e-5, kn = 2e10, t = 0.3;
+    const double xb[6] = {-1.0, -0.7, 2.0, 0.0, -1.0, 0.0};   // top edge y = 0 from x = 2 to -1 (CCW)
+    const double xa[6] = {0.0, -d, 1.0, -d, 0.5, 0.6};         // bottom edge y = -d, x in [0, 1]
+    PairParams p;
+    p.thickness = t;
+    p.c = 0.5 * kn;
+    p.distance_potential = true;
+    double hist[6] = {0, 0, 0, 0, 0, 0};
+    PairResult r;
+    REQUIRE(pair_contact(xa, xb, kZero, kZero, p, true, hist, r));
+    const double fy = r.fa[1] + r.fa[3] + r.fa[5];
+    // the overlap is the strip 0<x<1 minus two small triangles at the ends: relative error O(d)
+    CHECK(fy == Approx(kn * d * 1.0 * t).epsilon(1e-4));
+    CHECK(r.energy_normal == Approx(0.5 * kn * d * d * 1.0 * t).epsilon(1e-4));
+}
+
+TEST_CASE("Friction on one contacting edge: stick below mu F_n, slip at mu F_n with dissipation", "[unit]") {
+    const double d = 1e-4, kn = 1e9, ks = 5e8, t = 0.1, mu = 0.5, dt = 1e-4;
+    const double xb[6] = {-1.0, -1.0, 2.0, 0.0, -1.0, 0.0};
+    const double xa[6] = {0.0, -d, 1.0, -d, 0.5, 0.6};
+    PairParams p;
+    p.thickness = t;
+    p.c = 0.5 * kn;
+    p.distance_potential = true;
+    p.k_s = ks;
+    p.mu = mu;
+    p.dt = dt;
+    double va[6] = {0.01, 0, 0.01, 0, 0.01, 0};  // A slides to +x at 1 cm/s
+    double hist[6] = {0, 0, 0, 0, 0, 0};
+    PairResult r;
+    REQUIRE(pair_contact(xa, xb, va, kZero, p, true, hist, r));
+    const double fn = r.fa[1] + r.fa[3] + r.fa[5];
+    const double ft1 = r.fa[0] + r.fa[2] + r.fa[4];
+    // Two loaded edges (A's bottom in B, B's top in A), each with k_t = k_s t L / 2 and delta_s = v dt: total
+    // tangential force = -k_s t L v dt with L = 1 m, below the cap.
+    CHECK(fn == Approx(kn * d * t).epsilon(1e-3));
+    CHECK(ft1 == Approx(-ks * t * 1.0 * 0.01 * dt).epsilon(1e-3));
+    CHECK(r.dissipation == 0.0);
+    // keep sliding: elastic (force grows by k_s t L v dt per step) until k_s t L delta = mu F_n, then capped
+    const double slip_at = mu * fn / (ks * t);  // m of sliding
+    const int n_elastic = static_cast<int>(slip_at / (0.01 * dt));  // 100 steps
+    double ft = 0.0;
+    for (int step = 2; step <= n_elastic + 20; ++step) {
+        pair_contact(xa, xb, va, kZero, p, true, hist, r);
+        ft = r.fa[0] + r.fa[2] + r.fa[4];
+        if (step == n_elastic / 2) CHECK(ft == Approx(-ks * t * step * 0.01 * dt).epsilon(2e-3));
+    }
+    CHECK(ft == Approx(-mu * fn).epsilon(1e-3));
+    // in full slip every further step dissipates mu F_n v dt
+    pair_contact(xa, xb, va, kZero, p, true, hist, r);
+    CHECK(r.dissipation == Approx(mu * fn * 0.01 * dt).epsilon(1e-3));
+    CHECK(r.fa[0] + r.fa[2] + r.fa[4] == Approx(-mu * fn).epsilon(1e-3));
+    // reversing the velocity unloads elastically first: no dissipation on the first reverse step
+    for (double& x : va) x = -x;
+    for (int s = 0; s < 3; ++s) va[2 * s + 1] = 0.0;
+    pair_contact(xa, xb, va, kZero, p, true, hist, r);
+    CHECK(r.dissipation == 0.0);
+    CHECK(std::fabs(r.fa[0] + r.fa[2] + r.fa[4]) < mu * fn);
+}
+
+TEST_CASE("Law validation names the law and the value", "[unit]") {
+    ContactLaw bad = ContactLaw::penalty(1e9, -0.3);
+    bad.name = "brick/brick";
+    try {
+        resolve_law(bad);
+        FAIL("negative friction accepted");
+    } catch (const std::invalid_argument& e) {
+        const std::string m = e.what();
+        CHECK(m.find("brick/brick") != std::string::npos);
+        CHECK(m.find("-0.3") != std::string::npos);
+    }
+    CHECK_THROWS_AS(resolve_law(ContactLaw::penalty(0.0)), std::invalid_argument);
+    CHECK_THROWS_AS(resolve_law(ContactLaw::penalty(-1e9)), std::invalid_argument);
+    CHECK_THROWS_AS(resolve_law(ContactLaw::stiffness(-1e9, 1e9, 30)), std::invalid_argument);
+    CHECK_THROWS_AS(resolve_law(ContactLaw::stiffness(1e9, -1e9, 30)), std::invalid_argument);
+    CHECK_THROWS_AS(resolve_law(ContactLaw::stiffness(1e9, 1e9, -5)), std::invalid_argument);
+    CHECK_THROWS_AS(resolve_law(ContactLaw::stiffness(1e9, 1e9, 95)), std::invalid_argument);
+    ContactLaw both = ContactLaw::penalty(1e9);
+    both.k_n = 1e10;
+    CHECK_THROWS_AS(resolve_law(both), std::invalid_argument);
+    const ResolvedLaw ok = resolve_law(ContactLaw::stiffness(1e10, 4e9, 35.0));
+    CHECK(ok.normal_is_stiffness);
+    CHECK(ok.mu == Approx(std::tan(35.0 * M_PI / 180.0)));
+    // a ContactSystem refuses a mesh whose material combination has no law
+    ContactLaws laws(2);
+    laws.set_interface(0, 0, ContactLaw::penalty(1e9));
+    const int tri[6] = {0, 1, 2, 3, 4, 5};
+    CHECK_THROWS_AS(ContactSystem(tri, 2, 6, 0.1, {0, 1}, {0, 1}, laws), std::invalid_argument);
+}
+
+namespace {
+
+// Mesh a rectangle and append it to (xy, tri, body).
+void append_rectangle(double x0, double y0, double w, double h, double size, int body, std::vector<double>& xy,
+                      std::vector<int>& tri, std::vector<int>& tri_body) {
+    const fdem::mesh::Mesh m = fdem::mesh::mesh_rectangle(x0, y0, w, h, size);
+    const int off = static_cast<int>(xy.size() / 2);
+    xy.insert(xy.end(), m.xy.begin(), m.xy.end());
+    for (int v : m.tri) tri.push_back(v + off);
+    for (int t = 0; t < m.n_triangles(); ++t) tri_body.push_back(body);
+}
+
+}  // namespace
+
+TEST_CASE("k_n calibration: two pressed rectangles give pressure/overlap = k_n at 3 mesh sizes", "[convergence]") {
+    const double kn = 1e10, t = 0.1, W = 0.2, H = 0.1, d = 1e-6;
+    for (double size : {0.05, 0.025, 0.0125}) {
+        std::vector<double> xy;
+        std::vector<int> tri, body;
+        append_rectangle(0.0, 0.0, W, H, size, 0, xy, tri, body);
+        const int n_lower = static_cast<int>(xy.size() / 2);
+        append_rectangle(0.0, H - d, W, H, size * 0.83, 1, xy, tri, body);  // different mesh: unmatched nodes
+        const int nt = static_cast<int>(tri.size() / 3), nn = static_cast<int>(xy.size() / 2);
+        ContactLaws laws(1);
+        laws.set_interface(0, 0, ContactLaw::stiffness(kn, kn, 30.0));
+        ContactSystem cs(tri.data(), nt, nn, t, std::vector<int>(nt, 0), body, laws);
+        for (int i = 0; i < nt; ++i) cs.set_capable(i, true);
+        std::vector<double> v(2 * nn, 0.0), f(2 * nn, 0.0);
+        cs.step(xy.data(), v.data(), 1e-6, f.data());
+        double fy_upper = 0.0, fy_lower = 0.0, fx = 0.0;
+        for (int k = 0; k < nn; ++k) (k < n_lower ? fy_lower : fy_upper) += f[2 * k + 1], fx += f[2 * k];
+        const double slope = fy_upper / (W * t) / d;
+        INFO("mesh size " << size << ": pressure/overlap = " << slope << " Pa/m, pairs " << cs.stats().candidate_pairs);
+        CHECK(slope == Approx(kn).epsilon(0.01));
+        CHECK(fy_lower == Approx(-fy_upper).epsilon(1e-12));
+        CHECK(std::fabs(fx) < 1e-9 * fy_upper);
+        CHECK(cs.elastic_energy() == Approx(0.5 * kn * d * d * W * t).epsilon(0.01));
+    }
+}
+
+TEST_CASE("Contact forces have the same bits for 1, 2 and 4 threads on a 10k-triangle packing", "[unit]") {
+    // 10,000 random small triangles (separate nodes) in a box, overlapping at random, random velocities.
+    const int nt = 10000;
+    std::mt19937_64 rng(99);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    std::vector<double> xy(6 * nt), v(6 * nt);
+    std::vector<int> tri(3 * nt), body(nt), mat(nt);
+    for (int t = 0; t < nt; ++t) {
+        const double cx = 2.0 * u(rng), cy = 2.0 * u(rng), s = 0.005 + 0.02 * u(rng), a = 6.283 * u(rng);
+        for (int k = 0; k < 3; ++k) {
+            const double ang = a + k * 2.0944 + 0.3 * (u(rng) - 0.5);
+            xy[6 * t + 2 * k] = cx + s * std::cos(ang);
+            xy[6 * t + 2 * k + 1] = cy + s * std::sin(ang);
+            v[6 * t + 2 * k] = u(rng) - 0.5;
+            v[6 * t + 2 * k + 1] = u(rng) - 0.5;
+            tri[3 * t + k] = 3 * t + k;
+        }
+        body[t] = t;
+        mat[t] = t % 2;
+    }
+    ContactLaws laws(2);
+    laws.set_interface(0, 0, ContactLaw::penalty(1e9, 0.5));
+    laws.set_interface(0, 1, ContactLaw::stiffness(1e11, 5e10, 30.0));
+    laws.set_interface(1, 1, ContactLaw::penalty(3e9, 0.2, 1e9));
+    auto run = [&](int threads) {
+        omp_set_num_threads(threads);
+        ContactSystem cs(tri.data(), nt, 3 * nt, 0.1, mat, body, laws);
+        for (int t = 0; t < nt; ++t) cs.set_capable(t, true);
+        std::vector<double> x = xy, f;
+        uint64_t hash = 1469598103934665603ull;
+        for (int step = 0; step < 5; ++step) {
+            f.assign(2 * 3 * nt, 0.0);
+            cs.step(x.data(), v.data(), 1e-4, f.data());
+            for (size_t i = 0; i < x.size(); ++i) x[i] += 1e-4 * v[i];
+            for (double q : f) {
+                uint64_t bits;
+                std::memcpy(&bits, &q, 8);
+                hash = (hash ^ bits) * 1099511628211ull;
+            }
+        }
+        double e = cs.elastic_energy(), dsp = cs.friction_dissipation();
+        uint64_t b1, b2;
+        std::memcpy(&b1, &e, 8);
+        std::memcpy(&b2, &dsp, 8);
+        hash = ((hash ^ b1) * 1099511628211ull ^ b2) * 1099511628211ull;
+        return std::make_pair(hash, cs.stats().active_pairs);
+    };
+    const int saved = omp_get_max_threads();
+    const auto h1 = run(1), h2 = run(2), h4 = run(4);
+    omp_set_num_threads(saved);
+    CHECK(h1.second > 1000);  // many pairs carry load
+    CHECK(h1.first == h2.first);
+    CHECK(h1.first == h4.first);
+}
