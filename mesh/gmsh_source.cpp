@@ -158,6 +158,10 @@ Mesh extract_current_model() {
                 if (it != tag_index.end()) g.nodes.push_back(it->second);
             }
         }
+        // A .msh 2.2 import has discrete curves without boundary points, so getNodes misses curve end nodes:
+        // the nodes of the group's own elements are always part of it.
+        for (const auto& e : g.edges) g.nodes.insert(g.nodes.end(), e.begin(), e.end());
+        for (int t : g.triangles) g.nodes.insert(g.nodes.end(), &m.tri[3 * t], &m.tri[3 * t] + 3);
         std::sort(g.nodes.begin(), g.nodes.end());
         g.nodes.erase(std::unique(g.nodes.begin(), g.nodes.end()), g.nodes.end());
         std::sort(g.triangles.begin(), g.triangles.end());

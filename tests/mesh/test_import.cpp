@@ -1,0 +1,140 @@
+// tests/mesh/test_import.cpp: .geo and .msh (2.2, 4.1) imports give the topology of the generated wall; VTU output.
+#include <catch2/catch.hpp>
+
+#include <gmsh.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "helpers.hpp"
+#include "mesh/gmsh_source.hpp"
+#include "mesh/topology.hpp"
+#include "mesh/vtu.hpp"
+#include "mesh/wall.hpp"
+
+using namespace fdem::mesh;
+using namespace fdem::mesh::testing;
+
+namespace {
+
+const std::string geo_path = std::string(FDEM_TEST_DATA_DIR) + "/mesh/wall_running_bond.geo";
+
+std::string tmp_dir() {
+    const std::string d = std::string(FDEM_TEST_TMP) + "/mesh";
+    std::filesystem::create_directories(d);
+    return d;
+}
+
+TopologyOptions dry_units() {
+    TopologyOptions o;
+    o.regions = {{"units", true}};
+    o.interfaces = {{"units", "units", InterfaceKind::dry}};
+    return o;
+}
+
+void require_same_layout(const LayoutSignature& a, const LayoutSignature& b) {
+    REQUIRE(a.bodies.size() == b.bodies.size());
+    for (auto ia = a.bodies.begin(), ib = b.bodies.begin(); ia != a.bodies.end(); ++ia, ++ib) {
+        REQUIRE(ia->first == ib->first);
+        CHECK(std::abs(ia->second - ib->second) <= 1e-12);
+    }
+    REQUIRE(a.joints.size() == b.joints.size());
+    for (auto ia = a.joints.begin(), ib = b.joints.begin(); ia != a.joints.end(); ++ia, ++ib) {
+        REQUIRE(ia->first == ib->first);
+        REQUIRE(ia->second.size() == ib->second.size());
+        for (const auto& [cls, len] : ia->second) CHECK(std::abs(len - ib->second.at(cls)) <= 1e-9);
+    }
+    for (int c : {static_cast<int>(EdgeClass::dry), static_cast<int>(EdgeClass::free_boundary)})
+        CHECK(std::abs(a.class_lengths.at(c) - b.class_lengths.at(c)) <= 1e-9);
+}
+
+}  // namespace
+
+TEST_CASE(".geo with physical groups and its .msh 2.2 / 4.1 exports match the generated wall", "[regression]") {
+    const Mesh generated = generate_wall(cases_a_wall());
+    const Topology tg = build_topology(generated, dry_units());
+    const LayoutSignature sg = signature(tg);
+    REQUIRE(sg.bodies.size() == 55);
+    // Touching unit pairs: 45 head joints; across each of the 9 bed joints every full unit of the 5-unit course
+    // meets 2 units of the 6-piece course (the joints are offset by half a unit): 10 pairs.
+    REQUIRE(sg.joints.size() == 45 + 9 * 10);
+
+    const Mesh geo = mesh_geo_file(geo_path);
+    REQUIRE(geo.regions == std::vector<std::string>{"units"});
+    const Topology tgeo = build_topology(geo, dry_units());
+    require_same_layout(signature(tgeo), sg);
+    for (const char* g : {"wall_bottom", "wall_top", "wall_left", "wall_right", "toe_left", "toe_right"}) {
+        REQUIRE(geo.find_group(g) != nullptr);
+        CHECK(geo.find_group(g)->nodes.size() == generated.find_group(g)->nodes.size());
+    }
+
+    // Export the .geo's mesh in both formats through the API, then import each.
+    const std::string dir = tmp_dir();
+    {
+        GmshSession session;
+        gmsh::open(geo_path);
+        gmsh::model::mesh::generate(2);
+        gmsh::option::setNumber("Mesh.MshFileVersion", 2.2);
+        gmsh::write(dir + "/wall_22.msh");
+        gmsh::option::setNumber("Mesh.MshFileVersion", 4.1);
+        gmsh::write(dir + "/wall_41.msh");
+    }
+    for (const char* file : {"/wall_22.msh", "/wall_41.msh"}) {
+        CAPTURE(file);
+        const Mesh msh = read_msh_file(dir + file);
+        // Same mesh as the .geo run: identical counts, and the same layout as the generated wall.
+        CHECK(msh.n_triangles() == geo.n_triangles());
+        CHECK(msh.n_nodes() == geo.n_nodes());
+        CHECK(msh.n_bodies() == 55);
+        REQUIRE(msh.regions == std::vector<std::string>{"units"});
+        const Topology tm = build_topology(msh, dry_units());
+        CHECK(tm.mesh.n_nodes() == tgeo.mesh.n_nodes());
+        CHECK(tm.cohesive.size() == tgeo.cohesive.size());
+        CHECK(tm.contact_capable.size() == tgeo.contact_capable.size());
+        require_same_layout(signature(tm), sg);
+        for (const char* g : {"wall_bottom", "wall_top", "wall_left", "wall_right", "toe_left", "toe_right"}) {
+            REQUIRE(msh.find_group(g) != nullptr);
+            CHECK(msh.find_group(g)->nodes.size() == geo.find_group(g)->nodes.size());
+            CHECK(msh.find_group(g)->edges.size() == geo.find_group(g)->edges.size());
+        }
+    }
+}
+
+TEST_CASE("import errors name the file", "[unit]") {
+    CHECK_THROWS_WITH(read_msh_file("/nonexistent/wall.msh"), Catch::Contains("/nonexistent/wall.msh"));
+    CHECK_THROWS_WITH(mesh_geo_file("/nonexistent/wall.geo"), Catch::Contains("/nonexistent/wall.geo"));
+    const std::string bad = tmp_dir() + "/broken.geo";
+    {
+        std::ofstream f(bad);
+        f << "Point(1) = {0, 0, 0};\nThis is not Gmsh;\n";
+    }
+    CHECK_THROWS_WITH(mesh_geo_file(bad), Catch::Contains("broken.geo"));
+}
+
+TEST_CASE("VTU output holds the split mesh and the classified edges", "[unit]") {
+    WallSpec s = cases_a_wall(0.1);
+    s.beam_height = 0.1;
+    const Mesh m = generate_wall(s);
+    TopologyOptions o = dry_units();
+    o.interfaces.push_back({"units", "beam", InterfaceKind::bonded});
+    const Topology topo = build_topology(m, o);
+    const std::string path = tmp_dir() + "/wall.vtu";
+    std::remove(path.c_str());
+    write_topology_vtu(path, topo);
+    REQUIRE(std::filesystem::exists(path));
+    CHECK_FALSE(std::filesystem::exists(path + ".tmp"));
+    std::ifstream f(path);
+    std::stringstream buf;
+    buf << f.rdbuf();
+    const std::string text = buf.str();
+    std::ostringstream head;
+    head << "NumberOfPoints=\"" << topo.mesh.n_nodes() << "\" NumberOfCells=\""
+         << topo.mesh.n_triangles() + topo.n_edges() << "\"";
+    CHECK(text.find(head.str()) != std::string::npos);
+    for (const char* name : {"\"region\"", "\"body\"", "\"contact_capable\"", "\"edge_class\"", "\"node_origin\"",
+                             "\"cell_kind\"", "</VTKFile>"})
+        CHECK(text.find(name) != std::string::npos);
+    CHECK_THROWS_WITH(write_topology_vtu("/nonexistent/dir/x.vtu", topo), Catch::Contains("/nonexistent/dir/x.vtu"));
+}
