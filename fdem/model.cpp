@@ -3,7 +3,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <stdexcept>
+#include <tuple>
 
 #include "fdem/errors.hpp"
 
@@ -21,8 +23,70 @@ double p_wave_speed(const Material& m, Plane plane) {
     return std::sqrt(m.E * (1 - m.nu) / (m.density * (1 + m.nu) * (1 - 2 * m.nu)));
 }
 
+std::pair<std::vector<int>, std::vector<int>> reorder_for_locality(mesh::Mesh& m) {
+    const int nn = m.n_nodes(), nt = m.n_triangles();
+    double xmin = 1e300, ymin = 1e300, xmax = -1e300, ymax = -1e300;
+    for (int k = 0; k < nn; ++k) {
+        xmin = std::min(xmin, m.xy[2 * k]), xmax = std::max(xmax, m.xy[2 * k]);
+        ymin = std::min(ymin, m.xy[2 * k + 1]), ymax = std::max(ymax, m.xy[2 * k + 1]);
+    }
+    const double span = std::max({xmax - xmin, ymax - ymin, 1e-300});
+    auto spread = [](std::uint64_t v) {  // interleave the low 21 bits with zeros
+        v &= 0x1fffff;
+        v = (v | (v << 32)) & 0x1f00000000ffffULL;
+        v = (v | (v << 16)) & 0x1f0000ff0000ffULL;
+        v = (v | (v << 8)) & 0x100f00f00f00f00fULL;
+        v = (v | (v << 4)) & 0x10c30c30c30c30c3ULL;
+        v = (v | (v << 2)) & 0x1249249249249249ULL;
+        return v;
+    };
+    std::vector<std::pair<std::uint64_t, int>> key(nt);
+    for (int e = 0; e < nt; ++e) {
+        double cx = 0, cy = 0;
+        for (int k = 0; k < 3; ++k) cx += m.xy[2 * m.tri[3 * e + k]], cy += m.xy[2 * m.tri[3 * e + k] + 1];
+        const auto qx = static_cast<std::uint64_t>((cx / 3 - xmin) / span * 2097151.0);
+        const auto qy = static_cast<std::uint64_t>((cy / 3 - ymin) / span * 2097151.0);
+        key[e] = {spread(qx) | (spread(qy) << 1), e};
+    }
+    std::sort(key.begin(), key.end());
+    std::vector<int> tri_new(nt), node_new(nn, -1);
+    int next = 0;
+    for (int i = 0; i < nt; ++i) {
+        const int e = key[i].second;
+        tri_new[e] = i;
+        for (int k = 0; k < 3; ++k)
+            if (node_new[m.tri[3 * e + k]] < 0) node_new[m.tri[3 * e + k]] = next++;
+    }
+    for (int k = 0; k < nn; ++k)
+        if (node_new[k] < 0) node_new[k] = next++;  // nodes of no triangle (rejected later)
+    mesh::Mesh r;
+    r.regions = m.regions;
+    r.xy.resize(m.xy.size());
+    for (int k = 0; k < nn; ++k) r.xy[2 * node_new[k]] = m.xy[2 * k], r.xy[2 * node_new[k] + 1] = m.xy[2 * k + 1];
+    r.tri.resize(m.tri.size());
+    r.tri_region.resize(nt);
+    if (!m.tri_body.empty()) r.tri_body.resize(nt);
+    for (int e = 0; e < nt; ++e) {
+        const int ne = tri_new[e];
+        for (int k = 0; k < 3; ++k) r.tri[3 * ne + k] = node_new[m.tri[3 * e + k]];
+        r.tri_region[ne] = m.tri_region[e];
+        if (!m.tri_body.empty()) r.tri_body[ne] = m.tri_body[e];
+    }
+    for (auto g : m.groups) {
+        for (int& k : g.nodes) k = node_new[k];
+        std::sort(g.nodes.begin(), g.nodes.end());
+        for (auto& ed : g.edges) ed = {node_new[ed[0]], node_new[ed[1]]};
+        for (int& t : g.triangles) t = tri_new[t];
+        std::sort(g.triangles.begin(), g.triangles.end());
+        r.groups.push_back(std::move(g));
+    }
+    m = std::move(r);
+    return {std::move(node_new), std::move(tri_new)};
+}
+
 Model build_model(const CaseSpec& spec, mesh::Mesh mesh) {
     Model md;
+    std::tie(md.node_new_of_old, md.tri_new_of_old) = reorder_for_locality(mesh);
     md.thickness = spec.thickness;
     md.plane = spec.plane;
     const int nn = mesh.n_nodes(), nt = mesh.n_triangles();
