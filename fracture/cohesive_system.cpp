@@ -1,0 +1,360 @@
+// fracture/cohesive_system.cpp: force loop, damage update and records of the cohesive elements.
+//
+// DATA LAYOUT ASSUMPTIONS
+// - Node arrays (x, f, node_mass) are the engine's: x and f interleaved 2 per node (x0 y0 x1 y1 ...), m 1 per node.
+// - Elements are indexed 0..size()-1 in the order the engine gave them; every per-element array below uses that
+//   index: law_[e] (AoS struct, read whole by the kernel), length_[e], damage_[3e + i] (i = end 0, midpoint, end 1),
+//   force_[8e + 2k + {0,1}] (k = a0, a1, b0, b1), energy_[e], dissipated_[e].
+// - active_ lists the intact elements in ascending order; broken ones leave it and their force slots are zeroed,
+//   so the node gather (CSR built once over all elements) stays valid without rebuilding.
+//
+// Kinematics and forces ([M04] ch. 7, [MAW99]). With N0 = 1 - xi, N1 = xi along the edge, the gap is
+//   d(xi) = sum_k N_k (x_Bk - x_Ak),  o = d.n,  s = d.t,
+// and the nodal forces are the integral of the traction T = sigma n + tau t over the reference face area h t:
+//   f_Bk = - int N_k T dA,  f_Ak = + int N_k T dA   (action = reaction, sum zero),
+// discretised by Simpson's rule on xi = 0, 1/2, 1 with weights 1/6, 4/6, 1/6:
+//   f_A0 = h t (T_0 / 6 + T_m / 3),  f_A1 = h t (T_1 / 6 + T_m / 3).
+// The derivative of the frame (n, t) with respect to x is neglected, as in [M04]: it is of the order of the
+// gap over h, which is tiny while the joint carries load.
+#include "fracture/cohesive_system.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <ostream>
+#include <sstream>
+#include <stdexcept>
+
+namespace fdem::fracture {
+
+namespace {
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kSimpson[3] = {1.0 / 6.0, 4.0 / 6.0, 1.0 / 6.0};  // end 0, midpoint, end 1
+// Below this many items a parallel region costs more than it saves (thread wake-up is microseconds, an element
+// tens of nanoseconds), and on a loaded machine much more. The result does not depend on it.
+constexpr int kMinParallel = 4096;
+}  // namespace
+
+const char* to_string(JointClass c) { return c == JointClass::interface ? "interface" : "unit-interior"; }
+
+const char* to_string(FractureMode m) {
+  switch (m) {
+    case FractureMode::mode_I: return "I";
+    case FractureMode::mode_II: return "II";
+    default: return "mixed";
+  }
+}
+
+FractureMode classify_mode(double D_I, double D_II) {
+  if (D_I >= 2.0 * D_II) return FractureMode::mode_I;
+  if (D_II >= 2.0 * D_I) return FractureMode::mode_II;
+  return FractureMode::mixed;
+}
+
+long long BreakCounts::total() const {
+  long long s = 0;
+  for (const auto& row : count)
+    for (long long c : row) s += c;
+  return s;
+}
+
+void orient_elements(std::vector<CohesiveElement>& elems, const int* tri_nodes) {
+  // Position of node v in triangle tri, or -1.
+  auto where = [tri_nodes](int tri, int v) {
+    for (int k = 0; k < 3; ++k)
+      if (tri_nodes[3 * tri + k] == v) return k;
+    return -1;
+  };
+  for (std::size_t e = 0; e < elems.size(); ++e) {
+    CohesiveElement& el = elems[e];
+    const bool use_a = el.tri_a >= 0;
+    const int tri = use_a ? el.tri_a : el.tri_b;
+    const int u = use_a ? el.n[0] : el.n[2], v = use_a ? el.n[1] : el.n[3];
+    if (tri < 0) throw std::invalid_argument("cohesive element " + std::to_string(e) + " has no triangle on either side");
+    const int i = where(tri, u), j = where(tri, v);
+    if (i < 0 || j < 0)
+      throw std::invalid_argument("cohesive element " + std::to_string(e) + ": its edge is not an edge of triangle " +
+                                  std::to_string(tri));
+    const bool ccw = j == (i + 1) % 3;
+    // Side A wants its edge counter-clockwise, side B clockwise (it is the same edge seen from the other side).
+    if (ccw != use_a) {
+      std::swap(el.n[0], el.n[1]);
+      std::swap(el.n[2], el.n[3]);
+    }
+  }
+}
+
+CohesiveSystem::CohesiveSystem(std::vector<CohesiveElement> elems, std::vector<CohesiveProps> props,
+                               double thickness, const double* x_reference, int num_nodes)
+    : elems_(std::move(elems)), props_(std::move(props)), thickness_(thickness), num_nodes_(num_nodes) {
+  std::vector<std::string> problems;
+  if (!(thickness_ > 0.0) || !std::isfinite(thickness_)) problems.push_back("thickness must be finite and > 0 (m)");
+  const int ne = size();
+  // Longest edge per class: the penalty form is too soft first there.
+  std::vector<double> h_max(props_.size(), 0.0);
+  length_.assign(ne, 0.0);
+  for (int e = 0; e < ne; ++e) {
+    const CohesiveElement& el = elems_[e];
+    const std::string where = "cohesive element " + std::to_string(e) + ": ";
+    bool nodes_ok = true;
+    for (int k = 0; k < 4; ++k)
+      if (el.n[k] < 0 || el.n[k] >= num_nodes_) nodes_ok = false;
+    if (!nodes_ok) {
+      problems.push_back(where + "node index out of range");
+      continue;
+    }
+    if (el.props < 0 || el.props >= int(props_.size())) {
+      problems.push_back(where + "properties index " + std::to_string(el.props) + " out of range");
+      continue;
+    }
+    const double* X = x_reference;
+    const double hx = X[2 * el.n[1]] - X[2 * el.n[0]], hy = X[2 * el.n[1] + 1] - X[2 * el.n[0] + 1];
+    const double h = std::sqrt(hx * hx + hy * hy);
+    if (!(h > 0.0)) {
+      problems.push_back(where + "zero-length edge");
+      continue;
+    }
+    length_[e] = h;
+    for (int k = 0; k < 2; ++k) {
+      const double dx = X[2 * el.n[2 + k]] - X[2 * el.n[k]], dy = X[2 * el.n[2 + k] + 1] - X[2 * el.n[k] + 1];
+      if (std::sqrt(dx * dx + dy * dy) > 1e-9 * h)
+        problems.push_back(where + "nodes " + std::to_string(el.n[k]) + " and " + std::to_string(el.n[2 + k]) +
+                           " do not coincide in the reference configuration");
+    }
+    h_max[el.props] = std::max(h_max[el.props], h);
+  }
+  for (std::size_t p = 0; p < props_.size(); ++p) {
+    if (h_max[p] == 0.0) continue;  // class unused
+    for (const std::string& msg : check(props_[p], h_max[p]))
+      problems.push_back("cohesive properties " + std::to_string(p) + ": " + msg);
+  }
+  if (!problems.empty()) {
+    std::string all = "invalid cohesive elements:";
+    const std::size_t shown = std::min<std::size_t>(problems.size(), 20);
+    for (std::size_t i = 0; i < shown; ++i) all += "\n  " + problems[i];
+    if (shown < problems.size()) all += "\n  ... and " + std::to_string(problems.size() - shown) + " more";
+    throw std::invalid_argument(all);
+  }
+
+  law_.resize(ne);
+  for (int e = 0; e < ne; ++e) law_[e] = make_law(props_[elems_[e].props], length_[e]);
+  damage_.assign(3 * std::size_t(ne), 0.0);
+  force_.assign(8 * std::size_t(ne), 0.0);
+  energy_.assign(ne, 0.0);
+  dissipated_.assign(ne, 0.0);
+  break_DI_.assign(ne, 0.0);
+  break_DII_.assign(ne, 0.0);
+  pending_.assign(ne, 0);
+  broken_.assign(ne, 0);
+  active_.resize(ne);
+  for (int e = 0; e < ne; ++e) active_[e] = e;
+
+  // Gather CSR: counting sort of (node, slot) by node, slots of a node in element order.
+  std::vector<int> count(num_nodes_ + 1, 0);
+  for (int e = 0; e < ne; ++e)
+    for (int k = 0; k < 4; ++k) ++count[elems_[e].n[k] + 1];
+  std::vector<int> start(num_nodes_ + 1, 0);
+  for (int v = 0; v < num_nodes_; ++v) start[v + 1] = start[v] + count[v + 1];
+  std::vector<int> fill(start.begin(), start.end() - 1);
+  std::vector<int> slot(std::size_t(start[num_nodes_]));
+  for (int e = 0; e < ne; ++e)
+    for (int k = 0; k < 4; ++k) slot[fill[elems_[e].n[k]]++] = 8 * e + 2 * k;
+  gather_start_.push_back(0);
+  for (int v = 0; v < num_nodes_; ++v) {
+    if (start[v + 1] == start[v]) continue;
+    gather_node_.push_back(v);
+    gather_slot_.insert(gather_slot_.end(), slot.begin() + start[v], slot.begin() + start[v + 1]);
+    gather_start_.push_back(int(gather_slot_.size()));
+  }
+}
+
+double CohesiveSystem::stable_dt(const double* node_mass) const {
+  // Gershgorin bound of one element's stiffness row for a node: the 2x2 block R^T diag(K_n, K_s) R has absolute row
+  // sum <= K_max + |K_n - K_s| / 2, and the Simpson-lumped couplings of a node to the 4 nodes sum to h t (1/3 + 1/6 +
+  // 1/3 + 1/6) = h t. So omega^2 <= k / m with k = h t (K_max + |K_n - K_s|/2) summed over the node's elements,
+  // and central difference is stable for dt <= 2 / omega = 2 sqrt(m / k) (FORMULATION §3).
+  std::vector<double> k_node(num_nodes_, 0.0);
+  for (int e : active_) {
+    const JointLaw& L = law_[e];
+    const double K = std::max(L.normal_stiffness, L.shear_stiffness) +
+                     0.5 * std::abs(L.normal_stiffness - L.shear_stiffness);
+    const double k = length_[e] * thickness_ * K;
+    for (int j = 0; j < 4; ++j) k_node[elems_[e].n[j]] += k;
+  }
+  double dt = std::numeric_limits<double>::infinity();
+  for (int v = 0; v < num_nodes_; ++v)
+    if (k_node[v] > 0.0) dt = std::min(dt, 2.0 * std::sqrt(node_mass[v] / k_node[v]));
+  return dt;
+}
+
+void CohesiveSystem::add_forces(const double* x, double* f) {
+  const int na = int(active_.size());
+  int pending = 0;
+  // Integer reduction: exact, so the count does not depend on the thread count.
+#pragma omp parallel for schedule(static) reduction(+ : pending) if (na >= kMinParallel)
+  for (int k = 0; k < na; ++k) {
+    const int e = active_[k];
+    const int* n = elems_[e].n;
+    const double xa0 = x[2 * n[0]], ya0 = x[2 * n[0] + 1], xa1 = x[2 * n[1]], ya1 = x[2 * n[1] + 1];
+    const double xb0 = x[2 * n[2]], yb0 = x[2 * n[2] + 1], xb1 = x[2 * n[3]], yb1 = x[2 * n[3] + 1];
+    // Frame from the mid-line; a collapsed element (length 0) keeps the reference direction unknown, so guard it.
+    double tx = (xa1 + xb1) - (xa0 + xb0), ty = (ya1 + yb1) - (ya0 + yb0);
+    const double len = std::sqrt(tx * tx + ty * ty);
+    if (len > 0.0) {
+      tx /= len;
+      ty /= len;
+    } else {
+      tx = 1.0;
+      ty = 0.0;
+    }
+    const double nx = ty, ny = -tx;  // normal of edge A pointing into side B
+    const double d0x = xb0 - xa0, d0y = yb0 - ya0, d1x = xb1 - xa1, d1y = yb1 - ya1;
+    const double dx[3] = {d0x, 0.5 * (d0x + d1x), d1x};
+    const double dy[3] = {d0y, 0.5 * (d0y + d1y), d1y};
+
+    const JointLaw& L = law_[e];
+    const double area = length_[e] * thickness_;
+    double Tx[3], Ty[3];
+    double energy = 0.0, dissipated = 0.0, DI = 0.0, DII = 0.0;
+    bool all_broken = true;
+    for (int i = 0; i < 3; ++i) {
+      const double o = dx[i] * nx + dy[i] * ny;
+      const double s = dx[i] * tx + dy[i] * ty;
+      const PointResponse r = evaluate_point(L, o, s, damage_[3 * e + i]);
+      damage_[3 * e + i] = r.damage;
+      const double w = kSimpson[i] * area;
+      Tx[i] = w * (r.sigma * nx + r.tau * tx);
+      Ty[i] = w * (r.sigma * ny + r.tau * ty);
+      energy += w * r.energy;
+      dissipated += w * r.dissipated;
+      DI += r.damage_I;
+      DII += r.damage_II;
+      all_broken = all_broken && r.damage >= 1.0;
+    }
+    // Midpoint traction shared half-half by the two ends (N at xi = 1/2).
+    const double fa0x = Tx[0] + 0.5 * Tx[1], fa0y = Ty[0] + 0.5 * Ty[1];
+    const double fa1x = Tx[2] + 0.5 * Tx[1], fa1y = Ty[2] + 0.5 * Ty[1];
+    double* fe = &force_[8 * std::size_t(e)];
+    fe[0] = fa0x;
+    fe[1] = fa0y;
+    fe[2] = fa1x;
+    fe[3] = fa1y;
+    fe[4] = -fa0x;
+    fe[5] = -fa0y;
+    fe[6] = -fa1x;
+    fe[7] = -fa1y;
+    energy_[e] = energy;
+    dissipated_[e] += dissipated;
+    if (all_broken && !pending_[e]) {
+      pending_[e] = 1;
+      break_DI_[e] = DI / 3.0;
+      break_DII_[e] = DII / 3.0;
+    }
+    pending += pending_[e];
+  }
+  pending_count_ = pending;
+
+  // Gather: each node sums its element contributions in element order; nodes are independent.
+  const int rows = int(gather_node_.size());
+#pragma omp parallel for schedule(static) if (rows >= kMinParallel)
+  for (int r = 0; r < rows; ++r) {
+    double sx = 0.0, sy = 0.0;
+    for (int k = gather_start_[r]; k < gather_start_[r + 1]; ++k) {
+      sx += force_[gather_slot_[k]];
+      sy += force_[gather_slot_[k] + 1];
+    }
+    const int v = gather_node_[r];
+    f[2 * v] += sx;
+    f[2 * v + 1] += sy;
+  }
+}
+
+std::vector<BreakRecord> CohesiveSystem::update_damage(double time, double control_displacement, const double* x) {
+  std::vector<BreakRecord> out;
+  if (pending_count_ == 0) return out;
+  std::size_t kept = 0;
+  for (std::size_t k = 0; k < active_.size(); ++k) {
+    const int e = active_[k];
+    if (!pending_[e]) {
+      active_[kept++] = e;
+      continue;
+    }
+    const CohesiveElement& el = elems_[e];
+    BreakRecord rec{};
+    rec.element = e;
+    rec.time = time;
+    rec.control_displacement = control_displacement;
+    rec.x = 0.25 * (x[2 * el.n[0]] + x[2 * el.n[1]] + x[2 * el.n[2]] + x[2 * el.n[3]]);
+    rec.y = 0.25 * (x[2 * el.n[0] + 1] + x[2 * el.n[1] + 1] + x[2 * el.n[2] + 1] + x[2 * el.n[3] + 1]);
+    rec.kind = el.kind;
+    rec.unit_a = el.unit_a;
+    rec.unit_b = el.unit_b;
+    rec.tri_a = el.tri_a;
+    rec.tri_b = el.tri_b;
+    rec.props = el.props;
+    rec.damage_I = break_DI_[e];
+    rec.damage_II = break_DII_[e];
+    rec.mode = classify_mode(rec.damage_I, rec.damage_II);
+    rec.residual_friction = residual_friction(e);
+    out.push_back(rec);
+    ++counts_.count[int(el.kind)][int(rec.mode)];
+    // Whatever the element still stores (only compression can remain at D = 1) leaves with it: book it as
+    // dissipated so that elastic + dissipated stays continuous across the removal.
+    dissipated_[e] += energy_[e];
+    energy_[e] = 0.0;
+    std::fill(force_.begin() + 8 * std::size_t(e), force_.begin() + 8 * std::size_t(e) + 8, 0.0);
+    broken_[e] = 1;
+    pending_[e] = 0;
+  }
+  active_.resize(kept);
+  pending_count_ = 0;
+  return out;
+}
+
+double CohesiveSystem::elastic_energy() const {
+  double s = 0.0;
+  for (int e : active_) s += energy_[e];
+  return s;
+}
+
+double CohesiveSystem::dissipated_energy() const {
+  double s = 0.0;
+  for (double d : dissipated_) s += d;
+  return s;
+}
+
+double CohesiveSystem::damage(int e) const {
+  return std::max(damage_[3 * e], std::max(damage_[3 * e + 1], damage_[3 * e + 2]));
+}
+
+JointState CohesiveSystem::state(int e) const {
+  if (broken_[e]) return JointState::broken;
+  return damage(e) > 0.0 ? JointState::damaged : JointState::intact;
+}
+
+void CohesiveSystem::damage_per_element(double* out) const {
+  for (int e = 0; e < size(); ++e) out[e] = damage(e);
+}
+
+void CohesiveSystem::state_per_element(std::uint8_t* out) const {
+  for (int e = 0; e < size(); ++e) out[e] = std::uint8_t(state(e));
+}
+
+double CohesiveSystem::residual_friction(int e) const {
+  return std::tan(props_[elems_[e].props].residual_friction_deg * kPi / 180.0);
+}
+
+void write_cracks_csv_header(std::ostream& os) {
+  os << "time_s,control_displacement_m,x_m,y_m,class,unit_a,unit_b,mode,D_I,D_II,element,tri_a,tri_b\n";
+}
+
+void write_cracks_csv_row(std::ostream& os, const BreakRecord& r) {
+  std::ostringstream line;
+  line.precision(10);
+  line << r.time << ',' << r.control_displacement << ',' << r.x << ',' << r.y << ',' << to_string(r.kind) << ','
+       << r.unit_a << ',' << r.unit_b << ',' << to_string(r.mode) << ',' << r.damage_I << ',' << r.damage_II << ','
+       << r.element << ',' << r.tri_a << ',' << r.tri_b << '\n';
+  os << line.str();
+}
+
+}  // namespace fdem::fracture

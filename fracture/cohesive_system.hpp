@@ -1,0 +1,143 @@
+// fracture/cohesive_system.hpp: the set of 4-node cohesive crack elements of a model (FORMULATION §6).
+//
+// Conventions (fixed; the engine must follow them, orient_elements() helps):
+// - Element nodes n = {a0, a1, b0, b1}: side A edge a0->a1, side B edge b0->b1, a0/b0 and a1/b1 at the same
+//   reference position. a0->a1 runs counter-clockwise around triangle tri_a, so side B lies to the RIGHT of a0->a1.
+// - Current frame: tangent t along (a1 + b1) - (a0 + b0) (the mid-line of the two edges, so rigid rotations give
+//   no opening or slip), normal n = (t_y, -t_x), i.e. the normal of edge A pointing into side B.
+// - Relative displacement of the faces at a point, d = x_B - x_A; opening o = d.n (> 0 when the faces separate,
+//   < 0 when they overlap), slip s = d.t. Normal stress tension positive.
+// - Compression: the element stays a linear penalty sigma = K_n o (K_n = p_j/h or k_n) whatever its damage, until it
+//   breaks; contact then takes over. Integration at the two ends and the midpoint with Simpson weights 1/6, 4/6, 1/6.
+// - Breaking: when all three points reached D = 1 (the element then carries no tension or shear). A joint with one
+//   fully damaged end still holds through the others, which is what lets a crack tip cross an element gradually.
+// - Index "none" is -1 everywhere (tri_a, tri_b, units).
+#pragma once
+
+#include <cstdint>
+#include <iosfwd>
+#include <vector>
+
+#include "fracture/law.hpp"
+#include "fracture/properties.hpp"
+
+namespace fdem::fracture {
+
+enum class JointClass : std::uint8_t { unit_interior = 0, interface = 1 };
+enum class FractureMode : std::uint8_t { mode_I = 0, mode_II = 1, mixed = 2 };
+enum class JointState : std::uint8_t { intact = 0, damaged = 1, broken = 2 };
+
+const char* to_string(JointClass c);
+const char* to_string(FractureMode m);
+
+// Mode of a break from its damage components: "dominated" means at least twice the other, otherwise mixed.
+FractureMode classify_mode(double damage_I, double damage_II);
+
+struct CohesiveElement {
+  int n[4] = {-1, -1, -1, -1};  // {a0, a1, b0, b1}, node indices
+  int props = -1;               // index into the CohesiveProps vector
+  int tri_a = -1;               // triangle on side A (becomes contact-capable when broken)
+  int tri_b = -1;               // triangle on side B
+  JointClass kind = JointClass::unit_interior;
+  int unit_a = -1;              // unit (stone/brick) of side A, for the damage records
+  int unit_b = -1;              // unit of side B (== unit_a for a unit-interior crack)
+};
+
+struct BreakRecord {
+  int element;                  // index of the broken element
+  double time;                  // s
+  double control_displacement;  // m (whatever the engine passes as its control displacement)
+  double x, y;                  // midpoint of the element at breaking, m
+  JointClass kind;
+  int unit_a, unit_b, tri_a, tri_b, props;
+  FractureMode mode;
+  double damage_I, damage_II;   // mean over the 3 points of D_I, D_II at the step it broke (may exceed 1)
+  double residual_friction;     // tan(phi_res) of its class: the friction coefficient contact must use on this edge
+};
+
+// Counts of broken elements per class and mode, for history columns.
+struct BreakCounts {
+  long long count[2][3] = {{0, 0, 0}, {0, 0, 0}};  // [JointClass][FractureMode]
+  long long of(JointClass c, FractureMode m) const { return count[int(c)][int(m)]; }
+  long long total() const;
+};
+
+// Make a0->a1 run counter-clockwise around tri_a (swapping a0<->a1 together with b0<->b1 when needed), using the
+// triangle connectivity tri_nodes (3 per triangle). For tri_a == -1, b0->b1 is made clockwise around tri_b.
+// Throws std::invalid_argument if an element's edge is not an edge of its triangle.
+void orient_elements(std::vector<CohesiveElement>& elems, const int* tri_nodes);
+
+class CohesiveSystem {
+ public:
+  // thickness t (m) of the plane-stress model; x_reference: 2 * num_nodes reference coordinates (m), interleaved
+  // x0 y0 x1 y1 ... Throws std::invalid_argument with every problem found (bad props, too-soft penalty for an
+  // element, nodes out of range, a0/b0 or a1/b1 not coincident, zero-length edges).
+  CohesiveSystem(std::vector<CohesiveElement> elems, std::vector<CohesiveProps> props, double thickness,
+                 const double* x_reference, int num_nodes);
+
+  int size() const { return int(elems_.size()); }
+  int intact_count() const { return int(active_.size()); }  // elements still in the force loop
+  const CohesiveElement& element(int e) const { return elems_[e]; }
+  const JointLaw& law(int e) const { return law_[e]; }
+  double length(int e) const { return length_[e]; }  // reference length h, m
+
+  // Largest stable central-difference step (s) of the joint springs on their own: min over nodes of
+  // 2 sqrt(m / k), k the Gershgorin bound of the joint stiffness on that node (N/m). node_mass: kg per node.
+  // Returns +infinity when no element is intact. The engine combines it with the triangles' limit and a safety factor.
+  double stable_dt(const double* node_mass) const;
+
+  // Evaluate every intact element at positions x (2 * num_nodes, m), update its irreversible damage and
+  // dissipation, and ADD its nodal forces (N, whole thickness) to f (2 * num_nodes). Deterministic: per-element
+  // forces are computed in parallel, then every node sums its contributions in element order.
+  void add_forces(const double* x, double* f);
+
+  // Remove the elements that became fully damaged in the last add_forces from the force loop and return one record
+  // each, in element order. x: the current positions (for the midpoint). The engine writes cracks.csv and makes
+  // tri_a/tri_b contact-capable with friction residual_friction on that edge.
+  std::vector<BreakRecord> update_damage(double time, double control_displacement, const double* x);
+
+  // Energies (J, whole thickness), summed in element order. Elastic: recoverable energy of the intact elements at the
+  // last add_forces. Dissipated: cumulative damage dissipation, including the elastic energy left in an element
+  // when it is removed (so that the engine's balance closes).
+  double elastic_energy() const;
+  double dissipated_energy() const;
+  double dissipated_energy(int e) const { return dissipated_[e]; }
+
+  // Output for VTU snapshots: damage per element = max over its points; state intact / damaged / broken.
+  double damage(int e) const;
+  double point_damage(int e, int point) const { return damage_[3 * e + point]; }
+  JointState state(int e) const;
+  void damage_per_element(double* out) const;
+  void state_per_element(std::uint8_t* out) const;
+  const BreakCounts& counts() const { return counts_; }
+  double residual_friction(int e) const;  // tan(phi_res) of element e's class
+
+ private:
+  std::vector<CohesiveElement> elems_;
+  std::vector<CohesiveProps> props_;
+  double thickness_;
+  int num_nodes_;
+  // Hot, per element (index e): law constants (AoS: the kernel reads them all together), reference length,
+  // damage at the 3 points (3e + i), force buffer (8e: a0x a0y a1x a1y b0x b0y b1x b1y), energies.
+  std::vector<JointLaw> law_;
+  std::vector<double> length_;
+  std::vector<double> damage_;
+  std::vector<double> force_;
+  std::vector<double> energy_;
+  std::vector<double> dissipated_;
+  std::vector<double> break_DI_, break_DII_;
+  std::vector<std::uint8_t> pending_;  // 1: fully damaged at the last add_forces, not yet removed
+  std::vector<std::uint8_t> broken_;
+  std::vector<int> active_;            // intact elements, ascending
+  int pending_count_ = 0;
+  // Node -> contributions gather (CSR): for row r, node gather_node_[r] sums force_[gather_slot_[k]] (x) and
+  // force_[gather_slot_[k] + 1] (y) for k in [gather_start_[r], gather_start_[r+1]), slots in element order.
+  std::vector<int> gather_node_, gather_start_, gather_slot_;
+  BreakCounts counts_;
+};
+
+// cracks.csv: one row per broken element.
+void write_cracks_csv_header(std::ostream& os);
+void write_cracks_csv_row(std::ostream& os, const BreakRecord& r);
+
+}  // namespace fdem::fracture

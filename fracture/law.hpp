@@ -1,0 +1,91 @@
+// fracture/law.hpp: the cohesive traction-separation law of FORMULATION §6 as small pure functions.
+//
+// One integration point of a cohesive element sees an opening `o` (m, positive when the faces separate,
+// negative when they overlap) and a slip `s` (m, either sign). Its only history is the damage `D` in [0, 1],
+// the largest value ever reached (irreversible). Everything here is per unit crack area: stresses in Pa,
+// energies in J/m^2. Tension is positive.
+//
+// Continuous law ([K25] Eqs. 6-13, [MAW99], [M04] ch. 7):
+//   sigma(o, D) = K_n o                                  o < 0   (undamaged linear penalty; K_n o == 2 (o/o_p) f_t)
+//               = (2 x - x^2) z(D) f_t,  x = o/o_p       0 <= o <= o_p
+//               = z(D) f_t                               o > o_p
+//   tau(s, D)   = sign(s) (2 y - y^2) z(D) f_s,  y = |s|/s_p  for |s| <= s_p,  sign(s) z(D) f_s beyond,
+//   f_s = c + max(0, -sigma) tan(phi),  o_p = 2 f_t / K_n,  s_p = 2 f_s / K_s,
+//   D_I = max(0, (o - o_p)/o_t),  D_II = max(0, (|s| - s_p)/s_t),  D = min(1, sqrt(D_I^2 + D_II^2)).
+// K_n, K_s (Pa/m) are the initial slopes of the law: p_j / h for a penalty joint (then o_p = 2 h f_t / p_j as in
+// FORMULATION), or the measured k_n, k_s of a zero-thickness interface. Writing the compressive branch as K_n o
+// instead of 2 (o/o_p) f_t is the same number and stays defined when it matters least (f_t tiny).
+//
+// Energy-exact ranges: the whole area under sigma(o) in pure mode I is (2/3) f_t o_p + kappa f_t o_t with
+// kappa = int_0^1 z(D) dD, so o_t = (G_I - (2/3) f_t o_p) / (kappa f_t) makes it exactly G_I (likewise s_t, G_II).
+#pragma once
+
+namespace fdem::fracture {
+
+// Softening function z(D) of [K25] Eq. 10 with its published constants a = 0.63, b = 1.8, c = 6.0:
+//   z(D) = [1 - (a+b-1)/(a+b) exp(D (a + c b) / ((a+b)(1-a-b)))] [a (1-D) + b (1-D)^c],  z(0) = 1, z(1) = 0.
+double softening(double D);
+
+// kappa = int_0^1 z(D) dD (dimensionless), about 0.38631; computed once by composite Gauss-Legendre quadrature
+// to machine precision so that the energy-exact ranges below are exact to rounding, not to 5 digits.
+double softening_integral();
+
+// Elastic limit (m): opening or slip at peak stress, o_p = 2 f / K (FORMULATION §6; K in Pa/m, f in Pa).
+inline double opening_at_peak(double strength, double stiffness) { return 2.0 * strength / stiffness; }
+
+// Energy-exact softening range (m): o_t = (G - (2/3) f o_p) / (kappa f). G in J/m^2, f in Pa, o_p in m.
+// Non-positive when the joint is too compliant for its fracture energy (an input error, see check()).
+double softening_range(double fracture_energy, double strength, double elastic_limit);
+
+// Pre-peak shape (2 x - x^2) of the traction for x = o/o_p in [0, 1], and its integral x^2 - x^3/3 (times f o_p).
+inline double prepeak_shape(double x) { return x * (2.0 - x); }
+inline double prepeak_energy_shape(double x) { return x * x * (1.0 - x / 3.0); }
+
+// Undamaged (z = 1) tensile/shear traction magnitude (Pa) for a separation u >= 0 with limit u_p and strength f.
+inline double undamaged_traction(double u, double u_p, double f) {
+  return u >= u_p ? f : prepeak_shape(u / u_p) * f;
+}
+// Undamaged energy (J/m^2) stored along that curve from 0 to u (the recoverable energy at D = 0; scale by z(D)).
+inline double undamaged_energy(double u, double u_p, double f) {
+  return u >= u_p ? f * (u_p * (2.0 / 3.0) + (u - u_p)) : prepeak_energy_shape(u / u_p) * f * u_p;
+}
+
+// Shear strength (Pa), Mohr-Coulomb with tension positive: f_s = c + max(0, -sigma) tan(phi).
+inline double shear_strength(double sigma, double cohesion, double tan_friction) {
+  return cohesion + (sigma < 0.0 ? -sigma * tan_friction : 0.0);
+}
+
+// Constants of one element's law (all derived once from CohesiveProps and the edge length).
+struct JointLaw {
+  double normal_stiffness;     // K_n, Pa/m: initial slope of sigma(o), also the compressive penalty
+  double shear_stiffness;      // K_s, Pa/m: initial slope of tau(s)
+  double tensile_strength;     // f_t, Pa
+  double opening_peak;         // o_p = 2 f_t / K_n, m
+  double opening_range;        // o_t, m (energy-exact, > 0)
+  double cohesion;             // c, Pa
+  double tan_friction;         // tan(phi), -
+  double shear_energy;         // G_II, J/m^2
+};
+
+// Result of evaluating one integration point.
+struct PointResponse {
+  double sigma;       // normal stress, Pa (tension positive)
+  double tau;         // shear stress, Pa (same sign as the slip)
+  double damage;      // new history D in [0, 1] (>= the old one)
+  double damage_I;    // D_I at this state (trial value, before taking the history maximum)
+  double damage_II;   // D_II at this state
+  double energy;      // recoverable elastic energy at the new state, J/m^2
+  double dissipated;  // energy dissipated by the damage increment of this evaluation, J/m^2 (>= 0)
+};
+
+// The law at one point: (opening o (m), slip s (m), old damage) -> stresses, new damage, energies.
+// Dissipation is the drop of recoverable energy at fixed (o, s) when D grows: E(o,s,D_old) - E(o,s,D_new),
+// which summed over a monotonic path gives exactly (2/3) f o_p + kappa f o_t = G (see the header comment).
+PointResponse evaluate_point(const JointLaw& law, double opening, double slip, double damage_old);
+
+// Softening range in shear for the current shear strength (m). Compression raises f_s and s_p = 2 f_s / K_s
+// and can push (2/3) f_s s_p up to G_II; the range is then floored at 1e-3 s_p (the joint breaks just after its peak
+// and dissipates (2/3) f_s s_p > G_II: the least wrong answer; check() can warn for an expected compression).
+double shear_softening_range(const JointLaw& law, double shear_strength_now, double slip_peak);
+
+}  // namespace fdem::fracture

@@ -1,0 +1,190 @@
+// Unit tests of the pure law functions and the property checks (FORMULATION §6).
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <string>
+
+#include "fracture/law.hpp"
+#include "fracture/properties.hpp"
+
+using namespace fdem::fracture;
+
+namespace {
+// [K25] Eq. 10 written again from the paper, independently of the library, for the kappa check.
+double z_paper(double D) {
+  const double a = 0.63, b = 1.8, c = 6.0;
+  return (1.0 - (a + b - 1.0) / (a + b) * std::exp(D * (a + c * b) / ((a + b) * (1.0 - a - b)))) *
+         (a * (1.0 - D) + b * std::pow(1.0 - D, c));
+}
+
+bool any_contains(const std::vector<std::string>& v, const std::string& what) {
+  for (const auto& s : v)
+    if (s.find(what) != std::string::npos) return true;
+  return false;
+}
+
+CohesiveProps stone() {  // CASES.md A: sandstone units, penalty chosen by us
+  CohesiveProps p;
+  p.tensile_strength = 3.7e6;
+  p.cohesion = 5.2e6;
+  p.friction_deg = 35.0;
+  p.residual_friction_deg = 35.0;
+  p.G_I = 110.0;
+  p.G_II = 770.0;
+  p.penalty = 1.0e11;
+  return p;
+}
+}  // namespace
+
+TEST_CASE("softening z(D) of [K25] Eq. 10: end values, monotone, matches the paper's formula", "[unit]") {
+  CHECK(softening(0.0) == 1.0);
+  CHECK(softening(1.0) == 0.0);
+  CHECK(softening(-0.5) == 1.0);
+  CHECK(softening(1.5) == 0.0);
+  double prev = softening(0.0);
+  for (int i = 1; i <= 1000; ++i) {
+    const double D = i / 1000.0;
+    const double zD = softening(D);
+    REQUIRE(zD < prev);  // strictly decreasing: dissipation is never negative
+    REQUIRE(std::abs(zD - z_paper(D)) < 1e-14);
+    prev = zD;
+  }
+  CHECK(softening(1e-300) == Approx(1.0).margin(1e-15));
+  CHECK(softening(1.0 - 1e-12) >= 0.0);
+}
+
+TEST_CASE("kappa = integral of z over [0,1] is 0.38631", "[unit]") {
+  // Independent composite midpoint rule with 400000 panels: error ~ max|z''| / (24 n^2), far below 1e-9.
+  const int n = 400000;
+  double sum = 0.0;
+  for (int i = 0; i < n; ++i) sum += z_paper((i + 0.5) / n);
+  const double kappa_midpoint = sum / n;
+  CHECK(std::abs(softening_integral() - kappa_midpoint) < 1e-9);
+  CHECK(std::abs(softening_integral() - 0.38631) < 5e-6);
+}
+
+TEST_CASE("energy-exact ranges: pre-peak plus softening area equals G", "[unit]") {
+  const double f = 3.7e6, G = 110.0;
+  for (double o_p : {1e-7, 1e-6, 2e-5, 4e-5}) {
+    const double o_t = softening_range(G, f, o_p);
+    REQUIRE(o_t > 0.0);
+    CHECK((2.0 / 3.0) * f * o_p + softening_integral() * f * o_t == Approx(G).epsilon(1e-13));
+    // Matches the written form o_t = (G_I - (2/3) f_t o_p) / (kappa f_t) with kappa = 0.38631.
+    CHECK(o_t == Approx((G - (2.0 / 3.0) * f * o_p) / (0.38631 * f)).epsilon(2e-5));
+  }
+  CHECK(softening_range(G, f, 1.6 * G / f) < 0.0);  // too compliant: (2/3) f o_p > G
+  CHECK(opening_at_peak(f, 1e12) == Approx(2 * f / 1e12));
+}
+
+TEST_CASE("point law: branches, continuity at o_p, undamaged compression, Mohr-Coulomb strength", "[unit]") {
+  JointLaw L{};
+  L.normal_stiffness = 4e12;  // Pa/m
+  L.shear_stiffness = 2e12;
+  L.tensile_strength = 3e6;
+  L.opening_peak = opening_at_peak(3e6, 4e12);
+  L.opening_range = softening_range(100.0, 3e6, L.opening_peak);
+  L.cohesion = 4e6;
+  L.tan_friction = std::tan(0.5);
+  L.shear_energy = 500.0;
+  const double o_p = L.opening_peak;
+
+  auto r = evaluate_point(L, 0.5 * o_p, 0.0, 0.0);
+  CHECK(r.sigma == Approx(0.75 * 3e6));
+  CHECK(r.damage == 0.0);
+  CHECK(r.energy == Approx((0.25 - 0.125 / 3.0) * 3e6 * o_p));
+  r = evaluate_point(L, o_p, 0.0, 0.0);
+  CHECK(r.sigma == Approx(3e6));
+  CHECK(r.energy == Approx((2.0 / 3.0) * 3e6 * o_p));
+  // Initial slope equals K_n on both sides of o = 0.
+  const double tiny = 1e-6 * o_p;
+  CHECK(evaluate_point(L, tiny, 0.0, 0.0).sigma / tiny == Approx(4e12).epsilon(1e-5));
+  CHECK(evaluate_point(L, -tiny, 0.0, 0.0).sigma / -tiny == Approx(4e12).epsilon(1e-12));
+  // Softening: D = (o - o_p)/o_t, sigma = z(D) f_t.
+  r = evaluate_point(L, o_p + 0.3 * L.opening_range, 0.0, 0.0);
+  CHECK(r.damage == Approx(0.3));
+  CHECK(r.sigma == Approx(softening(0.3) * 3e6));
+  // Damaged joint in compression keeps the full penalty; in tension it is scaled by z(D).
+  r = evaluate_point(L, -o_p, 0.0, 0.7);
+  CHECK(r.sigma == Approx(-4e12 * o_p));
+  CHECK(r.damage == 0.7);
+  r = evaluate_point(L, 0.5 * o_p, 0.0, 0.7);
+  CHECK(r.sigma == Approx(0.75 * 3e6 * softening(0.7)));
+  // Irreversible: a smaller trial damage leaves the history alone and dissipates nothing.
+  r = evaluate_point(L, o_p + 0.1 * L.opening_range, 0.0, 0.5);
+  CHECK(r.damage == 0.5);
+  CHECK(r.dissipated == 0.0);
+  // Shear strength rises with compression: f_s = c + sigma_c tan(phi); plateau beyond s_p; odd in s.
+  const double sigma_c = 2e6, o_c = -sigma_c / 4e12;
+  const double f_s = 4e6 + sigma_c * std::tan(0.5);
+  const double s_p = 2.0 * f_s / 2e12;
+  r = evaluate_point(L, o_c, s_p, 0.0);
+  CHECK(r.tau == Approx(f_s));
+  CHECK(r.sigma == Approx(-sigma_c));
+  CHECK(evaluate_point(L, o_c, -s_p, 0.0).tau == Approx(-f_s));
+  CHECK(evaluate_point(L, 0.0, 2.0 * 4e6 / 2e12, 0.0).tau == Approx(4e6));  // no compression: f_s = c
+  CHECK(shear_strength(1e6, 4e6, 0.7) == 4e6);                              // tension does not raise it
+}
+
+TEST_CASE("check(): accepts good classes, names missing and non-physical values", "[unit]") {
+  CHECK(check(stone(), 0.025).empty());
+
+  CohesiveProps missing;
+  const auto m = check(missing, 0.025);
+  CHECK(any_contains(m, "tensile strength f_t is missing"));
+  CHECK(any_contains(m, "cohesion c is missing"));
+  CHECK(any_contains(m, "mode I fracture energy G_I is missing"));
+  CHECK(any_contains(m, "mode II fracture energy G_II is missing"));
+  CHECK(any_contains(m, "friction angle is missing"));
+  CHECK(any_contains(m, "stiffness is missing"));
+
+  CohesiveProps bad = stone();
+  bad.tensile_strength = -1.0;
+  bad.friction_deg = 95.0;
+  bad.G_II = 0.0;
+  const auto b = check(bad, 0.025);
+  CHECK(any_contains(b, "f_t = -1 Pa is not physical"));
+  CHECK(any_contains(b, "friction angle = 95 deg is not physical"));
+  CHECK(any_contains(b, "G_II = 0 J/m^2 is not physical"));
+
+  CohesiveProps both = stone();
+  both.k_n = 1e12;
+  CHECK(any_contains(check(both, 0.025), "not both"));
+
+  CohesiveProps iface = stone();  // CASES.md B interface, measured stiffness
+  iface.penalty = CohesiveProps::unset;
+  iface.tensile_strength = 0.25e6;
+  iface.cohesion = 0.35e6;
+  iface.G_I = 12.0;
+  iface.G_II = 125.0;
+  iface.k_n = 82e9;
+  iface.k_s = 36e9;
+  CHECK(check(iface, 0.0).empty());
+  iface.k_s = CohesiveProps::unset;
+  CHECK(any_contains(check(iface, 0.0), "shear stiffness k_s is missing"));
+}
+
+TEST_CASE("check(): a penalty too soft for the fracture energy is an input error", "[unit]") {
+  CohesiveProps p = stone();
+  const double h = 0.025;
+  // G_I <= (2/3) f_t o_p with o_p = 2 h f_t / p_j  <=>  p_j <= 4 h f_t^2 / (3 G_I) = 4.15e9 Pa.
+  const double p_limit = 4.0 * h * p.tensile_strength * p.tensile_strength / (3.0 * p.G_I);
+  p.penalty = 1.01 * p_limit;
+  auto mode_I = [](const std::vector<std::string>& v) { return any_contains(v, "too soft for its mode I"); };
+  CHECK_FALSE(mode_I(check(p, h)));
+  p.penalty = 0.99 * p_limit;
+  const auto msgs = check(p, h);
+  CHECK(mode_I(msgs));
+  CHECK(any_contains(msgs, "need p_j >"));
+  CHECK_FALSE(mode_I(check(p, 0.9 * h)));  // worst for the longest edge
+  // Compression raises f_s and the pre-peak shear work: warn for the expected precompression.
+  p = stone();
+  p.penalty = 1e10;
+  CHECK(check(p, h, 0.0).empty());
+  CHECK(any_contains(check(p, h, 2e7), "too soft for its mode II"));
+  // Interfaces: k_n <= 4 f_t^2 / (3 G_I).
+  CohesiveProps q = stone();
+  q.penalty = CohesiveProps::unset;
+  q.k_s = 1e13;
+  q.k_n = 0.99 * 4.0 * q.tensile_strength * q.tensile_strength / (3.0 * q.G_I);
+  CHECK(any_contains(check(q, 0.0), "need k_n >"));
+}
