@@ -26,6 +26,11 @@ STRESS_UNITS = {"Pa": 1.0, "kPa": 1e3, "MPa": 1e6, "GPa": 1e9, "psi": 6894.75729
 ENERGY_UNITS = {"J": 1.0, "kJ": 1e3, "N*m": 1.0, "kN*mm": 1.0, "kN*m": 1e3}
 
 
+# One colour per fracture mode in every figure (crack maps, damage plots).
+MODE_COLOURS = {"I": "#d62728", "II": "#1f77b4", "mixed": "#9467bd"}
+MODE_NAMES = {"I": "tension (I)", "II": "shear (II)", "mixed": "mixed (I-II)"}
+
+
 def unit_factor(unit: str, table: dict, what: str) -> float:
     if unit not in table:
         raise ToolError(f"unknown {what} unit '{unit}' (known: {', '.join(table)})")

@@ -17,8 +17,7 @@ import os
 
 import numpy as np
 
-from .common import ToolError, load_run, read_table
-from .figures import MODE_COLOURS, MODE_NAMES, new_figure, save
+from .common import MODE_COLOURS, MODE_NAMES, ToolError, load_run, read_table
 from .vtk import read_pvd, read_vtu, triangles
 
 CLASS_STYLE = {"unit": {"ls": "-", "lw": 2.0, "marker": "o"}, "interface": {"ls": (0, (2.0, 1.2)), "lw": 1.6, "marker": "s"}}
@@ -138,6 +137,7 @@ def draw(run_dir: str, prefix: str, time: float | None = None, displacement: flo
     if time is None:
         time = snap[0] if snap and np.isfinite(snap[0]) else (float(cr["time"].max()) if len(cr["time"]) else 0.0)
     keep = cr["time"] <= time * (1 + 1e-12) + 1e-300
+    from .figures import new_figure, save
     fig, ax = new_figure(figsize=(7.5, 6.5))
     geo = None
     if snap is not None:

@@ -22,9 +22,6 @@ STYLE = {
     "svg.fonttype": "none",  # text stays text in the SVG, editable in papers
 }
 
-# One colour per fracture mode everywhere (crack maps, damage plots).
-MODE_COLOURS = {"I": "#d62728", "II": "#1f77b4", "mixed": "#9467bd"}
-MODE_NAMES = {"I": "tension (I)", "II": "shear (II)", "mixed": "mixed (I-II)"}
 
 
 def new_figure(*args, **kwargs):

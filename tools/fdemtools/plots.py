@@ -13,7 +13,6 @@ import os
 import numpy as np
 
 from .common import FORCE_UNITS, LENGTH_UNITS, ToolError, load_curve, load_run
-from .figures import new_figure, save
 
 ENERGY_COLUMNS = [  # column, label, style
     ("W_ext", "external work $W_{ext}$", {"color": "k", "lw": 2.0}),
@@ -42,6 +41,7 @@ def run_labels(paths: list, runs: list) -> list:
 
 
 def plot_curves(curves: list, experiments: list, prefix: str, xu=("mm", 1e-3), yu=("kN", 1e3)) -> list:
+    from .figures import new_figure, save
     fig, ax = new_figure()
     for c in experiments:
         ax.plot(c.x / xu[1], c.y / yu[1], color="k", lw=2.2, alpha=0.75, label=f"{c.label} (experiment)")
@@ -56,6 +56,7 @@ def plot_curves(curves: list, experiments: list, prefix: str, xu=("mm", 1e-3), y
 
 
 def plot_energy(run, label: str, prefix: str) -> list:
+    from .figures import new_figure, save
     h = run.history
     if not h.has("time"):
         raise ToolError(f"{run.path}: history.csv has no 'time' column")
@@ -83,6 +84,7 @@ def plot_energy(run, label: str, prefix: str) -> list:
 
 
 def plot_damage(run, label: str, prefix: str, xu=("mm", 1e-3), yu=("kN", 1e3)) -> list:
+    from .figures import new_figure, save
     h = run.history
     missing = [c for cols in BROKEN.values() for c in cols if not h.has(c)]
     if missing:

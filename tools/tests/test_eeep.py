@@ -147,7 +147,8 @@ def test_cli_bad_input_one_line(tmp_path, cli, content, args, needle):
     assert "Traceback" not in err
 
 
-def test_cli_missing_file_and_unfinished_run(tmp_path, cli):
+def test_cli_missing_file_and_unfinished_run(tmp_path, cli_subprocess):
+    cli = cli_subprocess  # through the executable entry: one line on stderr, no traceback
     rc, out, err = cli("eeep", tmp_path / "nope.csv")
     assert rc == 1 and "no such file" in err and len(err.strip().splitlines()) == 1
     run = tmp_path / "run"

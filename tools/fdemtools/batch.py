@@ -1,0 +1,312 @@
+"""`batch`: a parameter grid of fdem runs executed in parallel on the local cores, resumable, with a results table.
+
+Layout of a batch folder:
+  batch.json            the case, the fixed settings and every grid point (name -> {key: value})
+  runs/<name>/          one fdem run folder per grid point; <name> is made from the point's settings, so it is
+                        the same after a restart whatever the order of the grid
+  logs/<name>.log       fdem's output for that run
+  results.csv           one row per grid point: settings, status, run time, size, peak load, reference error
+A run counts as finished when its summary.json says "completed"; a restarted batch skips those and runs the
+others again (failed, interrupted or never started). Each grid value is passed verbatim to `fdem run --set
+KEY=VALUE`, so it is a TOML value: 0.025, "name", [0.01, 0].
+"""
+from __future__ import annotations
+
+import hashlib
+import itertools
+import json
+import os
+import shutil
+import subprocess
+import sys
+import threading
+import time
+from concurrent.futures import ThreadPoolExecutor
+
+from .common import ToolError, read_summary, write_csv, write_json
+
+REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+
+
+def split_values(text: str) -> list:
+    """Splits 'a,b,[1,2],"x,y"' at the commas that are not inside brackets, braces or quotes."""
+    out, cur, depth, quote = [], [], 0, None
+    for ch in text:
+        if quote:
+            cur.append(ch)
+            if ch == quote:
+                quote = None
+            continue
+        if ch in "\"'":
+            quote = ch
+        elif ch in "[{":
+            depth += 1
+        elif ch in "]}":
+            depth -= 1
+        if ch == "," and depth == 0:
+            out.append("".join(cur).strip())
+            cur = []
+        else:
+            cur.append(ch)
+    if quote or depth:
+        raise ToolError(f"unbalanced brackets or quotes in '{text}'")
+    out.append("".join(cur).strip())
+    if any(v == "" for v in out):
+        raise ToolError(f"empty value in '{text}'")
+    return out
+
+
+def parse_assignment(text: str, what: str = "--grid") -> tuple:
+    if "=" not in text:
+        raise ToolError(f"{what} '{text}': expected KEY=VALUE")
+    k, v = text.split("=", 1)
+    k = k.strip()
+    if not k or any(c.isspace() for c in k):
+        raise ToolError(f"{what} '{text}': bad key '{k}'")
+    return k, v.strip()
+
+
+def expand_grid(grid: list) -> list:
+    """[(key, [values])] -> list of {key: value} in product order (the first key varies slowest)."""
+    keys = [k for k, _ in grid]
+    if len(set(keys)) != len(keys):
+        raise ToolError("a key appears twice in the grid")
+    return [dict(zip(keys, combo)) for combo in itertools.product(*[vals for _, vals in grid])]
+
+
+def run_name(params: dict) -> str:
+    if not params:
+        return "run"
+    parts = []
+    for k, v in params.items():
+        short = k.split(".")[-1] if k.split(".")[-1] and not k.split(".")[-1].isdigit() else k
+        parts.append(f"{short}={v}")
+    name = "".join(ch if ch.isalnum() or ch in "-_.=+" else "_" for ch in "__".join(parts))
+    digest = hashlib.sha1(json.dumps(sorted(params.items())).encode()).hexdigest()[:8]
+    if len(name) > 80:
+        name = name[:70]
+    return f"{name}__{digest}"
+
+
+def fdem_binary(given: str | None) -> str:
+    path = given or os.environ.get("FDEM_BIN") or os.path.join(REPO, "build", "fdem", "fdem")
+    resolved = shutil.which(path) if os.sep not in path else path
+    if not resolved or not os.path.isfile(resolved) or not os.access(resolved, os.X_OK):
+        raise ToolError(f"fdem executable '{path}' not found (build it, set FDEM_BIN or give --fdem)")
+    return os.path.abspath(resolved)
+
+
+def is_finished(run_dir: str) -> bool:
+    s = read_summary(run_dir)
+    return bool(s) and s.get("status") == "completed"
+
+
+def curve_peak(summary: dict) -> float | None:
+    """Largest absolute value of the load monitor named by the summary's curve, N."""
+    try:
+        y = summary["curve"]["y"]
+        m = summary["monitors"][y]
+        return max(abs(float(m["min"])), abs(float(m["max"])))
+    except (KeyError, TypeError, ValueError):
+        return None
+
+
+class Batch:
+    """Runs the points of a grid; thread-safe bookkeeping of the live processes so that an interruption can stop
+    exactly the processes this batch started."""
+
+    def __init__(self, case: str, out_dir: str, fdem: str, threads: int = 1, fixed: list | None = None,
+                 log=print, timeout: float | None = None):
+        if not os.path.isfile(case):
+            raise ToolError(f"{case}: no such case file")
+        self.case = os.path.abspath(case)
+        self.out = os.path.abspath(out_dir)
+        self.fdem = fdem
+        self.threads = threads
+        self.fixed = fixed or []
+        self.log = log
+        self.timeout = timeout
+        self._procs = {}
+        self._lock = threading.Lock()
+        self._stopping = False
+
+    def command(self, params: dict, run_dir: str) -> list:
+        cmd = [self.fdem, "run", self.case, "--out", run_dir, "--threads", str(self.threads), "--quiet"]
+        for k, v in list(self.fixed) + list(params.items()):
+            cmd += ["--set", f"{k}={v}"]
+        return cmd
+
+    def _one(self, name: str, params: dict) -> dict:
+        run_dir = os.path.join(self.out, "runs", name)
+        rec = {"name": name, "params": params, "run_dir": run_dir, "resumed": False}
+        if is_finished(run_dir):
+            rec.update(resumed=True, exit_code=0)
+            self.log(f"  {name}: already completed, skipped")
+            return rec
+        if self._stopping:
+            rec["exit_code"] = None
+            return rec
+        os.makedirs(os.path.join(self.out, "logs"), exist_ok=True)
+        log_path = os.path.join(self.out, "logs", name + ".log")
+        cmd = self.command(params, run_dir)
+        t0 = time.monotonic()
+        with open(log_path, "w") as lf:
+            lf.write("$ " + " ".join(cmd) + "\n")
+            lf.flush()
+            try:
+                p = subprocess.Popen(cmd, stdout=lf, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL)
+            except OSError as e:
+                raise ToolError(f"cannot start {self.fdem}: {e.strerror}") from None
+            with self._lock:
+                self._procs[name] = p
+            try:
+                rc = p.wait(timeout=self.timeout)
+            except subprocess.TimeoutExpired:
+                p.kill()
+                rc = p.wait()
+                lf.write(f"\nfdem-tools: killed after {self.timeout} s\n")
+            finally:
+                with self._lock:
+                    self._procs.pop(name, None)
+        rec["exit_code"] = rc
+        rec["elapsed_s"] = time.monotonic() - t0
+        s = read_summary(run_dir) or {}
+        self.log(f"  {name}: exit {rc}, status {s.get('status', 'no summary')} ({rec['elapsed_s']:.1f} s)"
+                 + ("" if rc == 0 else f", log {log_path}"))
+        return rec
+
+    def stop(self):
+        """Terminates the fdem processes this batch started (each by its own handle)."""
+        self._stopping = True
+        with self._lock:
+            procs = list(self._procs.values())
+        for p in procs:
+            if p.poll() is None:
+                p.terminate()
+        for p in procs:
+            try:
+                p.wait(timeout=10)
+            except subprocess.TimeoutExpired:
+                p.kill()
+
+    def run(self, points: list, jobs: int = 1, grid: list | None = None) -> list:
+        names = [run_name(p) for p in points]
+        if len(set(names)) != len(names):
+            raise ToolError("two grid points give the same run name (repeated values?)")
+        os.makedirs(self.out, exist_ok=True)
+        manifest = {"case": self.case, "fdem": self.fdem, "threads": self.threads,
+                    "fixed": [f"{k}={v}" for k, v in self.fixed], "grid": grid or [],
+                    "runs": [{"name": n, "params": p} for n, p in zip(names, points)]}
+        write_json(os.path.join(self.out, "batch.json"), manifest)
+        todo = sum(not is_finished(os.path.join(self.out, "runs", n)) for n in names)
+        self.log(f"batch: {len(points)} runs, {len(points) - todo} already completed, {todo} to run "
+                 f"({jobs} at a time, {self.threads} thread(s) each) in {self.out}")
+        ex = ThreadPoolExecutor(max_workers=max(1, jobs))
+        try:
+            futures = [ex.submit(self._one, n, p) for n, p in zip(names, points)]
+            recs = [f.result() for f in futures]
+        except BaseException:  # interrupted: stop our runs; they are redone on the next start
+            self.stop()
+            ex.shutdown(wait=True, cancel_futures=True)
+            raise
+        ex.shutdown(wait=True)
+        return [collect(r) for r in recs]
+
+
+def collect(rec: dict) -> dict:
+    """Adds what the run's summary says to a batch record."""
+    s = read_summary(rec["run_dir"]) or {}
+    rec["status"] = s.get("status", "not run" if rec.get("exit_code") is None else "no summary")
+    rec["message"] = s.get("message", "")
+    for k in ("wall_time_s", "n_triangles", "n_nodes", "dt", "steps", "threads"):
+        rec[k] = s.get(k)
+    rec["peak_load_N"] = curve_peak(s)
+    ref = (s.get("reference") or {}).get("peak_load_N")
+    rec["reference_peak_N"] = ref
+    rec["reference_error"] = (abs(rec["peak_load_N"] - ref) / abs(ref)
+                              if ref and rec["peak_load_N"] is not None else None)
+    rec["summary"] = s
+    return rec
+
+
+def results_table(recs: list, path: str) -> str:
+    keys = []
+    for r in recs:
+        for k in r["params"]:
+            if k not in keys:
+                keys.append(k)
+    header = keys + ["name", "status", "exit_code", "resumed", "wall_time_s", "n_triangles", "dt", "steps",
+                     "peak_load_kN", "reference_peak_kN", "reference_error"]
+    rows = []
+    for r in recs:
+        kn = lambda v: v / 1e3 if v is not None else None  # noqa: E731
+        rows.append([r["params"].get(k, "") for k in keys] +
+                    [r["name"], r["status"], r.get("exit_code"), int(r["resumed"]), r.get("wall_time_s"),
+                     r.get("n_triangles"), r.get("dt"), r.get("steps"), kn(r.get("peak_load_N")),
+                     kn(r.get("reference_peak_N")), r.get("reference_error")])
+    write_csv(path, header, [["" if v is None else v for v in row] for row in rows])
+    return format_table(header, rows)
+
+
+def format_table(header: list, rows: list) -> str:
+    def f(v):
+        if v is None or v == "":
+            return "-"
+        if isinstance(v, float):
+            return f"{v:.4g}"
+        return str(v)
+    cells = [[f(v) for v in r] for r in rows]
+    widths = [max([len(h)] + [len(c[i]) for c in cells]) for i, h in enumerate(header)]
+    lines = ["  ".join(h.ljust(w) for h, w in zip(header, widths))]
+    lines += ["  ".join(c.ljust(w) for c, w in zip(r, widths)) for r in cells]
+    return "\n".join(lines)
+
+
+def default_jobs(threads: int) -> int:
+    return max(1, (os.cpu_count() or 1) // max(1, threads))
+
+
+def cmd_batch(args):
+    grid = []
+    for g in args.grid or []:
+        k, v = parse_assignment(g)
+        grid.append((k, split_values(v)))
+    if not grid:
+        raise ToolError("no --grid KEY=V1,V2,... given")
+    fixed = [parse_assignment(s, "--set") for s in args.set or []]
+    points = expand_grid(grid)
+    out = args.out_dir or os.path.join("runs", "batch_" + os.path.splitext(os.path.basename(args.case))[0])
+    if args.dry_run:
+        for p in points:
+            print(run_name(p), " ".join(f"--set {k}={v}" for k, v in p.items()))
+        return 0
+    b = Batch(args.case, out, fdem_binary(args.fdem), threads=args.threads, fixed=fixed, timeout=args.timeout)
+    recs = b.run(points, jobs=args.jobs or default_jobs(args.threads), grid=[[k, v] for k, v in grid])
+    table = results_table(recs, os.path.join(b.out, "results.csv"))
+    print(table)
+    print(f"wrote {os.path.join(b.out, 'results.csv')}")
+    failed = [r for r in recs if r["status"] != "completed"]
+    if failed:
+        print(f"fdem-tools batch: {len(failed)} of {len(recs)} runs did not complete (see logs/); "
+              "run the same command again to retry them", file=sys.stderr)
+        return 2
+    return 0
+
+
+def add_parser(sub):
+    p = sub.add_parser("batch", help="run a parameter grid of fdem runs in parallel, resumable",
+                       description="Expands a parameter grid (any case key, passed as fdem run --set KEY=VALUE) into "
+                                   "fdem runs executed in parallel on the local cores. Restarting the same command "
+                                   "skips the runs whose summary.json says completed. Ends with a results table "
+                                   "(results.csv).")
+    p.add_argument("case", metavar="CASE.toml", help="case file")
+    p.add_argument("--grid", action="append", metavar="KEY=V1,V2,...",
+                   help="a grid dimension: dotted case key and comma-separated TOML values (repeatable)")
+    p.add_argument("--set", action="append", metavar="KEY=VALUE", help="a fixed setting for every run (repeatable)")
+    p.add_argument("--out-dir", help="batch folder (default runs/batch_<case>)")
+    p.add_argument("--jobs", type=int, help="runs at a time (default: cores / threads)")
+    p.add_argument("--threads", type=int, default=1, help="OpenMP threads per run (default 1)")
+    p.add_argument("--fdem", help="fdem executable (default: $FDEM_BIN, else build/fdem/fdem)")
+    p.add_argument("--timeout", type=float, help="kill a run after this many seconds")
+    p.add_argument("--dry-run", action="store_true", help="list the runs and their settings, run nothing")
+    p.set_defaults(func=cmd_batch)

@@ -1,0 +1,62 @@
+#!/usr/bin/python3
+"""A stand-in for the fdem executable, for testing the batch and study logic only (no physics).
+
+`fake_fdem.py run CASE --out DIR [--set k=v ...] [--threads N] [--quiet]` appends its --set list to the file
+named by $FAKE_FDEM_LOG and writes a run folder following the contract. The "peak load" depends on the settings
+in a known way: peak = 10 kN * (1 + mesh_size) * (1 + rate) * (1 + damping); wall time = 0.01 / mesh_size^2.
+A setting `fail=true` makes it exit 2 with a failed summary; `slow=SECONDS` makes it sleep first.
+"""
+import json
+import os
+import sys
+import time
+
+
+def main(argv):
+    if len(argv) < 2 or argv[0] != "run":
+        return 1
+    out, sets = None, {}
+    i = 2
+    while i < len(argv):
+        if argv[i] == "--out":
+            out = argv[i + 1]; i += 2
+        elif argv[i] == "--set":
+            k, v = argv[i + 1].split("=", 1); sets[k] = v; i += 2
+        elif argv[i] == "--threads":
+            i += 2
+        else:
+            i += 1
+    log = os.environ.get("FAKE_FDEM_LOG")
+    if log:
+        with open(log, "a") as f:
+            f.write(json.dumps(sets, sort_keys=True) + "\n")
+    os.makedirs(out, exist_ok=True)
+    summ = {"case": "fake", "status": "running", "curve": {"x": "u", "y": "F"}, "columns": {"u": "m", "F": "N"}}
+    with open(os.path.join(out, "summary.json"), "w") as f:
+        json.dump(summ, f)
+    if "slow" in sets:
+        time.sleep(float(sets["slow"]))
+    h = float(sets.get("geometry.mesh_size", 0.1))
+    rate = float(sets.get("rate", 0.0))
+    damp = float(sets.get("damping", 0.0))
+    peak = 10e3 * (1 + h) * (1 + rate) * (1 + damp)
+    n = 21
+    with open(os.path.join(out, "history.csv"), "w") as f:
+        f.write("time,step,stage,u,F,E_kin,W_ext,D_frac\n")
+        for k in range(n):
+            u = 1e-3 * k / (n - 1)
+            F = peak * min(1.0, 2 * k / (n - 1))
+            f.write(f"{k * 0.1},{k},1,{u},{F},0,{F * u},{0.3 * F * u}\n")
+    failed = sets.get("fail") == "true"
+    summ.update({"status": "failed" if failed else "completed", "message": "made to fail" if failed else "",
+                 "n_triangles": int(1 / h ** 2), "n_nodes": int(1 / h ** 2), "dt": 1e-6, "steps": 20,
+                 "wall_time_s": 0.01 / h ** 2, "threads": 1,
+                 "monitors": {"u": {"min": 0, "max": 1e-3, "final": 1e-3}, "F": {"min": 0, "max": peak, "final": peak}},
+                 "settings": sets})
+    with open(os.path.join(out, "summary.json"), "w") as f:
+        json.dump(summ, f)
+    return 2 if failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))

@@ -1,0 +1,114 @@
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+
+from conftest import ENTRY
+from fdemtools import batch
+from fdemtools.common import ToolError
+
+FAKE = os.path.join(os.path.dirname(os.path.abspath(__file__)), "fake_fdem.py")
+
+
+def calls(log):
+    if not os.path.exists(log):
+        return []
+    with open(log) as f:
+        return [json.loads(line) for line in f]
+
+
+def test_split_values_and_grid():
+    assert batch.split_values('0.1, 0.05,[1, 2],"a,b"') == ["0.1", "0.05", "[1, 2]", '"a,b"']
+    with pytest.raises(ToolError):
+        batch.split_values("[1,2")
+    pts = batch.expand_grid([("a", ["1", "2"]), ("b.c", ["x", "y", "z"])])
+    assert len(pts) == 6 and pts[0] == {"a": "1", "b.c": "x"} and pts[-1] == {"a": "2", "b.c": "z"}
+    names = {batch.run_name(p) for p in pts}
+    assert len(names) == 6
+    assert batch.run_name({"a": "1", "b.c": "x"}) == batch.run_name({"b.c": "x", "a": "1"}).replace(
+        "c=x__a=1", "a=1__c=x")  # same digest whatever the key order
+
+
+def test_batch_resumes(tmp_path, cli):
+    case = tmp_path / "case.toml"
+    case.write_text("# fake\n")
+    log = str(tmp_path / "calls.log")
+    out = tmp_path / "b"
+    args = ["batch", case, "--grid", "geometry.mesh_size=0.1,0.05", "--grid", "fail=false,true",
+            "--set", "rate=0.5", "--out-dir", out, "--fdem", FAKE, "--jobs", "2"]
+    rc, o, err = cli(*args, env={"FAKE_FDEM_LOG": log})
+    assert rc == 2 and "1 of 4" not in err and "2 of 4 runs did not complete" in err
+    assert len(calls(log)) == 4
+    assert all(c["rate"] == "0.5" for c in calls(log))
+    table = (out / "results.csv").read_text().splitlines()
+    assert len(table) == 5 and table[0].startswith("geometry.mesh_size,fail,name,status")
+    # restart: the two completed runs are skipped, the two failed ones are run again
+    rc, o, err = cli(*args, env={"FAKE_FDEM_LOG": log})
+    assert rc == 2
+    again = calls(log)[4:]
+    assert len(again) == 2 and all(c["fail"] == "true" for c in again)
+    assert o.count("already completed, skipped") == 2
+    # a run left 'running' by an interruption is redone; a completed one with the same grid is not
+    rc, o, err = cli("batch", case, "--grid", "geometry.mesh_size=0.1,0.05", "--set", "rate=0.5",
+                     "--out-dir", out, "--fdem", FAKE, env={"FAKE_FDEM_LOG": log})
+    assert rc == 0
+    assert len(calls(log)) == 8  # first grid's names differ (no 'fail' key): both run
+    rd = out / "runs" / batch.run_name({"geometry.mesh_size": "0.1"}) / "summary.json"
+    s = json.loads(rd.read_text())
+    s["status"] = "running"
+    rd.write_text(json.dumps(s))
+    rc, o, err = cli("batch", case, "--grid", "geometry.mesh_size=0.1,0.05", "--set", "rate=0.5",
+                     "--out-dir", out, "--fdem", FAKE, env={"FAKE_FDEM_LOG": log})
+    assert rc == 0 and len(calls(log)) == 9 and calls(log)[-1]["geometry.mesh_size"] == "0.1"
+    res = (out / "results.csv").read_text()
+    # peak 10 kN * (1 + h) * (1 + rate): 16.5 kN for h = 0.1, 15.75 kN for h = 0.05
+    rows = [line.split(",") for line in res.splitlines()]
+    col = rows[0].index("peak_load_kN")
+    assert [float(r[col]) for r in rows[1:]] == pytest.approx([16.5, 15.75], rel=1e-12)
+    assert all(r[rows[0].index("status")] == "completed" for r in rows[1:])
+
+
+def test_interrupted_batch_is_resumed(tmp_path):
+    """SIGINT to a running batch stops its fdem processes; the next start only redoes the unfinished runs."""
+    case = tmp_path / "case.toml"
+    case.write_text("# fake\n")
+    log = str(tmp_path / "calls.log")
+    out = tmp_path / "b"
+    cmd = [sys.executable, ENTRY, "batch", str(case), "--grid", "slow=0,30", "--out-dir", str(out),
+           "--fdem", FAKE, "--jobs", "2"]
+    env = dict(os.environ, FAKE_FDEM_LOG=log)
+    p = subprocess.Popen(cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    slow_dir = out / "runs" / batch.run_name({"slow": "30"})
+    fast_dir = out / "runs" / batch.run_name({"slow": "0"})
+    t0 = time.monotonic()
+    while time.monotonic() - t0 < 20 and not (batch.is_finished(str(fast_dir)) and (slow_dir / "summary.json").exists()):
+        time.sleep(0.1)
+    p.send_signal(signal.SIGINT)
+    o, err = p.communicate(timeout=30)
+    assert p.returncode == 130 and "interrupted" in err and "Traceback" not in err
+    assert time.monotonic() - t0 < 25  # did not wait for the 30 s run
+    assert not batch.is_finished(str(slow_dir))
+    n = len(calls(log))
+    # restart with the slow run made fast: only it runs again
+    r = subprocess.run([sys.executable, ENTRY, "batch", str(case), "--grid", "slow=0,30", "--out-dir", str(out),
+                        "--fdem", FAKE, "--dry-run"], env=env, capture_output=True, text=True)
+    assert r.returncode == 0 and len(r.stdout.splitlines()) == 2
+    rc = subprocess.run(cmd[:-2] + ["--jobs", "1", "--timeout", "0.5"], env=env, capture_output=True, text=True)
+    new = calls(log)[n:]
+    assert len(new) == 1 and new[0]["slow"] == "30"  # the fast, finished one was not redone
+    assert rc.returncode == 2  # killed by the timeout
+
+
+def test_bad_batch_input(tmp_path, cli):
+    case = tmp_path / "case.toml"
+    case.write_text("")
+    rc, o, err = cli("batch", case, "--grid", "a", "--fdem", FAKE)
+    assert rc == 1 and "expected KEY=VALUE" in err
+    rc, o, err = cli("batch", case, "--grid", "a=1", "--fdem", tmp_path / "nope")
+    assert rc == 1 and "not found" in err
+    rc, o, err = cli("batch", tmp_path / "none.toml", "--grid", "a=1", "--fdem", FAKE)
+    assert rc == 1 and "no such case file" in err
