@@ -57,7 +57,7 @@ def cmd_eeep(args):
         "regression_limit": res["regression_limit"], "regression_points": res["regression_points"],
         "stiffness_rule": res["stiffness_rule"], "ultimate_rule": res["ultimate_rule"],
         "ultimate_note": res["ultimate_note"], "yield_note": res["yield_note"],
-        "mirrored": res["mirrored"], "origin_added": res["origin_added"],
+        "sign_x": res["sign_x"], "sign_y": res["sign_y"], "origin_added": res["origin_added"],
         "si": {k: res[k] for k in ("K_e", "P_peak", "Delta_peak", "Delta_u", "P_y", "Delta_y", "area")},
     }
     files = [write_json(prefix + ".json", report)]
@@ -111,6 +111,7 @@ def cmd_hysteresis(args):
     report = {"source": c.source, "units": {"displacement": xu, "load": yu, "stiffness": f"{yu}/{xu}", "energy": "J"},
               "k_el": res["k_el"] * fx / fy, "k_el_rule": res["k_el_rule"], "E_h_J": res["E_h"],
               "E_h_rule": res["E_h_rule"], "E_total_J": res["E_total"], "n_cycles": res["n_cycles"],
+              "sign_y": res["sign_y"],
               "columns": header, "cycles": rows}
     files = [write_json(prefix + ".json", report), write_csv(prefix + ".csv", header, rows)]
     if not args.no_plot:

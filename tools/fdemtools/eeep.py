@@ -55,11 +55,11 @@ def eeep(d, p, fraction: float = 0.7, ultimate: str = "peak", drop: float = 0.8,
     if not (np.isfinite(d).all() and np.isfinite(p).all()):
         raise ToolError(f"{source}: the curve contains non-finite values")
 
-    # A curve loaded in the negative direction is analysed as its mirror image.
-    sign = 1.0
-    if abs(p.min()) > abs(p.max()):
-        sign = -1.0
-        d, p = -d, -p
+    # A curve loaded in the negative direction is analysed as its mirror image; each axis is turned on its own
+    # because a reaction monitor carries the opposite sign of the applied load.
+    sign_x = -1.0 if abs(d.min()) > abs(d.max()) else 1.0
+    sign_y = -1.0 if abs(p.min()) > abs(p.max()) else 1.0
+    d, p = sign_x * d, sign_y * p
     # The bilinear idealisation starts at the origin, so the curve must too.
     origin_added = not (d[0] == 0.0 and p[0] == 0.0)
     if origin_added:
@@ -151,7 +151,9 @@ def eeep(d, p, fraction: float = 0.7, ultimate: str = "peak", drop: float = 0.8,
         "ultimate_rule": ultimate,
         "ultimate_note": ultimate_note,
         "yield_note": yield_note,
-        "mirrored": sign < 0,
+        "mirrored": bool(sign_x < 0 or sign_y < 0),
+        "sign_x": sign_x,
+        "sign_y": sign_y,
         "origin_added": origin_added,
         "bilinear": {"x": [0.0, float(d_y), float(d_u)], "y": [0.0, float(p_y), float(p_y)]},
     }
@@ -161,9 +163,9 @@ def plot(curve_d, curve_p, res: dict, prefix: str, label: str, x_unit=("mm", 1e-
     """The curve, its EEEP bilinear idealisation and the markers of yield, peak and ultimate points."""
     from .figures import new_figure, save
     sx, sy = 1.0 / x_unit[1], 1.0 / y_unit[1]
-    s = -1.0 if res["mirrored"] else 1.0
     fig, ax = new_figure()
-    ax.plot(s * np.asarray(curve_d) * sx, s * np.asarray(curve_p) * sy, color="0.2", lw=1.4, label=label)
+    ax.plot(res["sign_x"] * np.asarray(curve_d) * sx, res["sign_y"] * np.asarray(curve_p) * sy, color="0.2", lw=1.4,
+            label=label)
     bx = np.array(res["bilinear"]["x"]) * sx
     by = np.array(res["bilinear"]["y"]) * sy
     ax.plot(bx, by, color="#d62728", lw=1.8, ls="--",
@@ -174,8 +176,8 @@ def plot(curve_d, curve_p, res: dict, prefix: str, label: str, x_unit=("mm", 1e-
             label=f"peak {res['P_peak'] * sy:.4g} {y_unit[0]}")
     ax.axvline(res["Delta_u"] * sx, color="0.5", lw=0.8, ls=":")
     ax.text(res["Delta_u"] * sx, 0.97, r" $\Delta_u$", transform=ax.get_xaxis_transform(), va="top", color="0.3")
-    ax.set_xlabel(f"displacement ({x_unit[0]})" + (" [mirrored]" if res["mirrored"] else ""))
-    ax.set_ylabel(f"load ({y_unit[0]})")
+    ax.set_xlabel(f"displacement ({x_unit[0]})" + (" [sign reversed]" if res["sign_x"] < 0 else ""))
+    ax.set_ylabel(f"load ({y_unit[0]})" + (" [sign reversed]" if res["sign_y"] < 0 else ""))
     ax.set_title(f"EEEP idealisation, ultimate: {res['ultimate_rule']}, regression to {res['regression_limit']:g} P_peak",
                  fontsize=9)
     ax.set_xlim(left=0)

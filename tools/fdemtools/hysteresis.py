@@ -56,6 +56,9 @@ def analyse(d, p, k_el: float | None = None, e_h: float | None = None, deadband:
         raise ToolError(f"{source}: the curve contains non-finite values")
     if not (d.max() > 0 and d.min() < 0):
         raise ToolError(f"{source}: not a cyclic curve (the displacement never changes sign)")
+    # A load that falls as the displacement grows is a reaction (opposite sign convention): turn it.
+    sign_y = -1.0 if float(np.dot(d - d.mean(), p - p.mean())) < 0 else 1.0
+    p = sign_y * p
     cycles = []
     e_cum = 0.0
     for s, e, complete in split_cycles(d, deadband):
@@ -86,6 +89,7 @@ def analyse(d, p, k_el: float | None = None, e_h: float | None = None, deadband:
         c["E_d"] = c["E_i"] / e_ref if e_ref != 0 else float("nan")
     return {
         "n_cycles": len(cycles),
+        "sign_y": sign_y,
         "k_el": k_ref, "k_el_rule": "given" if k_el is not None else "secant stiffness of the first cycle",
         "E_h": e_ref, "E_h_rule": "given" if e_h is not None else "cumulative energy at the end of the record",
         "E_total": e_cum,
@@ -98,13 +102,13 @@ def plot(d, p, res: dict, prefix: str, label: str, x_unit=("mm", 1e-3), y_unit=(
     sx, sy = 1.0 / x_unit[1], 1.0 / y_unit[1]
     fig, axs = new_figure(1, 2, figsize=(11, 4.4))
     ax = axs[0]
-    ax.plot(np.asarray(d) * sx, np.asarray(p) * sy, color="0.3", lw=1.0, label=label)
+    ax.plot(np.asarray(d) * sx, res["sign_y"] * np.asarray(p) * sy, color="0.3", lw=1.0, label=label)
     cyc = res["cycles"]
     ax.plot([c["d_plus"] * sx for c in cyc] + [c["d_minus"] * sx for c in cyc],
             [c["P_plus"] * sy for c in cyc] + [c["P_minus"] * sy for c in cyc], "o", color="#d62728", ms=4,
             label="cycle peaks")
     ax.set_xlabel(f"displacement ({x_unit[0]})")
-    ax.set_ylabel(f"load ({y_unit[0]})")
+    ax.set_ylabel(f"load ({y_unit[0]})" + (" [sign reversed]" if res["sign_y"] < 0 else ""))
     ax.legend(fontsize=8)
     ax = axs[1]
     n = [c["cycle"] for c in cyc]

@@ -98,7 +98,7 @@ def test_regression_limit_matters():
 
 @pytest.mark.parametrize("d,p", [
     ([0, 1, 2], [0, 0, 0]),        # never loaded
-    ([0, 1, 2], [0, -1, -2]),      # load opposes the displacement: mirrored, the peak is at negative displacement
+    ([0, -1, -2], [0, 0, 0]),
     ([0, 1, 2], [5, 3, 1]),        # peak at the origin, nothing ascends
 ])
 def test_no_peak_is_an_error(d, p):
@@ -106,10 +106,13 @@ def test_no_peak_is_an_error(d, p):
         eeep.eeep(np.array(d, float), np.array(p, float))
 
 
-def test_negative_loading_is_mirrored():
+@pytest.mark.parametrize("sx,sy", [(-1, -1), (1, -1), (-1, 1)])
+def test_negative_loading_is_mirrored(sx, sy):
+    # a reaction monitor has the opposite sign of the load: each axis is turned on its own
     d, p = epp_curve(2.0, 1.0, 5.0)
-    r = eeep.eeep(-d, -p)
-    assert r["mirrored"] and r["ductility"] == pytest.approx(5.0, rel=1e-12)
+    r = eeep.eeep(sx * d, sy * p)
+    assert (r["sign_x"], r["sign_y"]) == (sx, sy)
+    assert r["ductility"] == pytest.approx(5.0, rel=1e-12)
 
 
 def test_cli_csv_units_and_files(tmp_path, cli):
@@ -132,7 +135,7 @@ def test_cli_csv_units_and_files(tmp_path, cli):
 
 @pytest.mark.parametrize("content,args,needle", [
     ("a,b\n0,0\n1,1\n2,2\n", ["--x", "u", "--y", "b"], "no column 'u'"),
-    ("a,b\n0,0\n1,-0.5\n2,0\n", [], "no peak"),
+    ("a,b\n0,0\n1,0\n2,0\n", [], "no peak"),
     ("a,b\n0,0\n1,x\n", [], "not numeric"),
     ("", [], "empty file"),
     ("a,b\n0,0\n1\n", [], "has 1 fields"),

@@ -57,6 +57,13 @@ def test_given_references_and_trailing_half_cycle():
     assert c1["E_d"] == pytest.approx(4 * HS[0] * AMPS[0] / 10.0, rel=1e-10)
 
 
+def test_reaction_sign_is_turned():
+    d, p = loops(AMPS, HS, K)
+    r = hysteresis.analyse(d, -p)
+    assert r["sign_y"] == -1
+    assert r["E_total"] == pytest.approx(sum(4 * h * D for D, h in zip(AMPS, HS)), rel=1e-10)
+
+
 def test_noise_at_zero_does_not_split_cycles():
     d, p = loops(AMPS, HS, K)
     rng = np.random.default_rng(3)
