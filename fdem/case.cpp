@@ -22,16 +22,17 @@ std::string fmt_num(double v) {
     return s.str();
 }
 
+// Edit distance counting a swap of two neighbouring letters as one edit (the commonest typo).
 std::size_t edit_distance(const std::string& a, const std::string& b) {
-    std::vector<std::size_t> prev(b.size() + 1), cur(b.size() + 1);
-    for (std::size_t j = 0; j <= b.size(); ++j) prev[j] = j;
-    for (std::size_t i = 1; i <= a.size(); ++i) {
-        cur[0] = i;
-        for (std::size_t j = 1; j <= b.size(); ++j)
-            cur[j] = std::min({prev[j] + 1, cur[j - 1] + 1, prev[j - 1] + (a[i - 1] == b[j - 1] ? 0 : 1)});
-        std::swap(prev, cur);
-    }
-    return prev[b.size()];
+    std::vector<std::vector<std::size_t>> d(a.size() + 1, std::vector<std::size_t>(b.size() + 1));
+    for (std::size_t i = 0; i <= a.size(); ++i) d[i][0] = i;
+    for (std::size_t j = 0; j <= b.size(); ++j) d[0][j] = j;
+    for (std::size_t i = 1; i <= a.size(); ++i)
+        for (std::size_t j = 1; j <= b.size(); ++j) {
+            d[i][j] = std::min({d[i - 1][j] + 1, d[i][j - 1] + 1, d[i - 1][j - 1] + (a[i - 1] == b[j - 1] ? 0 : 1)});
+            if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1]) d[i][j] = std::min(d[i][j], d[i - 2][j - 2] + 1);
+        }
+    return d[a.size()][b.size()];
 }
 
 std::string describe(const toml::node& n) {
@@ -341,6 +342,67 @@ LoadSpec read_load(Ctx& ctx, const toml::table& t, const std::string& path) {
     return l;
 }
 
+// [geometry] type = "wall": keys named after mesh::WallSpec's fields; the generator's own check() runs later,
+// with the mesh, and its messages are reported against the [geometry] table.
+void read_wall(Ctx& ctx, Reader& r, mesh::WallSpec& w) {
+    auto nonneg = [](double v) { return v >= 0; };
+    auto positive = [](double v) { return v > 0; };
+    w.length = r.number("length", false, "a wall length > 0 in m", positive).value_or(0);
+    w.height = r.number("height", false, "a wall height > 0 in m", positive).value_or(0);
+    w.courses = r.integer("courses", false, "a whole number of courses >= 1", [](long long v) { return v >= 1; }).value_or(0);
+    w.unit_length = r.number("unit_length", false, "a unit length > 0 in m", positive).value_or(0);
+    w.unit_height = r.number("unit_height", false, "a unit height > 0 in m", positive).value_or(0);
+    w.bond = r.string("bond", false, "the bond pattern", {"running", "stack", "offsets"}).value_or("running");
+    if (auto o = r.numbers("offsets", false, "an array of course offsets in m")) w.offsets = *o;
+    if (const toml::node* n = r.node("stones", false, "an array of polygons [[x, y], ...] in m")) {
+        bool ok = n->is_array();
+        if (ok)
+            for (const auto& poly : *n->as_array()) {
+                std::vector<std::array<double, 2>> pts;
+                if (!poly.is_array()) { ok = false; break; }
+                for (const auto& pt : *poly.as_array()) {
+                    const toml::array* a = pt.as_array();
+                    if (!a || a->size() != 2 || !(*a)[0].is_number() || !(*a)[1].is_number()) { ok = false; break; }
+                    pts.push_back({*(*a)[0].value<double>(), *(*a)[1].value<double>()});
+                }
+                if (pts.size() < 3) ok = false;
+                w.stones.push_back(pts);
+            }
+        if (!ok) ctx.error(r.key_path("stones"), line_of(n), "expected an array of polygons, each at least 3 [x, y] points in m");
+    }
+    w.joint = r.string("joint", false, "the joint type", {"dry", "mortar"}).value_or("dry");
+    w.joint_thickness = r.number("joint_thickness", false, "a mortar joint thickness >= 0 in m", nonneg).value_or(0);
+    w.beam_height = r.number("beam_height", false, "a beam depth >= 0 in m", nonneg).value_or(0);
+    w.beam_overhang = r.number("beam_overhang", false, "a beam overhang >= 0 in m", nonneg).value_or(0);
+    w.base = r.string("base", false, "the base", {"none", "fixed", "slab"}).value_or("none");
+    w.base_height = r.number("base_height", false, "a base depth >= 0 in m", nonneg).value_or(0);
+    w.base_overhang = r.number("base_overhang", false, "a base overhang >= 0 in m", nonneg).value_or(0);
+    w.mesh_size = r.number("mesh_size", true, "a mesh size > 0 in m", positive).value_or(1);
+    w.mesh_size_beam = r.number("mesh_size_beam", false, "a mesh size > 0 in m", positive).value_or(0);
+    w.mesh_size_base = r.number("mesh_size_base", false, "a mesh size > 0 in m", positive).value_or(0);
+    for (const toml::table* t : r.tables("openings", false, "[[geometry.openings]] blocks { x, y, width, height }")) {
+        Reader o(ctx, *t, r.key_path("openings." + std::to_string(w.openings.size())));
+        mesh::WallOpening op;
+        op.x = o.number("x", true, "the opening's left edge in m").value_or(0);
+        op.y = o.number("y", true, "the opening's bottom edge in m").value_or(0);
+        op.width = o.number("width", true, "a width > 0 in m", positive).value_or(0);
+        op.height = o.number("height", true, "a height > 0 in m", positive).value_or(0);
+        o.finish();
+        w.openings.push_back(op);
+    }
+    for (const toml::table* t : r.tables("refine", false, "[[geometry.refine]] blocks { x, y, width, height, size }")) {
+        Reader o(ctx, *t, r.key_path("refine." + std::to_string(w.refine.size())));
+        mesh::WallRefinement rf;
+        rf.x = o.number("x", true, "the box's left edge in m").value_or(0);
+        rf.y = o.number("y", true, "the box's bottom edge in m").value_or(0);
+        rf.width = o.number("width", true, "a width > 0 in m", positive).value_or(0);
+        rf.height = o.number("height", true, "a height > 0 in m", positive).value_or(0);
+        rf.size = o.number("size", true, "a mesh size > 0 in m", positive).value_or(0);
+        o.finish();
+        w.refine.push_back(rf);
+    }
+}
+
 }  // namespace
 
 std::string MonitorSpec::unit() const {
@@ -401,7 +463,7 @@ CaseSpec load_case(const std::string& path, const std::vector<std::string>& over
         Reader r(ctx, *t, "geometry");
         GeometrySpec& g = spec.geometry;
         g.line = r.line();
-        g.type = r.string("type", true, "the geometry source", {"rectangle", "gmsh", "msh"}).value_or("");
+        g.type = r.string("type", true, "the geometry source", {"rectangle", "gmsh", "msh", "wall"}).value_or("");
         if (g.type == "rectangle") {
             auto origin = r.vec2("origin", false, "[x0, y0] in m");
             if (origin) g.x0 = (*origin)[0], g.y0 = (*origin)[1];
@@ -420,6 +482,8 @@ CaseSpec load_case(const std::string& path, const std::vector<std::string>& over
             }
             if (g.type == "gmsh")
                 g.size_factor = r.number("size_factor", false, "a factor > 0 on the script's mesh sizes", positive).value_or(1.0);
+        } else if (g.type == "wall") {
+            read_wall(ctx, r, g.wall);
         }
         r.finish();
     }

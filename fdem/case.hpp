@@ -12,6 +12,8 @@
 #include <string>
 #include <vector>
 
+#include "mesh/wall.hpp"
+
 namespace fdem {
 
 enum class Plane { stress, strain };
@@ -26,7 +28,7 @@ struct Material {
 };
 
 struct GeometrySpec {
-    std::string type;  // "rectangle" | "gmsh" | "msh"
+    std::string type;  // "rectangle" | "gmsh" | "msh" | "wall"
     // rectangle
     double x0 = 0, y0 = 0;  // lower-left corner, m
     double width = 0;       // m
@@ -35,6 +37,8 @@ struct GeometrySpec {
     // gmsh (.geo script) / msh (mesh file); paths relative to the case file
     std::string file;
     double size_factor = 1;  // multiplies the .geo script's mesh sizes, -
+    // wall: the masonry wall generator; the TOML keys are the WallSpec field names (mesh/wall.hpp)
+    mesh::WallSpec wall;
     int line = 0;
 };
 

@@ -21,6 +21,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <iostream>
 #include <map>
@@ -29,6 +30,7 @@
 
 #include "fdem/errors.hpp"
 #include "mesh/gmsh_source.hpp"
+#include "mesh/wall.hpp"
 
 namespace fdem {
 
@@ -69,6 +71,7 @@ mesh::Mesh make_mesh(const CaseSpec& spec) {
         if (g.type == "rectangle") m = mesh::mesh_rectangle(g.x0, g.y0, g.width, g.height, g.mesh_size);
         else if (g.type == "gmsh") m = mesh::mesh_geo_file(g.file, g.size_factor);
         else if (g.type == "msh") m = mesh::read_msh_file(g.file);
+        else if (g.type == "wall") m = mesh::generate_wall(g.wall);
         else throw InputError(spec.file + ": key 'geometry.type': unsupported geometry '" + g.type + "'");
     } catch (const mesh::MeshError& e) {
         throw InputError(spec.file + ":" + std::to_string(g.line) + ": [geometry]: " + e.what());
@@ -82,7 +85,14 @@ mesh::Mesh make_mesh(const CaseSpec& spec) {
 
 Simulation::Simulation(CaseSpec spec, Model model, RunOptions options)
     : spec_(std::move(spec)), model_(std::move(model)), opt_(std::move(options)) {
-    if (opt_.threads > 0) omp_set_num_threads(opt_.threads);
+    // Gmsh sets OpenMP's thread count to its own General.NumThreads (1) when it initialises, so the count is
+    // set here in every case: --threads, else OMP_NUM_THREADS, else every processor.
+    int threads = opt_.threads;
+    if (threads <= 0) {
+        const char* env = std::getenv("OMP_NUM_THREADS");
+        threads = env ? std::atoi(env) : 0;
+    }
+    omp_set_num_threads(threads > 0 ? threads : omp_get_num_procs());
     const int nn = model_.n_nodes(), nt = model_.n_triangles();
     dof_kind_.assign(2 * nn, 0);
     dof_owner_.assign(2 * nn, -1);
