@@ -13,24 +13,38 @@ namespace fdem::mesh {
 
 namespace {
 int g_sessions = 0;
-
-// Gmsh reports most problems through its logger rather than by throwing; turn them into MeshError.
-void throw_on_gmsh_error(const std::string& what) {
-    std::string err;
-    gmsh::logger::getLastError(err);
-    if (!err.empty()) throw MeshError(what + ": " + err);
-}
 }  // namespace
 
+// Gmsh's own default for API use (General.AbortOnError = 2) throws from deep inside its .geo parser, which leaves
+// the parser and OpenProject's "busy" flag set for the rest of the process: every later gmsh::open then silently
+// reads nothing. So errors are logged only (AbortOnError = 0), collected by the in-memory logger of this session,
+// and turned into MeshError by throw_on_gmsh_error. (getLastError cannot be used: it keeps the last error forever.)
+void throw_on_gmsh_error(const std::string& what) {
+    std::vector<std::string> log;
+    gmsh::logger::get(log);
+    for (const auto& line : log)
+        if (line.rfind("Error", 0) == 0) {
+            const auto colon = line.find(':');
+            throw MeshError(what + ": " + (colon == std::string::npos ? line : line.substr(colon + 2)));
+        }
+}
+
 GmshSession::GmshSession(bool verbose) {
-    if (g_sessions++ == 0) gmsh::initialize(0, nullptr, false);
+    if (g_sessions++ == 0) {
+        gmsh::initialize(0, nullptr, false);
+        gmsh::logger::start();
+    }
     gmsh::option::setNumber("General.Terminal", verbose ? 1 : 0);
     gmsh::option::setNumber("General.Verbosity", verbose ? 5 : 1);
+    gmsh::option::setNumber("General.AbortOnError", 0);
     gmsh::clear();
 }
 
 GmshSession::~GmshSession() {
-    if (--g_sessions == 0) gmsh::finalize();
+    if (--g_sessions == 0) {
+        gmsh::logger::stop();
+        gmsh::finalize();
+    }
 }
 
 Mesh extract_current_model() {
@@ -235,6 +249,7 @@ Mesh mesh_geo_file(const std::string& path, double size_factor) {
     } catch (const std::exception& e) {
         throw MeshError("Gmsh failed on '" + path + "': " + e.what());
     } catch (...) {
+        throw_on_gmsh_error("Gmsh failed on '" + path + "'");
         throw MeshError("Gmsh failed on '" + path + "'");
     }
     try {
@@ -255,6 +270,7 @@ Mesh read_msh_file(const std::string& path) {
     } catch (const std::exception& e) {
         throw MeshError("Gmsh failed on '" + path + "': " + e.what());
     } catch (...) {
+        throw_on_gmsh_error("Gmsh failed on '" + path + "'");
         throw MeshError("Gmsh failed on '" + path + "'");
     }
     try {

@@ -16,6 +16,9 @@ public:
     GmshSession& operator=(const GmshSession&) = delete;
 };
 
+// Throws MeshError("<what>: <first Gmsh error>") if Gmsh logged an error in the current session.
+void throw_on_gmsh_error(const std::string& what);
+
 // Converts the 2D mesh of the current Gmsh model (already generated) into a Mesh: 3-node triangles only,
 // nodes renumbered compactly, every triangle made counter-clockwise, physical groups copied by name.
 // Throws MeshError if the model holds no triangles or a triangle has (near) zero area.

@@ -19,6 +19,11 @@
 
 namespace fdem::mesh {
 
+// Thrown for geometry or mesh problems a user can fix (bad file, missing group, degenerate triangle).
+struct MeshError : std::runtime_error {
+    using std::runtime_error::runtime_error;
+};
+
 struct PhysicalGroup {
     std::string name;
     int dim = 0;                            // 0 points, 1 curves, 2 surfaces
@@ -47,16 +52,24 @@ struct Mesh {
             if (g.name == name) return &g;
         return nullptr;
     }
+    // The group a case file refers to; throws MeshError naming it and listing the groups that exist.
+    // dim >= 0 also requires that dimension (0 points, 1 curves, 2 surfaces).
+    const PhysicalGroup& require_group(const std::string& name, int dim = -1) const {
+        const PhysicalGroup* g = find_group(name);
+        if (g && (dim < 0 || g->dim == dim)) return *g;
+        std::string have;
+        for (const auto& h : groups) have += (have.empty() ? "" : ", ") + h.name + " (" + std::to_string(h.dim) + "D)";
+        if (g)
+            throw MeshError("physical group '" + name + "' is " + std::to_string(g->dim) + "D, expected " +
+                            std::to_string(dim) + "D");
+        throw MeshError("physical group '" + name + "' does not exist in the mesh (groups: " +
+                        (have.empty() ? std::string("none") : have) + ")");
+    }
     int find_region(const std::string& name) const {
         for (std::size_t r = 0; r < regions.size(); ++r)
             if (regions[r] == name) return static_cast<int>(r);
         return -1;
     }
-};
-
-// Thrown for geometry or mesh problems a user can fix (bad file, missing group, degenerate triangle).
-struct MeshError : std::runtime_error {
-    using std::runtime_error::runtime_error;
 };
 
 }  // namespace fdem::mesh

@@ -30,6 +30,15 @@ const char* to_string(EdgeClass c) {
     return "?";
 }
 
+bool parse_interface_kind(const std::string& text, InterfaceKind& kind) {
+    for (auto k : {InterfaceKind::tied, InterfaceKind::bonded, InterfaceKind::dry})
+        if (text == to_string(k)) {
+            kind = k;
+            return true;
+        }
+    return false;
+}
+
 const char* to_string(InterfaceKind k) {
     switch (k) {
         case InterfaceKind::tied: return "tied";
@@ -93,12 +102,88 @@ void check_input(const Mesh& m) {
     }
 }
 
+// Overlapping bodies: a conforming, non-overlapping mesh has no triangle centroid strictly inside another
+// triangle. Centroids are tested against the triangles of other bodies found through a uniform grid of cells
+// about one mean triangle size wide (each triangle listed in every cell its bounding box touches): O(n).
+void check_overlaps(const Mesh& m, const std::vector<int>& body) {
+    const int nt = m.n_triangles();
+    double xmin = m.xy[0], xmax = m.xy[0], ymin = m.xy[1], ymax = m.xy[1], size = 0;
+    for (int k = 0; k < m.n_nodes(); ++k) {
+        xmin = std::min(xmin, m.xy[2 * k]), xmax = std::max(xmax, m.xy[2 * k]);
+        ymin = std::min(ymin, m.xy[2 * k + 1]), ymax = std::max(ymax, m.xy[2 * k + 1]);
+    }
+    auto bbox = [&](int t, double& x0, double& y0, double& x1, double& y1) {
+        const int* n = &m.tri[3 * t];
+        x0 = std::min({m.xy[2 * n[0]], m.xy[2 * n[1]], m.xy[2 * n[2]]});
+        x1 = std::max({m.xy[2 * n[0]], m.xy[2 * n[1]], m.xy[2 * n[2]]});
+        y0 = std::min({m.xy[2 * n[0] + 1], m.xy[2 * n[1] + 1], m.xy[2 * n[2] + 1]});
+        y1 = std::max({m.xy[2 * n[0] + 1], m.xy[2 * n[1] + 1], m.xy[2 * n[2] + 1]});
+    };
+    for (int t = 0; t < nt; ++t) {
+        double x0, y0, x1, y1;
+        bbox(t, x0, y0, x1, y1);
+        size += std::max(x1 - x0, y1 - y0);
+    }
+    size /= nt;
+    const int nx = std::max(1, std::min(4096, static_cast<int>((xmax - xmin) / size) + 1));
+    const int ny = std::max(1, std::min(4096, static_cast<int>((ymax - ymin) / size) + 1));
+    const double hx = (xmax - xmin) / nx + 1e-300, hy = (ymax - ymin) / ny + 1e-300;
+    auto cx = [&](double x) { return std::clamp(static_cast<int>((x - xmin) / hx), 0, nx - 1); };
+    auto cy = [&](double y) { return std::clamp(static_cast<int>((y - ymin) / hy), 0, ny - 1); };
+    std::vector<int> start(static_cast<std::size_t>(nx) * ny + 1, 0), items;
+    for (int pass = 0; pass < 2; ++pass) {
+        std::vector<int> fill(start.begin(), start.end() - 1);
+        if (pass == 1) items.resize(start.back());
+        for (int t = 0; t < nt; ++t) {
+            double x0, y0, x1, y1;
+            bbox(t, x0, y0, x1, y1);
+            for (int j = cy(y0); j <= cy(y1); ++j)
+                for (int i = cx(x0); i <= cx(x1); ++i) {
+                    const std::size_t c = static_cast<std::size_t>(j) * nx + i;
+                    if (pass == 0) ++start[c + 1];
+                    else items[fill[c]++] = t;
+                }
+        }
+        if (pass == 0) std::partial_sum(start.begin(), start.end(), start.begin());
+    }
+    for (int t = 0; t < nt; ++t) {
+        const int* n = &m.tri[3 * t];
+        const double px = (m.xy[2 * n[0]] + m.xy[2 * n[1]] + m.xy[2 * n[2]]) / 3;
+        const double py = (m.xy[2 * n[0] + 1] + m.xy[2 * n[1] + 1] + m.xy[2 * n[2] + 1]) / 3;
+        const std::size_t c = static_cast<std::size_t>(cy(py)) * nx + cx(px);
+        for (int q = start[c]; q < start[c + 1]; ++q) {
+            const int u = items[q];
+            if (body[u] == body[t]) continue;
+            const int* v = &m.tri[3 * u];
+            const double* a = &m.xy[2 * v[0]];
+            const double* b = &m.xy[2 * v[1]];
+            const double* d = &m.xy[2 * v[2]];
+            const double area2 = (b[0] - a[0]) * (d[1] - a[1]) - (d[0] - a[0]) * (b[1] - a[1]);
+            // Barycentric coordinates times area2; strictly inside with a margin of 1e-9 of the area.
+            const double l0 = (b[0] - px) * (d[1] - py) - (d[0] - px) * (b[1] - py);
+            const double l1 = (d[0] - px) * (a[1] - py) - (a[0] - px) * (d[1] - py);
+            const double l2 = (a[0] - px) * (b[1] - py) - (b[0] - px) * (a[1] - py);
+            const double eps = 1e-9 * area2;
+            if (l0 > eps && l1 > eps && l2 > eps) {
+                std::ostringstream s;
+                s.precision(6);
+                s << "bodies " << body[t] << " (region " << region_name(m, m.tri_region[t]) << ") and " << body[u]
+                  << " (region " << region_name(m, m.tri_region[u]) << ") overlap near (" << px << ", " << py
+                  << ") m: units must not overlap, and touching units must be meshed conformingly "
+                     "(OpenCASCADE BooleanFragments in a .geo)";
+                throw MeshError(s.str());
+            }
+        }
+    }
+}
+
 }  // namespace
 
 Topology build_topology(const Mesh& m, const TopologyOptions& opt) {
     check_input(m);
     const int nt = m.n_triangles(), nn = m.n_nodes(), nr = static_cast<int>(m.regions.size());
     auto body_of = [&](int t) { return m.tri_body.empty() ? m.tri_region[t] : m.tri_body[t]; };
+    check_overlaps(m, m.tri_body.empty() ? m.tri_region : m.tri_body);
 
     // Rules by region index. -1 = no rule.
     std::vector<char> crackable(nr, 0);

@@ -48,6 +48,8 @@ const char* to_string(EdgeClass c);
 // bonded = mortared joint (cohesive element), dry = contact only.
 enum class InterfaceKind : int { tied = 0, bonded = 1, dry = 2 };
 const char* to_string(InterfaceKind k);
+// "tied", "bonded", "dry" -> kind; false for anything else (for the case loader).
+bool parse_interface_kind(const std::string& text, InterfaceKind& kind);
 
 // Per region (2D physical group name): may the material crack inside?
 struct RegionRule {
@@ -98,7 +100,8 @@ struct Topology {
 // Classifies every edge and splits the nodes. Throws MeshError (one line, naming regions and a location) for:
 // a rule naming a region the mesh does not have, conflicting rules for one pair, a pair of touching regions
 // without a rule, an edge shared by more than two triangles or by two triangles on the same side (overlap or
-// inversion), and inverted or degenerate triangles.
+// inversion), inverted or degenerate triangles, and overlapping bodies (a triangle's centroid strictly inside a
+// triangle of another body: e.g. a .geo whose units were not fragmented).
 Topology build_topology(const Mesh& mesh, const TopologyOptions& options);
 
 }  // namespace fdem::mesh

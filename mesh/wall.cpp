@@ -79,12 +79,6 @@ Extent extent_of(const WallSpec& s) {
     return e;
 }
 
-void throw_on_gmsh_error(const std::string& what) {
-    std::string err;
-    gmsh::logger::getLastError(err);
-    if (!err.empty()) throw MeshError(what + ": " + err);
-}
-
 }  // namespace
 
 std::vector<std::string> check(const WallSpec& s) {
@@ -418,9 +412,8 @@ Mesh generate_wall(const WallSpec& s) {
     } catch (const std::exception& ex) {
         throw MeshError(std::string("Gmsh failed on the wall geometry: ") + ex.what());
     } catch (...) {
-        std::string err;
-        gmsh::logger::getLastError(err);
-        throw MeshError("Gmsh failed on the wall geometry" + (err.empty() ? std::string() : ": " + err));
+        throw_on_gmsh_error("Gmsh failed on the wall geometry");
+        throw MeshError("Gmsh failed on the wall geometry");
     }
 }
 

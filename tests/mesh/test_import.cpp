@@ -138,3 +138,31 @@ TEST_CASE("VTU output holds the split mesh and the classified edges", "[unit]") 
         CHECK(text.find(name) != std::string::npos);
     CHECK_THROWS_WITH(write_topology_vtu("/nonexistent/dir/x.vtu", topo), Catch::Contains("/nonexistent/dir/x.vtu"));
 }
+
+TEST_CASE("a .geo with overlapping, unfragmented units is rejected by the topology", "[unit]") {
+    const std::string path = tmp_dir() + "/overlap.geo";
+    {
+        std::ofstream f(path);
+        f << "SetFactory(\"OpenCASCADE\");\n"
+             "Rectangle(1) = {0, 0, 0, 0.2, 0.1};\n"
+             "Rectangle(2) = {0.15, 0.05, 0, 0.2, 0.1};\n"
+             "MeshSize{ PointsOf{ Surface{:}; } } = 0.02;\n"
+             "Physical Surface(\"units\") = {1, 2};\n";
+    }
+    const Mesh m = mesh_geo_file(path);
+    CHECK(m.n_bodies() == 2);
+    TopologyOptions o;
+    o.interfaces = {{"units", "units", InterfaceKind::dry}};
+    CHECK_THROWS_WITH(build_topology(m, o), Catch::Contains("overlap") && Catch::Contains("'units'"));
+    // A missing group named by a case.
+    CHECK_THROWS_WITH(m.require_group("beam_top"), Catch::Contains("'beam_top'") && Catch::Contains("does not exist"));
+    CHECK_THROWS_WITH(m.require_group("units", 1), Catch::Contains("'units' is 2D"));
+    CHECK(m.require_group("units", 2).triangles.size() == static_cast<std::size_t>(m.n_triangles()));
+    // A Gmsh failure does not leak into the next, valid model.
+    CHECK_THROWS(mesh_geo_file(tmp_dir() + "/broken.geo"));
+    CHECK_NOTHROW(generate_wall(cases_a_wall(0.1)));
+    InterfaceKind k{};
+    CHECK(parse_interface_kind("bonded", k));
+    CHECK(k == InterfaceKind::bonded);
+    CHECK_FALSE(parse_interface_kind("glued", k));
+}
