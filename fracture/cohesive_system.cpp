@@ -149,23 +149,31 @@ CohesiveSystem::CohesiveSystem(std::vector<CohesiveElement> elems, std::vector<C
   active_.resize(ne);
   for (int e = 0; e < ne; ++e) active_[e] = e;
 
-  // Gather CSR: counting sort of (node, slot) by node, slots of a node in element order.
-  std::vector<int> count(num_nodes_ + 1, 0);
-  for (int e = 0; e < ne; ++e)
-    for (int k = 0; k < 4; ++k) ++count[elems_[e].n[k] + 1];
+  build_gather();
+}
+
+void CohesiveSystem::build_gather() {
+  // Counting sort of (node, slot) pairs of the intact elements by node; the slots of a node stay in element order,
+  // which fixes the summation order whatever the thread count.
   std::vector<int> start(num_nodes_ + 1, 0);
-  for (int v = 0; v < num_nodes_; ++v) start[v + 1] = start[v] + count[v + 1];
+  for (int e : active_)
+    for (int k = 0; k < 4; ++k) ++start[elems_[e].n[k] + 1];
+  for (int v = 0; v < num_nodes_; ++v) start[v + 1] += start[v];
   std::vector<int> fill(start.begin(), start.end() - 1);
   std::vector<int> slot(std::size_t(start[num_nodes_]));
-  for (int e = 0; e < ne; ++e)
+  for (int e : active_)
     for (int k = 0; k < 4; ++k) slot[fill[elems_[e].n[k]]++] = 8 * e + 2 * k;
-  gather_start_.push_back(0);
+  gather_node_.clear();
+  gather_start_.assign(1, 0);
+  gather_slot_.clear();
+  gather_slot_.reserve(slot.size());
   for (int v = 0; v < num_nodes_; ++v) {
     if (start[v + 1] == start[v]) continue;
     gather_node_.push_back(v);
     gather_slot_.insert(gather_slot_.end(), slot.begin() + start[v], slot.begin() + start[v + 1]);
     gather_start_.push_back(int(gather_slot_.size()));
   }
+  stale_slots_ = 0;
 }
 
 double CohesiveSystem::stable_dt(const double* node_mass) const {
@@ -306,8 +314,12 @@ std::vector<BreakRecord> CohesiveSystem::update_damage(double time, double contr
     broken_[e] = 1;
     pending_[e] = 0;
   }
+  stale_slots_ += 4 * (active_.size() - kept);
   active_.resize(kept);
   pending_count_ = 0;
+  // Broken elements' slots hold zeros, so the gather stays right; rebuild it once they are a quarter of it, which
+  // keeps a fragmented block from paying for its dead joints (amortised O(1) per break).
+  if (4 * stale_slots_ > gather_slot_.size()) build_gather();
   return out;
 }
 

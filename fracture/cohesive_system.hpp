@@ -130,9 +130,11 @@ class CohesiveSystem {
   std::vector<std::uint8_t> broken_;
   std::vector<int> active_;            // intact elements, ascending
   int pending_count_ = 0;
-  // Node -> contributions gather (CSR): for row r, node gather_node_[r] sums force_[gather_slot_[k]] (x) and
+  // Node -> contributions gather (CSR over the intact elements): for row r, node gather_node_[r] sums force_[gather_slot_[k]] (x) and
   // force_[gather_slot_[k] + 1] (y) for k in [gather_start_[r], gather_start_[r+1]), slots in element order.
   std::vector<int> gather_node_, gather_start_, gather_slot_;
+  std::size_t stale_slots_ = 0;  // slots of elements broken since the last build_gather()
+  void build_gather();
   BreakCounts counts_;
 };
 

@@ -52,46 +52,25 @@ double shear_softening_range(const JointLaw& law, double shear_strength_now, dou
   return std::max(s_t, 1e-3 * slip_peak);
 }
 
-PointResponse evaluate_point(const JointLaw& law, double o, double s, double damage_old) {
-  PointResponse r{};
-  const double K_n = law.normal_stiffness;
-  const double f_t = law.tensile_strength;
-  const double o_p = law.opening_peak;
-
-  // Compression is an undamaged linear penalty: crack faces in contact carry pressure whatever D is.
-  const double sigma_c = o < 0.0 ? K_n * o : 0.0;
-  const double f_s = shear_strength(sigma_c, law.cohesion, law.tan_friction);
-  const double s_p = opening_at_peak(f_s, law.shear_stiffness);
-  const double a_s = std::abs(s);
-
-  // Damage components from the current separation; D is the largest value ever reached (irreversible).
-  const double D_I = o > o_p ? (o - o_p) / law.opening_range : 0.0;
-  const double D_II = a_s > s_p ? (a_s - s_p) / shear_softening_range(law, f_s, s_p) : 0.0;
-  double D = damage_old;
-  if (D_I > 0.0 || D_II > 0.0) {
-    const double D_trial = std::min(1.0, std::sqrt(D_I * D_I + D_II * D_II));
-    D = std::max(D, D_trial);
-  }
-  r.damage = D;
-  r.damage_I = D_I;
-  r.damage_II = D_II;
-
-  // Undamaged tensile and shear curves; z(D) scales both (FORMULATION §6).
-  const double o_pos = o > 0.0 ? o : 0.0;
-  const double t_n0 = o > 0.0 ? undamaged_traction(o_pos, o_p, f_t) : 0.0;
-  const double t_s0 = undamaged_traction(a_s, s_p, f_s);
-  const double z = softening(D);
-  r.sigma = o < 0.0 ? sigma_c : z * t_n0;
-  r.tau = (s < 0.0 ? -z : z) * t_s0;
-
-  // Recoverable energy: the work given back when unloading to o = s = 0 at frozen D along the same curves.
-  const double e_n0 = o > 0.0 ? undamaged_energy(o_pos, o_p, f_t) : 0.0;
-  const double e_s0 = undamaged_energy(a_s, s_p, f_s);
-  const double e_c = o < 0.0 ? 0.5 * K_n * o * o : 0.0;
-  r.energy = z * (e_n0 + e_s0) + e_c;
-  // E(o,s,D_old) - E(o,s,D_new): exact bookkeeping of "work done minus recoverable energy" for each increment.
-  r.dissipated = D > damage_old ? (softening(damage_old) - z) * (e_n0 + e_s0) : 0.0;
-  return r;
+JointLaw make_joint_law(double K_n, double K_s, double f_t, double G_I, double cohesion, double tan_friction,
+                        double G_II) {
+  JointLaw L{};
+  L.normal_stiffness = K_n;
+  L.shear_stiffness = K_s;
+  L.tensile_strength = f_t;
+  L.opening_peak = opening_at_peak(f_t, K_n);
+  L.opening_range = softening_range(G_I, f_t, L.opening_peak);
+  L.cohesion = cohesion;
+  L.tan_friction = tan_friction;
+  L.shear_energy = G_II;
+  L.slip_peak0 = opening_at_peak(cohesion, K_s);
+  L.slip_range0 = shear_softening_range(L, cohesion, L.slip_peak0);
+  L.inv_opening_peak = 1.0 / L.opening_peak;
+  L.inv_opening_range = 1.0 / L.opening_range;
+  L.inv_shear_stiffness = 1.0 / K_s;
+  L.inv_slip_peak0 = 1.0 / L.slip_peak0;
+  L.inv_slip_range0 = 1.0 / L.slip_range0;
+  return L;
 }
 
 }  // namespace fdem::fracture

@@ -20,6 +20,8 @@
 // kappa = int_0^1 z(D) dD, so o_t = (G_I - (2/3) f_t o_p) / (kappa f_t) makes it exactly G_I (likewise s_t, G_II).
 #pragma once
 
+#include <cmath>
+
 namespace fdem::fracture {
 
 // Softening function z(D) of [K25] Eq. 10 with its published constants a = 0.63, b = 1.8, c = 6.0:
@@ -55,7 +57,8 @@ inline double shear_strength(double sigma, double cohesion, double tan_friction)
   return cohesion + (sigma < 0.0 ? -sigma * tan_friction : 0.0);
 }
 
-// Constants of one element's law (all derived once from CohesiveProps and the edge length).
+// Constants of one element's law (all derived once from CohesiveProps and the edge length by make_joint_law;
+// reciprocals are stored because the kernel runs three points per element per step and divisions dominate it).
 struct JointLaw {
   double normal_stiffness;     // K_n, Pa/m: initial slope of sigma(o), also the compressive penalty
   double shear_stiffness;      // K_s, Pa/m: initial slope of tau(s)
@@ -65,7 +68,18 @@ struct JointLaw {
   double cohesion;             // c, Pa
   double tan_friction;         // tan(phi), -
   double shear_energy;         // G_II, J/m^2
+  double slip_peak0;           // s_p at zero normal stress, 2 c / K_s, m
+  double slip_range0;          // s_t at zero normal stress, m
+  double inv_opening_peak;     // 1/o_p, 1/m
+  double inv_opening_range;    // 1/o_t, 1/m
+  double inv_shear_stiffness;  // 1/K_s, m/Pa
+  double inv_slip_peak0;       // 1/s_p at zero normal stress, 1/m
+  double inv_slip_range0;      // 1/s_t at zero normal stress, 1/m
 };
+
+// Law constants from stiffnesses K_n, K_s (Pa/m), strengths f_t, c (Pa), tan(phi) and fracture energies (J/m^2).
+JointLaw make_joint_law(double K_n, double K_s, double f_t, double G_I, double cohesion, double tan_friction,
+                        double G_II);
 
 // Result of evaluating one integration point.
 struct PointResponse {
@@ -78,14 +92,71 @@ struct PointResponse {
   double dissipated;  // energy dissipated by the damage increment of this evaluation, J/m^2 (>= 0)
 };
 
-// The law at one point: (opening o (m), slip s (m), old damage) -> stresses, new damage, energies.
-// Dissipation is the drop of recoverable energy at fixed (o, s) when D grows: E(o,s,D_old) - E(o,s,D_new),
-// which summed over a monotonic path gives exactly (2/3) f o_p + kappa f o_t = G (see the header comment).
-PointResponse evaluate_point(const JointLaw& law, double opening, double slip, double damage_old);
-
-// Softening range in shear for the current shear strength (m). Compression raises f_s and s_p = 2 f_s / K_s
-// and can push (2/3) f_s s_p up to G_II; the range is then floored at 1e-3 s_p (the joint breaks just after its peak
-// and dissipates (2/3) f_s s_p > G_II: the least wrong answer; check() can warn for an expected compression).
+// Softening range in shear for the current shear strength f_s (Pa) and slip at peak s_p (m). Compression raises
+// f_s and s_p = 2 f_s / K_s and can push (2/3) f_s s_p up to G_II; the range is then floored at 1e-3 s_p (the joint
+// breaks just after its peak and dissipates (2/3) f_s s_p > G_II: the least wrong answer; check() can warn for an
+// expected compression).
 double shear_softening_range(const JointLaw& law, double shear_strength_now, double slip_peak);
+
+// The law at one point: (opening o (m), slip s (m), old damage) -> stresses, new damage, energies.
+// Dissipation is the drop of recoverable energy at fixed (o, s) when D grows: E(o,s,D_old) - E(o,s,D_new). Summed
+// over a path this is a Riemann-Stieltjes sum of int -z'(D) E_0 dD, which for a monotonic mode I path is
+// (2/3) f_t o_p + kappa f_t o_t = G_I, to within f_t max(do) (first order in the increment; tested).
+inline PointResponse evaluate_point(const JointLaw& L, double o, double s, double damage_old) {
+  PointResponse r;
+  // Compression is an undamaged linear penalty: crack faces in contact carry pressure whatever D is, and it raises
+  // the shear strength (Mohr-Coulomb), hence s_p and s_t.
+  double sigma_c = 0.0, f_s = L.cohesion, s_p = L.slip_peak0, inv_s_p = L.inv_slip_peak0;
+  if (o < 0.0) {
+    sigma_c = L.normal_stiffness * o;
+    f_s = shear_strength(sigma_c, L.cohesion, L.tan_friction);
+    s_p = 2.0 * f_s * L.inv_shear_stiffness;
+    inv_s_p = 1.0 / s_p;
+  }
+  const double a_s = s < 0.0 ? -s : s;
+  const double o_p = L.opening_peak;
+
+  // Damage components from the current separation; D is the largest value ever reached (irreversible).
+  r.damage_I = o > o_p ? (o - o_p) * L.inv_opening_range : 0.0;
+  r.damage_II = 0.0;
+  if (a_s > s_p) {
+    r.damage_II = o < 0.0 ? (a_s - s_p) / shear_softening_range(L, f_s, s_p) : (a_s - s_p) * L.inv_slip_range0;
+  }
+  double D = damage_old;
+  if (r.damage_I > 0.0 || r.damage_II > 0.0) {
+    const double trial = std::sqrt(r.damage_I * r.damage_I + r.damage_II * r.damage_II);
+    D = trial >= 1.0 ? 1.0 : (trial > D ? trial : D);
+  }
+  r.damage = D;
+
+  // Undamaged tensile and shear curves and their energies; z(D) scales both (FORMULATION §6).
+  double t_n0 = 0.0, e_n0 = 0.0;
+  if (o > 0.0) {
+    if (o >= o_p) {
+      t_n0 = L.tensile_strength;
+      e_n0 = L.tensile_strength * (o_p * (2.0 / 3.0) + (o - o_p));
+    } else {
+      const double x = o * L.inv_opening_peak;
+      t_n0 = prepeak_shape(x) * L.tensile_strength;
+      e_n0 = prepeak_energy_shape(x) * L.tensile_strength * o_p;
+    }
+  }
+  double t_s0, e_s0;
+  if (a_s >= s_p) {
+    t_s0 = f_s;
+    e_s0 = f_s * (s_p * (2.0 / 3.0) + (a_s - s_p));
+  } else {
+    const double y = a_s * inv_s_p;
+    t_s0 = prepeak_shape(y) * f_s;
+    e_s0 = prepeak_energy_shape(y) * f_s * s_p;
+  }
+  const double z = D > 0.0 ? softening(D) : 1.0;
+  r.sigma = o < 0.0 ? sigma_c : z * t_n0;
+  r.tau = (s < 0.0 ? -z : z) * t_s0;
+  // Recoverable energy: the work given back when unloading to o = s = 0 at frozen D along the same curves.
+  r.energy = z * (e_n0 + e_s0) + (o < 0.0 ? 0.5 * sigma_c * o : 0.0);
+  r.dissipated = D > damage_old ? (softening(damage_old) - z) * (e_n0 + e_s0) : 0.0;
+  return r;
+}
 
 }  // namespace fdem::fracture

@@ -100,15 +100,10 @@ std::vector<std::string> check(const CohesiveProps& p, double h_max, double sigm
 }
 
 JointLaw make_law(const CohesiveProps& p, double h) {
-  JointLaw law{};
-  stiffnesses(p, h, law.normal_stiffness, law.shear_stiffness);
-  law.tensile_strength = p.tensile_strength;
-  law.opening_peak = opening_at_peak(p.tensile_strength, law.normal_stiffness);
-  law.opening_range = softening_range(p.G_I, p.tensile_strength, law.opening_peak);
-  law.cohesion = p.cohesion;
-  law.tan_friction = std::tan(p.friction_deg * kPi / 180.0);
-  law.shear_energy = p.G_II;
-  return law;
+  double K_n = 0.0, K_s = 0.0;
+  stiffnesses(p, h, K_n, K_s);
+  return make_joint_law(K_n, K_s, p.tensile_strength, p.G_I, p.cohesion, std::tan(p.friction_deg * kPi / 180.0),
+                        p.G_II);
 }
 
 }  // namespace fdem::fracture

@@ -77,15 +77,9 @@ TEST_CASE("energy-exact ranges: pre-peak plus softening area equals G", "[unit]"
 }
 
 TEST_CASE("point law: branches, continuity at o_p, undamaged compression, Mohr-Coulomb strength", "[unit]") {
-  JointLaw L{};
-  L.normal_stiffness = 4e12;  // Pa/m
-  L.shear_stiffness = 2e12;
-  L.tensile_strength = 3e6;
-  L.opening_peak = opening_at_peak(3e6, 4e12);
-  L.opening_range = softening_range(100.0, 3e6, L.opening_peak);
-  L.cohesion = 4e6;
-  L.tan_friction = std::tan(0.5);
-  L.shear_energy = 500.0;
+  // K_n 4e12 Pa/m, K_s 2e12 Pa/m, f_t 3 MPa, G_I 100 J/m^2, c 4 MPa, tan(0.5 rad), G_II 500 J/m^2.
+  const JointLaw L = make_joint_law(4e12, 2e12, 3e6, 100.0, 4e6, std::tan(0.5), 500.0);
+  CHECK(L.opening_range == Approx(softening_range(100.0, 3e6, opening_at_peak(3e6, 4e12))));
   const double o_p = L.opening_peak;
 
   auto r = evaluate_point(L, 0.5 * o_p, 0.0, 0.0);
