@@ -15,6 +15,10 @@ namespace fdem::contact {
 
 namespace {
 
+// Below this many items a loop runs on one thread: a parallel region costs more than it saves, and on a shared,
+// oversubscribed machine its barrier can cost milliseconds. Results are the same bits either way.
+constexpr int kParallelMin = 4096;
+
 inline double smallest_altitude(const double* T) {
     const double area2 = std::fabs((T[2] - T[0]) * (T[5] - T[1]) - (T[4] - T[0]) * (T[3] - T[1]));
     double lmax = 0.0;
@@ -175,7 +179,7 @@ void ContactSystem::detect(const double* x) {
         }
     }
     std::vector<double> icx(n), icy(n), ir(n);
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (n > kParallelMin)
     for (int i = 0; i < n; ++i) {
         double T[6];
         gather(x, tri_ + 3 * items_[i], T);
@@ -192,7 +196,7 @@ void ContactSystem::detect(const double* x) {
     // Drop pairs that share a node or an intact cohesive element, in parallel into flags, then compact in order.
     const int nc = cand_.size();
     std::vector<char> keep(nc);
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (nc > kParallelMin)
     for (int p = 0; p < nc; ++p) {
         const int a = cand_.a[p], b = cand_.b[p];
         bool ok = true;
@@ -230,7 +234,7 @@ void ContactSystem::detect(const double* x) {
         for (int t = 0; t < n_tri_; ++t) start[t + 1] += start[t];
         std::vector<int> fill(start.begin(), start.end() - 1);
         for (int p = 0; p < op; ++p) order[fill[pair_a_[p]]++] = p;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (np > kParallelMin)
         for (int p = 0; p < np; ++p) {
             const int a = na[p], b = nb[p];
             for (int q = start[a]; q < start[a + 1]; ++q) {
@@ -259,7 +263,7 @@ void ContactSystem::detect(const double* x) {
 
 void ContactSystem::step(const double* x, const double* v, double dt, double* f) {
     double vmax = 0.0;
-#pragma omp parallel for schedule(static) reduction(max : vmax)
+#pragma omp parallel for schedule(static) reduction(max : vmax) if (n_nodes_ > kParallelMin)
     for (int k = 0; k < n_nodes_; ++k) vmax = std::max(vmax, std::hypot(v[2 * k], v[2 * k + 1]));
     // [MA98]: a pair can only appear once two triangles have moved towards each other by the buffer; each moved
     // at most the accumulated dt max|v|. Anticipate this step's motion so the list is valid until the next call.
@@ -269,7 +273,7 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f)
     const double t0 = omp_get_wtime();
     const int np = static_cast<int>(pair_a_.size());
     const bool want_energy = opt_.compute_energy;
-#pragma omp parallel for schedule(dynamic, 512)
+#pragma omp parallel for schedule(dynamic, 512) if (np > kParallelMin)
     for (int p = 0; p < np; ++p) {
         const int a = pair_a_[p], b = pair_b_[p];
         double xa[6], xb[6];

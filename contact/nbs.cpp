@@ -68,7 +68,7 @@ void nbs_detect(const double* cx, const double* cy, const double* r, const int* 
     ws.col_below.resize(n_threads);
     ws.cell_next.resize(n_threads);
 
-#pragma omp parallel
+#pragma omp parallel if (n > 4096)
     {
         const int th = omp_get_thread_num();
         std::vector<int>& cur = ws.col_cur[th];
