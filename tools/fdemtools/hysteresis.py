@@ -114,6 +114,8 @@ def plot(d, p, res: dict, prefix: str, label: str, x_unit=("mm", 1e-3), y_unit=(
     n = [c["cycle"] for c in cyc]
     ax.plot(n, [c["k_d"] for c in cyc], "o-", color="#1f77b4", label=r"$k_d = k_i / k_{el}$")
     ax.plot(n, [c["E_d"] for c in cyc], "s-", color="#ff7f0e", label=r"$E_d = E_i / E_h$")
+    from matplotlib.ticker import MaxNLocator
+    ax.xaxis.set_major_locator(MaxNLocator(integer=True))
     ax.set_xlabel("cycle")
     ax.set_ylabel("normalised stiffness and energy (-)")
     ax.set_title(f"$k_{{el}}$ = {res['k_el'] * sy / sx:.4g} {y_unit[0]}/{x_unit[0]}, $E_h$ = {res['E_h']:.4g} J",

@@ -75,7 +75,12 @@ def plot_energy(run, label: str, prefix: str) -> list:
     ax.set_title(f"{label}: energy history", fontsize=9)
     if has_bal:
         b = axs[1, 0]
-        b.plot(t, 100.0 * h.numeric("E_balance"), color="#9467bd", lw=1.2)
+        bal = 100.0 * h.numeric("E_balance")
+        if h.has("W_ext"):
+            # a relative balance error means nothing while almost no work has been done: hide the start-up
+            w = np.abs(h.numeric("W_ext"))
+            bal = np.where(w > 1e-3 * (w.max() if len(w) else 0.0), bal, np.nan)
+        b.plot(t, bal, color="#9467bd", lw=1.2)
         b.set_ylabel("balance error (%)")
         b.set_xlabel("time (s)")
     else:

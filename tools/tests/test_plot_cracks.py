@@ -85,3 +85,13 @@ def test_plot_bad_input(tmp_path, cli):
     assert rc == 1 and "fracture off" in err
     rc, o, err = cli("plot", nf)  # default set: the damage figure is skipped with a note
     assert rc == 0 and "no damage figure" in o
+
+
+def test_run_curve_stage_selection_and_extra_columns(tmp_path):
+    from fdemtools.common import load_curve
+    run = make_run(str(tmp_path / "r"))  # has an unknown extra column, which must be tolerated
+    c_all = load_curve(run)
+    c2 = load_curve(run, stage=2)
+    assert len(c2.x) < len(c_all.x) and c2.x[0] >= 1e-3 - 1e-15  # stage 2 starts at t = 0.1 s, u = 1 mm
+    with pytest.raises(Exception, match="no rows of stage 5"):
+        load_curve(run, stage=5)
