@@ -111,10 +111,10 @@ std::string format_stats(const MeshStats& s) {
         o << "  region " << std::left << std::setw(12) << s.regions[r] << std::right << std::setw(8)
           << s.triangles_per_region[r] << " triangles, area " << s.area_per_region[r] << " m^2\n";
     o << "nodes                " << s.nodes_before << " shared, " << s.nodes_after << " after splitting\n";
-    o << "edges by class      ";
+    o << "edges by class\n";
     for (int c = 0; c < kEdgeClassCount; ++c)
-        o << " " << to_string(static_cast<EdgeClass>(c)) << " " << s.edges_per_class[c] << " ("
-          << s.length_per_class[c] << " m)" << (c + 1 < kEdgeClassCount ? "," : "\n");
+        o << "  " << std::left << std::setw(14) << to_string(static_cast<EdgeClass>(c)) << std::right << std::setw(8)
+          << s.edges_per_class[c] << " edges, " << s.length_per_class[c] << " m\n";
     o << "cohesive elements    " << s.cohesive_crackable << " crackable, " << s.cohesive_bonded << " bonded\n";
     o << "contact-capable      " << s.contact_capable << " triangles\n";
     o << "minimum angle        " << s.min_angle_deg << " deg (triangle " << s.min_angle_triangle << ")\n";

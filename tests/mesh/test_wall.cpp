@@ -215,3 +215,15 @@ TEST_CASE("bad wall specs give one-line problems naming the key", "[unit]") {
     sb.stones = {{{0, 0}, {0.5, 0}, {0.5, 0.2}, {0, 0.2}}, {{0.1, 0.2}, {0.3, 0.2}, {0.2, 0.2}}};
     CHECK_THROWS_WITH(generate_wall(sb), Catch::Contains("stones[1]") && Catch::Contains("zero area"));
 }
+
+TEST_CASE("the generator is deterministic: same spec, same bits", "[regression]") {
+    WallSpec s = cases_a_wall(0.04);
+    s.beam_height = 0.1;
+    s.base = "slab";
+    s.base_height = 0.1;
+    const Mesh a = generate_wall(s), b = generate_wall(s);
+    CHECK(a.xy == b.xy);
+    CHECK(a.tri == b.tri);
+    CHECK(a.tri_body == b.tri_body);
+    CHECK(a.tri_region == b.tri_region);
+}
