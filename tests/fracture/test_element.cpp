@@ -56,7 +56,7 @@ ModeIResult pull_mode_I(const CohesiveProps& p, double h, int n) {
 }
 }  // namespace
 
-TEST_CASE("mode I on one element: peak f_t and dissipated energy G_I, stiff and soft penalty", "[unit]") {
+TEST_CASE("mode I on one element: peak f_t and dissipated energy G_I for a stiff and a soft penalty", "[unit]") {
   const double h = 0.025, f_t = 3.7e6, G_I = 110.0;
   // Pre-peak work (4/3) h f_t^2 / p_j is 1.1 % of G_I for the stiff penalty and 59 % for the soft one.
   for (double p_j : {4e11, 7e9}) {
@@ -90,7 +90,7 @@ TEST_CASE("dissipation bookkeeping converges at first order in the damage increm
   CHECK(e1 / e2 == Approx(10.0).epsilon(0.15));
 }
 
-TEST_CASE("mode II under constant compression: peak c + sigma tan(phi), dissipated energy G_II", "[unit]") {
+TEST_CASE("mode II under constant compression: peak c + sigma tan(phi) and dissipated energy G_II", "[unit]") {
   const double h = 0.025;
   for (double sigma_c : {0.0, 1.0e6, 5.0e6}) {
     CAPTURE(sigma_c);
@@ -248,7 +248,7 @@ TEST_CASE("elastic cycle below the damage threshold returns exactly the work put
   CHECK(el.sys.damage(0) == 0.0);
 }
 
-TEST_CASE("rigid motion gives no force; a rotated element opens like a horizontal one", "[unit]") {
+TEST_CASE("rigid motion gives no force and a rotated element opens like a horizontal one", "[unit]") {
   const CohesiveProps p = stone(2e10);
   const double h = 0.03, t = 0.1, th = 0.7;
   const double c = std::cos(th), s = std::sin(th);
@@ -399,7 +399,7 @@ TEST_CASE("constructor rejects bad input with clear messages", "[unit]") {
   CHECK(message(els, stone(2e10)).find("properties index 2 out of range") != std::string::npos);
 }
 
-TEST_CASE("break records, counts and cracks.csv", "[unit]") {
+TEST_CASE("break records and counts and cracks.csv", "[unit]") {
   CohesiveProps unit = stone(1e11), iface = stone(1e11);
   iface.penalty = CohesiveProps::unset;
   iface.k_n = 8e12;

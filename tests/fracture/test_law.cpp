@@ -36,7 +36,7 @@ CohesiveProps stone() {  // CASES.md A: sandstone units, penalty chosen by us
 }
 }  // namespace
 
-TEST_CASE("softening z(D) of [K25] Eq. 10: end values, monotone, matches the paper's formula", "[unit]") {
+TEST_CASE("softening z(D) of K25 Eq. 10: end values and monotone and equal to the paper's formula", "[unit]") {
   CHECK(softening(0.0) == 1.0);
   CHECK(softening(1.0) == 0.0);
   CHECK(softening(-0.5) == 1.0);
@@ -53,7 +53,7 @@ TEST_CASE("softening z(D) of [K25] Eq. 10: end values, monotone, matches the pap
   CHECK(softening(1.0 - 1e-12) >= 0.0);
 }
 
-TEST_CASE("kappa = integral of z over [0,1] is 0.38631", "[unit]") {
+TEST_CASE("kappa = integral of z over 0..1 is 0.38631", "[unit]") {
   // Independent composite midpoint rule with 400000 panels: error ~ max|z''| / (24 n^2), far below 1e-9.
   const int n = 400000;
   double sum = 0.0;
@@ -76,7 +76,7 @@ TEST_CASE("energy-exact ranges: pre-peak plus softening area equals G", "[unit]"
   CHECK(opening_at_peak(f, 1e12) == Approx(2 * f / 1e12));
 }
 
-TEST_CASE("point law: branches, continuity at o_p, undamaged compression, Mohr-Coulomb strength", "[unit]") {
+TEST_CASE("point law: branches and continuity at o_p and undamaged compression and Mohr-Coulomb strength", "[unit]") {
   // K_n 4e12 Pa/m, K_s 2e12 Pa/m, f_t 3 MPa, G_I 100 J/m^2, c 4 MPa, tan(0.5 rad), G_II 500 J/m^2.
   const JointLaw L = make_joint_law(4e12, 2e12, 3e6, 100.0, 4e6, std::tan(0.5), 500.0);
   CHECK(L.opening_range == Approx(softening_range(100.0, 3e6, opening_at_peak(3e6, 4e12))));
@@ -119,7 +119,7 @@ TEST_CASE("point law: branches, continuity at o_p, undamaged compression, Mohr-C
   CHECK(shear_strength(1e6, 4e6, 0.7) == 4e6);                              // tension does not raise it
 }
 
-TEST_CASE("check(): accepts good classes, names missing and non-physical values", "[unit]") {
+TEST_CASE("check() accepts good classes and names missing and non-physical values", "[unit]") {
   CHECK(check(stone(), 0.025).empty());
 
   CohesiveProps missing;
@@ -157,7 +157,7 @@ TEST_CASE("check(): accepts good classes, names missing and non-physical values"
   CHECK(any_contains(check(iface, 0.0), "shear stiffness k_s is missing"));
 }
 
-TEST_CASE("check(): a penalty too soft for the fracture energy is an input error", "[unit]") {
+TEST_CASE("check() reports a penalty too soft for the fracture energy", "[unit]") {
   CohesiveProps p = stone();
   const double h = 0.025;
   // G_I <= (2/3) f_t o_p with o_p = 2 h f_t / p_j  <=>  p_j <= 4 h f_t^2 / (3 G_I) = 4.15e9 Pa.
