@@ -101,6 +101,22 @@ def is_finished(run_dir: str) -> bool:
     return bool(s) and s.get("status") == "completed"
 
 
+def reference_peak(summary: dict) -> float | None:
+    """The case's reference peak load in N: `reference.peak_load_N` (run-folder contract), or a reference of
+    quantity "peak" on the curve's load monitor (what the engine writes: monitor, quantity, value)."""
+    ref = summary.get("reference")
+    if not isinstance(ref, dict):
+        return None
+    try:
+        if ref.get("peak_load_N") is not None:
+            return abs(float(ref["peak_load_N"]))
+        if ref.get("quantity") == "peak" and ref.get("monitor") == (summary.get("curve") or {}).get("y"):
+            return abs(float(ref["value"]))
+    except (TypeError, ValueError):
+        return None
+    return None
+
+
 def curve_peak(summary: dict) -> float | None:
     """Largest absolute value of the load monitor named by the summary's curve, N."""
     try:
@@ -221,7 +237,7 @@ def collect(rec: dict) -> dict:
     for k in ("wall_time_s", "n_triangles", "n_nodes", "dt", "steps", "threads"):
         rec[k] = s.get(k)
     rec["peak_load_N"] = curve_peak(s)
-    ref = (s.get("reference") or {}).get("peak_load_N")
+    ref = reference_peak(s)
     rec["reference_peak_N"] = ref
     rec["reference_error"] = (abs(rec["peak_load_N"] - ref) / abs(ref)
                               if ref and rec["peak_load_N"] is not None else None)

@@ -112,3 +112,14 @@ def test_bad_batch_input(tmp_path, cli):
     assert rc == 1 and "not found" in err
     rc, o, err = cli("batch", tmp_path / "none.toml", "--grid", "a=1", "--fdem", FAKE)
     assert rc == 1 and "no such case file" in err
+
+
+def test_reference_peak_both_forms():
+    assert batch.reference_peak({"reference": {"peak_load_N": -20e3, "source": "x"}}) == 20e3
+    s = {"curve": {"x": "u", "y": "F"}, "reference": {"monitor": "F", "quantity": "peak", "value": -17.1e3}}
+    assert batch.reference_peak(s) == 17.1e3
+    s["reference"]["quantity"] = "final"
+    assert batch.reference_peak(s) is None
+    s = {"curve": {"x": "u", "y": "F"}, "reference": {"monitor": "u", "quantity": "peak", "value": 1.0}}
+    assert batch.reference_peak(s) is None
+    assert batch.reference_peak({}) is None

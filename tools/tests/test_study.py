@@ -106,3 +106,28 @@ def test_real_fdem_study_plot_eeep(tmp_path, cli):
         assert e["ductility"] == pytest.approx(1.0, abs=0.05)
     else:
         assert e["P_y"] == pytest.approx(0.85 * e["P_peak"], rel=1e-12)
+
+
+TINY_CYCLIC = os.path.join(os.path.dirname(os.path.abspath(__file__)), "data", "tiny_cyclic.toml")
+
+
+@needs_fdem
+def test_real_fdem_cyclic_hysteresis(tmp_path, cli):
+    """Two displacement cycles (0.5 and 1 mm) of an elastic block: the cycle splitter must find both, with
+    symmetric peaks at the amplitudes and no stiffness degradation (elastic)."""
+    out = tmp_path / "b"
+    rc, o, err = cli("batch", TINY_CYCLIC, "--grid", "case.name=\"cyc\"", "--fdem", _fdem(), "--out-dir", out)
+    assert rc == 0, err + o
+    run = next((out / "runs").iterdir())
+    rc, o, err = cli("hysteresis", run, "--out", tmp_path / "h")
+    assert rc == 0, err
+    h = json.loads((tmp_path / "h.json").read_text())
+    assert h["n_cycles"] == 2
+    col = {k: i for i, k in enumerate(h["columns"])}
+    for cyc, amp in zip(h["cycles"], (0.5, 1.0)):  # mm
+        assert cyc[col["complete"]] == 1
+        assert cyc[col["d_plus_mm"]] == pytest.approx(amp, rel=0.05)
+        assert cyc[col["d_minus_mm"]] == pytest.approx(-amp, rel=0.05)
+        assert cyc[col["P_minus_kN"]] == pytest.approx(-cyc[col["P_plus_kN"]], rel=0.05)
+        assert cyc[col["k_d"]] == pytest.approx(1.0, abs=0.05)
+    assert (tmp_path / "h.png").exists()
