@@ -80,6 +80,7 @@ MeshStats mesh_stats(const Topology& topo) {
     }
     for (const auto& ce : topo.cohesive) (ce.kind == EdgeClass::bonded ? s.cohesive_bonded : s.cohesive_crackable)++;
     s.contact_capable = static_cast<int>(topo.contact_capable.size());
+    s.nonconforming_nodes = topo.nonconforming_nodes;
     s.regions = m.regions;
     s.triangles_per_region.assign(m.regions.size(), 0);
     s.area_per_region.assign(m.regions.size(), 0.0);
@@ -117,6 +118,8 @@ std::string format_stats(const MeshStats& s) {
           << s.edges_per_class[c] << " edges, " << s.length_per_class[c] << " m\n";
     o << "cohesive elements    " << s.cohesive_crackable << " crackable, " << s.cohesive_bonded << " bonded\n";
     o << "contact-capable      " << s.contact_capable << " triangles\n";
+    if (s.nonconforming_nodes > 0)
+        o << "non-conforming       " << s.nonconforming_nodes << " nodes where bodies touch without shared nodes (dry)\n";
     o << "minimum angle        " << s.min_angle_deg << " deg (triangle " << s.min_angle_triangle << ")\n";
     o << "minimum altitude     " << s.min_altitude << " m (triangle " << s.min_altitude_triangle << ")\n";
     o << "aspect ratio R/2r    max " << s.max_aspect << "\n";

@@ -39,6 +39,7 @@ struct MeshStats {
     std::array<double, kEdgeClassCount> length_per_class{};  // m
     int cohesive_crackable = 0, cohesive_bonded = 0;
     int contact_capable = 0;
+    int nonconforming_nodes = 0;    // see Topology::nonconforming_nodes
     double min_angle_deg = 0;       // degrees, over all triangles
     int min_angle_triangle = -1;
     double min_altitude = 0;        // m

@@ -177,6 +177,66 @@ void check_overlaps(const Mesh& m, const std::vector<int>& body) {
     }
 }
 
+// Bodies that touch without sharing nodes (a .geo or .msh whose units were not fragmented): a node on a free
+// boundary lying on a free-boundary edge of another body, at its interior or at a coincident end point with a
+// different id. Dry contact tolerates that (the contact set handles it) and is only counted; for a tied or bonded
+// pair it would silently lose the joint, and a pair without a rule is a missing rule: both are errors.
+template <class BodyOf, class RuleOf>
+int count_nonconforming(const Mesh& m, const Topology& topo, BodyOf body_of, RuleOf rule_of) {
+    std::vector<int> free_edges;
+    double size = 0;
+    for (int e = 0; e < topo.n_edges(); ++e)
+        if (topo.edge_class[e] == EdgeClass::free_boundary) {
+            free_edges.push_back(e);
+            const int a = topo.edge_nodes[2 * e], b = topo.edge_nodes[2 * e + 1];
+            size += std::hypot(m.xy[2 * b] - m.xy[2 * a], m.xy[2 * b + 1] - m.xy[2 * a + 1]);
+        }
+    if (free_edges.empty()) return 0;
+    size /= static_cast<double>(free_edges.size());
+    // Hash grid of cell `size` over the edges' bounding boxes.
+    std::map<std::pair<long, long>, std::vector<int>> grid;
+    auto cell = [&](double v) { return static_cast<long>(std::floor(v / size)); };
+    for (int e : free_edges) {
+        const int a = topo.edge_nodes[2 * e], b = topo.edge_nodes[2 * e + 1];
+        for (long j = cell(std::min(m.xy[2 * a + 1], m.xy[2 * b + 1])); j <= cell(std::max(m.xy[2 * a + 1], m.xy[2 * b + 1])); ++j)
+            for (long i = cell(std::min(m.xy[2 * a], m.xy[2 * b])); i <= cell(std::max(m.xy[2 * a], m.xy[2 * b])); ++i)
+                grid[{i, j}].push_back(e);
+    }
+    std::vector<int> node_edge(m.n_nodes(), -1);  // one free edge at each free-boundary node
+    for (int e : free_edges) node_edge[topo.edge_nodes[2 * e]] = node_edge[topo.edge_nodes[2 * e + 1]] = e;
+    int count = 0;
+    for (int k = 0; k < m.n_nodes(); ++k) {
+        if (node_edge[k] < 0) continue;
+        const int tk = topo.edge_tri[2 * node_edge[k]];
+        const double px = m.xy[2 * k], py = m.xy[2 * k + 1];
+        auto it = grid.find({cell(px), cell(py)});
+        if (it == grid.end()) continue;
+        for (int e : it->second) {
+            const int a = topo.edge_nodes[2 * e], b = topo.edge_nodes[2 * e + 1];
+            const int te = topo.edge_tri[2 * e];
+            if (a == k || b == k || body_of(te) == body_of(tk)) continue;
+            const double ex = m.xy[2 * b] - m.xy[2 * a], ey = m.xy[2 * b + 1] - m.xy[2 * a + 1];
+            const double len2 = ex * ex + ey * ey;
+            const double s = ((px - m.xy[2 * a]) * ex + (py - m.xy[2 * a + 1]) * ey) / len2;
+            const double dist = std::abs((px - m.xy[2 * a]) * ey - (py - m.xy[2 * a + 1]) * ex) / std::sqrt(len2);
+            if (s < -1e-9 || s > 1 + 1e-9 || dist > 1e-9 * std::sqrt(len2)) continue;
+            const int ra = m.tri_region[tk], rb = m.tri_region[te];
+            const int rule = rule_of(ra, rb);
+            if (rule < 0 || rule != static_cast<int>(InterfaceKind::dry))
+                throw MeshError("bodies " + std::to_string(body_of(tk)) + " (region " + region_name(m, ra) + ") and " +
+                                std::to_string(body_of(te)) + " (region " + region_name(m, rb) + ") touch at " +
+                                where(m, k) + " without sharing nodes; " +
+                                (rule < 0 ? std::string("there is no interface rule for them, and ")
+                                          : std::string("a ") + to_string(static_cast<InterfaceKind>(rule)) +
+                                                " interface ") +
+                                "needs a conforming mesh (OpenCASCADE BooleanFragments in a .geo)");
+            ++count;
+            break;
+        }
+    }
+    return count;
+}
+
 }  // namespace
 
 Topology build_topology(const Mesh& m, const TopologyOptions& opt) {
@@ -288,6 +348,10 @@ Topology build_topology(const Mesh& m, const TopologyOptions& opt) {
         topo.edge_class.push_back(cls);
         i = j;
     }
+
+    topo.nonconforming_nodes = count_nonconforming(m, topo, body_of, [&](int ra, int rb) {
+        return (ra < 0 || rb < 0) ? -1 : pair_rule[static_cast<std::size_t>(ra) * nr + rb];
+    });
 
     // Node copies: corners of each node in triangle order; a new copy for each new union-find class.
     std::vector<int> node_start(nn + 1, 0);

@@ -93,6 +93,9 @@ struct Topology {
     std::vector<int> edge_tri;
     std::vector<EdgeClass> edge_class;
     int n_nodes_before = 0;
+    // Free-boundary nodes lying on a free edge of another body (bodies touching without shared nodes, allowed for
+    // dry pairs only: contact handles them). 0 for every generated wall.
+    int nonconforming_nodes = 0;
 
     int n_edges() const { return static_cast<int>(edge_class.size()); }
 };
@@ -101,7 +104,8 @@ struct Topology {
 // a rule naming a region the mesh does not have, conflicting rules for one pair, a pair of touching regions
 // without a rule, an edge shared by more than two triangles or by two triangles on the same side (overlap or
 // inversion), inverted or degenerate triangles, and overlapping bodies (a triangle's centroid strictly inside a
-// triangle of another body: e.g. a .geo whose units were not fragmented).
+// triangle of another body: e.g. a .geo whose units were not fragmented), and bodies touching without shared
+// nodes when their pair is tied, bonded or has no rule.
 Topology build_topology(const Mesh& mesh, const TopologyOptions& options);
 
 }  // namespace fdem::mesh

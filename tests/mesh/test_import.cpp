@@ -166,3 +166,27 @@ TEST_CASE("a .geo with overlapping, unfragmented units is rejected by the topolo
     CHECK(k == InterfaceKind::bonded);
     CHECK_FALSE(parse_interface_kind("glued", k));
 }
+
+TEST_CASE("units touching without shared nodes: counted for dry pairs, an error for bonded or unruled ones", "[unit]") {
+    const std::string path = tmp_dir() + "/unfragmented.geo";
+    {
+        std::ofstream f(path);
+        f << "SetFactory(\"OpenCASCADE\");\n"
+             "Rectangle(1) = {0, 0, 0, 0.2, 0.1};\n"
+             "Rectangle(2) = {0.2, 0, 0, 0.2, 0.1};\n"
+             "MeshSize{ PointsOf{ Surface{1}; } } = 0.02;\n"
+             "MeshSize{ PointsOf{ Surface{2}; } } = 0.03;\n"
+             "Physical Surface(\"units\") = {1, 2};\n";
+    }
+    const Mesh m = mesh_geo_file(path);
+    REQUIRE(m.n_bodies() == 2);
+    TopologyOptions o;
+    o.interfaces = {{"units", "units", InterfaceKind::dry}};
+    const Topology topo = build_topology(m, o);
+    CHECK(topo.nonconforming_nodes >= 2 * 4);  // both sides' nodes along the 0.1 m face (5 and 4 segments)
+    CHECK(class_length(topo, EdgeClass::dry) == 0.0);
+    o.interfaces = {{"units", "units", InterfaceKind::bonded}};
+    CHECK_THROWS_WITH(build_topology(m, o), Catch::Contains("without sharing nodes") && Catch::Contains("bonded"));
+    o.interfaces.clear();
+    CHECK_THROWS_WITH(build_topology(m, o), Catch::Contains("without sharing nodes") && Catch::Contains("no interface rule"));
+}

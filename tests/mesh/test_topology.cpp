@@ -108,6 +108,7 @@ TEST_CASE("CASES A wall: dry joint length equals bed plus head joints; splitting
     const Mesh m = generate_wall(cases_a_wall());
     const Topology topo = build_topology(m, dry_crackable_units());
     CHECK(check_invariants(m, topo) > 100);
+    CHECK(topo.nonconforming_nodes == 0);
     // 9 internal bed joints of 1 m; head joints: 5 courses x 4 + 5 courses x 5 = 45 of 0.1 m.
     const double bed = 9 * 1.0, head = 45 * 0.1;
     CHECK(std::abs(class_length(topo, EdgeClass::dry) - (bed + head)) <= 1e-9);
