@@ -24,18 +24,29 @@ CLASS_STYLE = {"unit": {"ls": "-", "lw": 2.0, "marker": "o"}, "interface": {"ls"
 CLASS_NAMES = {"unit": "in units", "interface": "at interfaces"}
 
 
+# Column names of the run-folder contract, and the unit-suffixed names the fracture module writes.
+CRACK_COLUMNS = {"time": ("time", "time_s"), "control_displacement": ("control_displacement", "control_displacement_m"),
+                 "x": ("x", "x_m"), "y": ("y", "y_m"), "class": ("class",), "mode": ("mode",)}
+CLASS_ALIASES = {"unit": "unit", "unit-interior": "unit", "unit_interior": "unit", "interior": "unit",
+                 "interface": "interface"}
+
+
 def read_cracks(run_dir: str):
     path = os.path.join(run_dir, "cracks.csv")
     if not os.path.isfile(path):
         raise ToolError(f"{run_dir}: no cracks.csv (was fracture on in this run?)")
     t = read_table(path)
-    for c in ("time", "x", "y", "class", "mode"):
-        t.col(c)
+    names = {}
+    for key, options in CRACK_COLUMNS.items():
+        found = [o for o in options if t.has(o)]
+        if not found and key != "control_displacement":
+            raise ToolError(f"{path}: no column '{options[0]}' (columns: {', '.join(t.names)})")
+        names[key] = found[0] if found else None
     n = len(t)
     if n == 0:
         return {"time": np.zeros(0), "x": np.zeros(0), "y": np.zeros(0), "class": np.zeros(0, object),
                 "mode": np.zeros(0, object), "control_displacement": np.zeros(0)}
-    cls = np.array([str(v) for v in t.col("class")], dtype=object)
+    cls = np.array([CLASS_ALIASES.get(str(v), str(v)) for v in t.col("class")], dtype=object)
     mode = np.array([str(v) for v in t.col("mode")], dtype=object)
     bad = set(cls) - set(CLASS_STYLE)
     if bad:
@@ -43,9 +54,9 @@ def read_cracks(run_dir: str):
     bad = set(mode) - set(MODE_COLOURS)
     if bad:
         raise ToolError(f"{path}: unknown mode {sorted(bad)} (expected I, II or mixed)")
-    cd = t.numeric("control_displacement") if t.has("control_displacement") else np.full(n, np.nan)
-    return {"time": t.numeric("time"), "x": t.numeric("x"), "y": t.numeric("y"), "class": cls, "mode": mode,
-            "control_displacement": cd}
+    cd = t.numeric(names["control_displacement"]) if names["control_displacement"] else np.full(n, np.nan)
+    return {"time": t.numeric(names["time"]), "x": t.numeric(names["x"]), "y": t.numeric(names["y"]), "class": cls,
+            "mode": mode, "control_displacement": cd}
 
 
 def snapshots(run_dir: str) -> list:

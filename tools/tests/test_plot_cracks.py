@@ -95,3 +95,16 @@ def test_run_curve_stage_selection_and_extra_columns(tmp_path):
     assert len(c2.x) < len(c_all.x) and c2.x[0] >= 1e-3 - 1e-15  # stage 2 starts at t = 0.1 s, u = 1 mm
     with pytest.raises(Exception, match="no rows of stage 5"):
         load_curve(run, stage=5)
+
+
+def test_cracks_csv_of_the_fracture_module(tmp_path):
+    """The fracture module writes unit-suffixed names and 'unit-interior'; both spellings are read."""
+    run = make_run(str(tmp_path / "run"))
+    with open(os.path.join(run, "cracks.csv"), "w") as f:
+        f.write("time_s,control_displacement_m,x_m,y_m,class,unit_a,unit_b,mode,D_I,D_II,element,tri_a,tri_b\n")
+        f.write("0.3,0.003,0.075,0.1,interface,0,1,I,1,0,5,1,9\n")
+        f.write("0.6,0.006,0.075,0.05,unit-interior,0,0,mixed,0.7,1,2,3,4\n")
+    cr = cracks.read_cracks(run)
+    assert list(cr["class"]) == ["interface", "unit"] and list(cr["time"]) == [0.3, 0.6]
+    files, info = cracks.draw(run, str(tmp_path / "c"))
+    assert info["counts"]["interface_I"] == 1 and info["counts"]["unit_mixed"] == 1
