@@ -30,7 +30,7 @@ namespace fdem::fracture {
 namespace {
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kSimpson[3] = {1.0 / 6.0, 4.0 / 6.0, 1.0 / 6.0};  // end 0, midpoint, end 1
-// Below this many items a parallel region costs more than it saves (thread wake-up is microseconds, an element
+// Below this many elements a parallel region costs more than it saves (thread wake-up is microseconds, an element
 // tens of nanoseconds), and on a loaded machine much more. The result does not depend on it.
 constexpr int kMinParallel = 4096;
 }  // namespace
@@ -197,15 +197,19 @@ double CohesiveSystem::stable_dt(const double* node_mass) const {
 
 void CohesiveSystem::add_forces(const double* x, double* f) {
   const int na = int(active_.size());
+  const int rows = int(gather_node_.size());
   int pending = 0;
+  // One parallel region for both loops: on a shared machine every fork/join can cost a scheduler time slice.
+#pragma omp parallel if (na >= kMinParallel)
+  {
   // Integer reduction: exact, so the count does not depend on the thread count.
-#pragma omp parallel for schedule(static) reduction(+ : pending) if (na >= kMinParallel)
+#pragma omp for schedule(static) reduction(+ : pending)
   for (int k = 0; k < na; ++k) {
     const int e = active_[k];
     const int* n = elems_[e].n;
     const double xa0 = x[2 * n[0]], ya0 = x[2 * n[0] + 1], xa1 = x[2 * n[1]], ya1 = x[2 * n[1] + 1];
     const double xb0 = x[2 * n[2]], yb0 = x[2 * n[2] + 1], xb1 = x[2 * n[3]], yb1 = x[2 * n[3] + 1];
-    // Frame from the mid-line; a collapsed element (length 0) keeps the reference direction unknown, so guard it.
+    // Frame from the mid-line of the two edges; a fully collapsed element (length 0) has none: pick x.
     double tx = (xa1 + xb1) - (xa0 + xb0), ty = (ya1 + yb1) - (ya0 + yb0);
     const double len = std::sqrt(tx * tx + ty * ty);
     if (len > 0.0) {
@@ -260,11 +264,10 @@ void CohesiveSystem::add_forces(const double* x, double* f) {
     }
     pending += pending_[e];
   }
-  pending_count_ = pending;
+  // (implicit barrier: every element's forces are in force_ before any node gathers them)
 
   // Gather: each node sums its element contributions in element order; nodes are independent.
-  const int rows = int(gather_node_.size());
-#pragma omp parallel for schedule(static) if (rows >= kMinParallel)
+#pragma omp for schedule(static)
   for (int r = 0; r < rows; ++r) {
     double sx = 0.0, sy = 0.0;
     for (int k = gather_start_[r]; k < gather_start_[r + 1]; ++k) {
@@ -275,6 +278,8 @@ void CohesiveSystem::add_forces(const double* x, double* f) {
     f[2 * v] += sx;
     f[2 * v + 1] += sy;
   }
+  }  // omp parallel
+  pending_count_ = pending;
 }
 
 std::vector<BreakRecord> CohesiveSystem::update_damage(double time, double control_displacement, const double* x) {
