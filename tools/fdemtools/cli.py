@@ -69,18 +69,51 @@ def cmd_eeep(args):
     print("wrote " + ", ".join(files))
 
 
+def _eeep_points(specs):
+    """--point SIGMA=EEEP_JSON: the ductility of an `eeep` result at an axial stress."""
+    import json
+    import numpy as np
+    xs, ys = [], []
+    for spec in specs:
+        if "=" not in spec:
+            raise ToolError(f"--point '{spec}': expected SIGMA=EEEP_JSON")
+        a, path = spec.split("=", 1)
+        try:
+            xs.append(float(a))
+        except ValueError:
+            raise ToolError(f"--point '{spec}': '{a}' is not a number") from None
+        try:
+            with open(path, encoding="utf-8") as f:
+                ys.append(float(json.load(f)["ductility"]))
+        except OSError:
+            raise ToolError(f"{path}: cannot read") from None
+        except (ValueError, KeyError, TypeError):
+            raise ToolError(f"{path}: not an eeep result (no 'ductility')") from None
+    return np.array(xs), np.array(ys)
+
+
 def cmd_ductility_fit(args):
     from . import ductility
-    tab = read_table(args.source)
-    xn = args.x or tab.names[0]
-    yn = args.y or (tab.names[1] if len(tab.names) > 1 else None)
-    if yn is None:
-        raise ToolError(f"{args.source}: needs two columns (axial stress, ductility)")
-    x, y = tab.numeric(xn), tab.numeric(yn)
-    res = ductility.fit(x, y, level=args.level, source=args.source)
-    res.update({"source": args.source, "x_column": xn, "y_column": yn, "x_unit": args.x_unit,
-                "note": f"b and d are per {args.x_unit}"})
-    prefix = args.out or os.path.splitext(args.source)[0] + "_fit"
+    if args.source and args.point:
+        raise ToolError("give either a CSV or --point values, not both")
+    if args.point:
+        x, y = _eeep_points(args.point)
+        xn, yn, src = "axial stress", "ductility", "eeep results"
+        prefix = args.out or "ductility_fit"
+    elif args.source:
+        tab = read_table(args.source)
+        xn = args.x or tab.names[0]
+        yn = args.y or (tab.names[1] if len(tab.names) > 1 else None)
+        if yn is None:
+            raise ToolError(f"{args.source}: needs two columns (axial stress, ductility)")
+        x, y = tab.numeric(xn), tab.numeric(yn)
+        src = args.source
+        prefix = args.out or os.path.splitext(args.source)[0] + "_fit"
+    else:
+        raise ToolError("no data: give a CSV or --point SIGMA=EEEP_JSON (repeated)")
+    res = ductility.fit(x, y, level=args.level, source=src)
+    res.update({"source": src, "x_column": xn, "y_column": yn, "x_unit": args.x_unit,
+                "note": f"b and d are per {args.x_unit}", "x": x.tolist(), "y": y.tolist()})
     files = [write_json(prefix + ".json", res)]
     if not args.no_plot:
         files += ductility.plot(x, y, res, prefix, f"axial stress ({args.x_unit})", "ductility $\\mu$ (-)")
@@ -149,13 +182,15 @@ def build_parser():
     p = sub.add_parser("ductility-fit", help="fit a e^{bx} + c e^{dx} to (axial stress, ductility) with 95 %% bounds",
                        description="Fits f(x) = a exp(b x) + c exp(d x) to (axial stress, ductility) points "
                                    "([K25] Eq. 15) and reports 95 %% confidence bounds (needs >= 5 points for bounds).")
-    p.add_argument("source", metavar="CSV", help="CSV with the axial stress and ductility columns")
+    p.add_argument("source", metavar="CSV", nargs="?", help="CSV with the axial stress and ductility columns")
+    p.add_argument("--point", action="append", metavar="SIGMA=EEEP_JSON",
+                   help="instead of a CSV: axial stress (in --x-unit) and the JSON written by `eeep` (repeatable)")
     p.add_argument("--x", help="axial stress column (default: first)")
     p.add_argument("--y", help="ductility column (default: second)")
     p.add_argument("--x-unit", default="MPa", choices=list(STRESS_UNITS),
                    help="unit of the stress column, used for labels; b and d are per this unit (default MPa)")
     p.add_argument("--level", type=float, default=0.95, help="confidence level (default 0.95)")
-    p.add_argument("-o", "--out", help="output prefix (default: CSV_STEM_fit)")
+    p.add_argument("-o", "--out", help="output prefix (default: CSV_STEM_fit, or ductility_fit with --point)")
     p.add_argument("--no-plot", action="store_true", help="write the JSON only")
     p.set_defaults(func=cmd_ductility_fit)
 

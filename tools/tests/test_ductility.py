@@ -77,3 +77,18 @@ def test_cli(tmp_path, cli):
     assert (tmp_path / "mu_fit.png").exists() and (tmp_path / "mu_fit.svg").exists()
     rc, out, err = cli("ductility-fit", f, "--y", "ductility")
     assert rc == 1 and "no column 'ductility'" in err and "Traceback" not in err
+
+
+def test_cli_from_eeep_results(tmp_path, cli):
+    true = (2.0, -1.5, 0.5, 0.3)
+    pts = []
+    for i, s in enumerate(np.linspace(0.15, 1.25, 6)):
+        p = tmp_path / f"e{i}.json"
+        p.write_text(json.dumps({"ductility": float(ductility.model(s, *true))}))
+        pts += ["--point", f"{s!r}={p}"]
+    rc, out, err = cli("ductility-fit", *pts, "--out", tmp_path / "fit")
+    assert rc == 0, err
+    r = json.loads((tmp_path / "fit.json").read_text())
+    assert (r["a"], r["b"], r["c"], r["d"]) == pytest.approx(true, rel=1e-6)
+    rc, out, err = cli("ductility-fit", "--point", f"0.5={tmp_path / 'missing.json'}")
+    assert rc == 1 and "cannot read" in err
