@@ -40,13 +40,24 @@ def run_labels(paths: list, runs: list) -> list:
     return [os.path.basename(os.path.normpath(p)) for p in paths]
 
 
-def plot_curves(curves: list, experiments: list, prefix: str, xu=("mm", 1e-3), yu=("kN", 1e3)) -> list:
+def load_sign(x, y) -> float:
+    """-1 when the load falls as the displacement grows (a reaction monitor), so that it can be turned to be
+    compared with an applied load; else 1."""
+    x, y = np.asarray(x, float), np.asarray(y, float)
+    if len(x) < 2:
+        return 1.0
+    return -1.0 if float(np.dot(x - x.mean(), y - y.mean())) < 0 else 1.0
+
+
+def plot_curves(curves: list, experiments: list, prefix: str, xu=("mm", 1e-3), yu=("kN", 1e3),
+                turn: bool = True) -> list:
     from .figures import new_figure, save
     fig, ax = new_figure()
     for c in experiments:
         ax.plot(c.x / xu[1], c.y / yu[1], color="k", lw=2.2, alpha=0.75, label=f"{c.label} (experiment)")
     for c in curves:
-        ax.plot(c.x / xu[1], c.y / yu[1], lw=1.4, label=c.label)
+        s = load_sign(c.x, c.y) if turn else 1.0
+        ax.plot(c.x / xu[1], s * c.y / yu[1], lw=1.4, label=c.label + (" (load sign turned)" if s < 0 else ""))
     ax.set_xlabel(f"control displacement ({xu[0]})")
     ax.set_ylabel(f"load ({yu[0]})")
     ax.axhline(0, color="0.6", lw=0.6)
@@ -88,7 +99,7 @@ def plot_energy(run, label: str, prefix: str) -> list:
     return save(fig, prefix)
 
 
-def plot_damage(run, label: str, prefix: str, xu=("mm", 1e-3), yu=("kN", 1e3)) -> list:
+def plot_damage(run, label: str, prefix: str, xu=("mm", 1e-3), yu=("kN", 1e3), turn: bool = True) -> list:
     from .figures import new_figure, save
     h = run.history
     missing = [c for cols in BROKEN.values() for c in cols if not h.has(c)]
@@ -97,8 +108,10 @@ def plot_damage(run, label: str, prefix: str, xu=("mm", 1e-3), yu=("kN", 1e3)) -
     cx, cy = run.curve_columns()
     x = h.numeric(cx) * (1.0 / xu[1])
     y = h.numeric(cy) * (1.0 / yu[1])
+    sign = load_sign(x, y) if turn else 1.0
+    y = sign * y
     fig, ax = new_figure(figsize=(7.0, 4.6))
-    ax.plot(x, y, color="0.35", lw=1.4, label=f"load ({yu[0]})")
+    ax.plot(x, y, color="0.35", lw=1.4, label=f"load ({yu[0]})" + (", sign turned" if sign < 0 else ""))
     ax.set_xlabel(f"control displacement ({xu[0]})")
     ax.set_ylabel(f"load ({yu[0]})")
     ax2 = ax.twinx()
@@ -135,7 +148,7 @@ def cmd_plot(args):
         exps = []
         for e in args.experiment or []:
             exps.append(load_curve(e, args.exp_x, args.exp_y, args.exp_x_unit, args.exp_y_unit))
-        files += plot_curves(curves, exps, os.path.join(out, "curves"), xu, yu)
+        files += plot_curves(curves, exps, os.path.join(out, "curves"), xu, yu, turn=not args.raw_sign)
     single = len(runs) == 1
     for run, lab in zip(runs, labels):
         suffix = "" if single else "_" + _safe(lab)
@@ -143,7 +156,7 @@ def cmd_plot(args):
             files += plot_energy(run, lab, os.path.join(out, "energy" + suffix))
         if "damage" in figs:
             try:
-                files += plot_damage(run, lab, os.path.join(out, "damage" + suffix), xu, yu)
+                files += plot_damage(run, lab, os.path.join(out, "damage" + suffix), xu, yu, turn=not args.raw_sign)
             except ToolError as e:
                 if args.figures != "curves,energy,damage":
                     raise  # asked for explicitly
@@ -170,6 +183,9 @@ def add_parser(sub):
     p.add_argument("--figures", default="curves,energy,damage", help="which figures (default curves,energy,damage)")
     p.add_argument("--report-x-unit", default="mm", choices=list(LENGTH_UNITS), help="displacement unit of the plots")
     p.add_argument("--report-y-unit", default="kN", choices=list(FORCE_UNITS), help="load unit of the plots")
+    p.add_argument("--raw-sign", action="store_true",
+                   help="plot loads as recorded (default: a load that falls as the displacement grows, i.e. a "
+                        "reaction, is turned and labelled so)")
     p.add_argument("--partial", action="store_true", help="accept runs whose summary is not 'completed'")
     p.add_argument("--out-dir", help="output folder (default RUN/post for one run, else ./fdem-plots)")
     p.set_defaults(func=cmd_plot)

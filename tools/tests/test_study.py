@@ -93,6 +93,7 @@ def test_real_fdem_study_plot_eeep(tmp_path, cli):
     for name in ("curves", "energy"):
         assert (figs / f"{name}.png").stat().st_size > 2000 and (figs / f"{name}.svg").exists()
     assert "no damage figure" in o  # elastic case: no broken-element columns
+    assert "load sign turned" in (figs / "curves.svg").read_text()  # the base reaction opposes the drive
     rc, o, err = cli("eeep", run, "--limit", "0.4", "--out", tmp_path / "e")
     assert rc == 0, err
     e = json.loads((tmp_path / "e.json").read_text())
