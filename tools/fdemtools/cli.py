@@ -26,8 +26,18 @@ def _units_args(p, x_default="m", y_default="N"):
     p.add_argument("--report-x-unit", default="mm", choices=list(LENGTH_UNITS), help="displacement unit of the report (default mm)")
     p.add_argument("--report-y-unit", default="kN", choices=list(FORCE_UNITS), help="load unit of the report (default kN)")
     p.add_argument("--stage", type=int, help="keep only the rows of this stage (1-based; run folders)")
+    p.add_argument("--zero-start", action="store_true",
+                   help="measure displacements from the first point kept (e.g. the start of --stage)")
     p.add_argument("--partial", action="store_true", help="accept a run whose summary is not 'completed'")
     p.add_argument("-o", "--out", help="output prefix: writes PREFIX.json/.png/.svg (default: RUN/post/NAME or CSV_STEM_NAME)")
+
+
+def _curve(args):
+    c = load_curve(args.source, args.x, args.y, args.x_unit, args.y_unit, args.stage, args.partial)
+    check_finite(c)
+    if args.zero_start:
+        c.x = c.x - c.x[0]
+    return c
 
 
 def _ru(args):
@@ -39,8 +49,7 @@ def _ru(args):
 
 def cmd_eeep(args):
     from . import eeep
-    c = load_curve(args.source, args.x, args.y, args.x_unit, args.y_unit, args.stage, args.partial)
-    check_finite(c)
+    c = _curve(args)
     res = eeep.eeep(c.x, c.y, fraction=args.limit, ultimate=args.ultimate, drop=args.drop, stiffness=args.stiffness,
                     source=c.source)
     (xu, fx), (yu, fy) = _ru(args)
@@ -129,8 +138,7 @@ def cmd_ductility_fit(args):
 def cmd_hysteresis(args):
     from . import hysteresis
     from .common import write_csv
-    c = load_curve(args.source, args.x, args.y, args.x_unit, args.y_unit, args.stage, args.partial)
-    check_finite(c)
+    c = _curve(args)
     (xu, fx), (yu, fy) = _ru(args)
     k_el = args.k_el * fy / fx if args.k_el is not None else None
     res = hysteresis.analyse(c.x, c.y, k_el=k_el, e_h=args.e_h, deadband=args.deadband, source=c.source)

@@ -78,7 +78,6 @@ def fit(x, y, level: float = 0.95, source: str = "data") -> dict:
     p = np.array([a, b, c, d])
 
     dof = n - 4
-    yfit = model(x, *p)
     sst = float(np.sum((y - y.mean()) ** 2))
     out = {
         "model": "f(x) = a exp(b x) + c exp(d x)",

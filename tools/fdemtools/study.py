@@ -15,7 +15,7 @@ import os
 
 import numpy as np
 
-from .batch import Batch, default_jobs, fdem_binary, parse_assignment, split_values
+from .batch import Batch, fdem_binary, parse_assignment, split_values
 from .common import ToolError, load_run, write_csv, write_json
 
 

@@ -160,3 +160,23 @@ def test_cli_missing_file_and_unfinished_run(tmp_path, cli_subprocess):
     (run / "history.csv").write_text("time,step,stage,u,F\n0,0,1,0,0\n")
     rc, out, err = cli("eeep", run)
     assert rc == 1 and "not 'completed'" in err and len(err.strip().splitlines()) == 1
+
+
+def test_cli_stage_and_zero_start(tmp_path, cli):
+    """A run whose first stage (precompression) moves the control point: --stage 2 --zero-start analyses the
+    shear stage from its own start."""
+    import os
+    k, dy, du = 2.0e6, 1e-3, 6e-3  # N/m, m, m
+    d, p = epp_curve(k, dy, du)
+    run = tmp_path / "run"
+    os.makedirs(run)
+    rows = [(0.0, 1, 0.0, 0.0), (0.1, 1, 0.3e-3, 0.0)] + [(0.2 + i, 2, 0.3e-3 + a, b) for i, (a, b) in enumerate(zip(d, p))]
+    (run / "history.csv").write_text("time,step,stage,u,F\n" + "".join(f"{t},{i},{s},{a!r},{b!r}\n"
+                                                                      for i, (t, s, a, b) in enumerate(rows)))
+    (run / "summary.json").write_text(json.dumps({"status": "completed", "curve": {"x": "u", "y": "F"},
+                                                  "columns": {"u": "m", "F": "N"}}))
+    rc, out, err = cli("eeep", run, "--stage", "2", "--zero-start", "--ultimate", "drop")
+    assert rc == 0, err
+    r = json.loads((run / "post" / "eeep.json").read_text())
+    assert r["si"]["K_e"] == pytest.approx(k, rel=1e-9)
+    assert r["ductility"] == pytest.approx(du / dy, rel=1e-9)
