@@ -168,8 +168,15 @@ def cmd_hysteresis(args):
 # ----------------------------------------------------------------------------------------------
 
 
+class OneLineParser(argparse.ArgumentParser):
+    """Usage errors as one line too (the usage itself is one --help away)."""
+
+    def error(self, message):
+        self.exit(1, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
 def build_parser():
-    ap = argparse.ArgumentParser(prog=PROG, description="Post-processing of fdem run folders and measured curves.")
+    ap = OneLineParser(prog=PROG, description="Post-processing of fdem run folders and measured curves.")
     sub = ap.add_subparsers(dest="command", metavar="COMMAND")
 
     p = sub.add_parser("eeep", help="EEEP bilinear curve and ductility (FORMULATION §9)",

@@ -180,3 +180,10 @@ def test_cli_stage_and_zero_start(tmp_path, cli):
     r = json.loads((run / "post" / "eeep.json").read_text())
     assert r["si"]["K_e"] == pytest.approx(k, rel=1e-9)
     assert r["ductility"] == pytest.approx(du / dy, rel=1e-9)
+
+
+def test_usage_errors_are_one_line(cli_subprocess):
+    for args in (["eeep"], ["eeep", "x.csv", "--ultimate", "foo"], ["study", "mesh", "x.toml"], ["nonsense"]):
+        rc, out, err = cli_subprocess(*args)
+        assert rc == 1, args
+        assert len(err.strip().splitlines()) == 1 and "error" in err, (args, err)
