@@ -403,6 +403,25 @@ void read_wall(Ctx& ctx, Reader& r, mesh::WallSpec& w) {
     }
 }
 
+// Cohesive keys shared by [materials.NAME.fracture] and bonded [[interfaces]]; stiffness keys only where allowed.
+void read_joint(Reader& r, JointSpec& j, bool allow_stiffness) {
+    auto positive = [](double v) { return v > 0; };
+    auto angle = [](double v) { return v >= 0 && v < 90; };
+    j.present = true;
+    j.line = r.line();
+    j.tensile_strength = r.number("tensile_strength", true, "a tensile strength f_t >= 0 in Pa", [](double v) { return v >= 0; }).value_or(std::nan(""));
+    j.cohesion = r.number("cohesion", true, "a cohesion c >= 0 in Pa", [](double v) { return v >= 0; }).value_or(std::nan(""));
+    j.friction = r.number("friction", true, "a friction angle in [0, 90) deg", angle).value_or(std::nan(""));
+    j.residual_friction = r.number("residual_friction", false, "a residual friction angle in [0, 90) deg (default: friction)", angle).value_or(j.friction);
+    j.GI = r.number("GI", true, "a mode I fracture energy > 0 in J/m^2", positive).value_or(std::nan(""));
+    j.GII = r.number("GII", true, "a mode II fracture energy > 0 in J/m^2", positive).value_or(std::nan(""));
+    j.penalty = r.number("penalty", false, "a joint penalty p_j > 0 in Pa", positive).value_or(std::nan(""));
+    if (allow_stiffness) {
+        j.normal_stiffness = r.number("normal_stiffness", false, "a normal stiffness k_n > 0 in Pa/m", positive).value_or(std::nan(""));
+        j.shear_stiffness = r.number("shear_stiffness", false, "a shear stiffness k_s > 0 in Pa/m", positive).value_or(std::nan(""));
+    }
+}
+
 }  // namespace
 
 std::string MonitorSpec::unit() const {
@@ -485,6 +504,8 @@ CaseSpec load_case(const std::string& path, const std::vector<std::string>& over
         } else if (g.type == "wall") {
             read_wall(ctx, r, g.wall);
         }
+        g.split_all = r.string("split", false, "\"joints\" (default) or \"all\" (every edge crackable, the classic FDEM limit)",
+                               {"joints", "all"}).value_or("joints") == "all";
         r.finish();
     }
 
@@ -504,6 +525,14 @@ CaseSpec load_case(const std::string& path, const std::vector<std::string>& over
             m.density = r.number("density", true, "a density > 0 in kg/m^3", positive).value_or(1);
             m.viscous_damping = r.number("viscous_damping", false, "a fraction of critical damping in [0, 1]",
                                          [](double x) { return x >= 0 && x <= 1; }).value_or(0);
+            if (const toml::table* ft = r.table("fracture", false, "a [materials.NAME.fracture] table")) {
+                Reader fr(ctx, *ft, p + ".fracture");
+                read_joint(fr, m.fracture, false);
+                if (std::isnan(m.fracture.penalty))
+                    ctx.error(p + ".fracture.penalty", fr.line(), "missing; expected a joint penalty p_j > 0 in Pa (it also "
+                                                                  "serves as the contact penalty of the crack faces)");
+                fr.finish();
+            }
             r.finish();
             spec.materials.push_back(m);
         }
@@ -522,6 +551,49 @@ CaseSpec load_case(const std::string& path, const std::vector<std::string>& over
                 ctx.error(p, line_of(&v), "no material named '" + mat + "' in [materials]");
             spec.region_material[std::string(k.str())] = mat;
         }
+    }
+
+    for (const toml::table* t : top.tables("interfaces", false, "[[interfaces]] blocks")) {
+        const std::string p = "interfaces." + std::to_string(spec.interfaces.size());
+        Reader r(ctx, *t, p);
+        InterfaceSpec in;
+        in.line = r.line();
+        const toml::node* regs = r.node("regions", true, "the two regions that meet, e.g. [\"units\", \"units\"]");
+        if (regs) {
+            const toml::array* a = regs->as_array();
+            if (!a || a->size() != 2 || !(*a)[0].is_string() || !(*a)[1].is_string())
+                ctx.error(p + ".regions", line_of(regs), "expected two region names, e.g. [\"units\", \"beam\"]");
+            else
+                in.region_a = *(*a)[0].value<std::string>(), in.region_b = *(*a)[1].value<std::string>();
+        }
+        in.kind = r.string("kind", true, "how the regions meet", {"tied", "bonded", "dry"}).value_or("tied");
+        auto positive = [](double v) { return v > 0; };
+        if (in.kind == "dry") {
+            in.friction = r.number("friction", true, "a friction angle in [0, 90) deg", [](double v) { return v >= 0 && v < 90; }).value_or(0);
+            in.normal_penalty = r.number("normal_penalty", false, "a normal penalty p_n > 0 in Pa", positive).value_or(std::nan(""));
+            in.normal_stiffness = r.number("normal_stiffness", false, "a normal stiffness k_n > 0 in Pa/m", positive).value_or(std::nan(""));
+            in.tangential_penalty = r.number("tangential_penalty", false, "a tangential penalty p_t > 0 in Pa", positive).value_or(std::nan(""));
+            in.shear_stiffness = r.number("shear_stiffness", false, "a shear stiffness k_s > 0 in Pa/m", positive).value_or(std::nan(""));
+            if (std::isnan(in.normal_penalty) == std::isnan(in.normal_stiffness))
+                ctx.error(p, in.line, "give exactly one of normal_penalty (Pa) or normal_stiffness (Pa/m)");
+            if (!std::isnan(in.tangential_penalty) && !std::isnan(in.shear_stiffness))
+                ctx.error(p, in.line, "give at most one of tangential_penalty (Pa) or shear_stiffness (Pa/m)");
+        } else if (in.kind == "bonded") {
+            read_joint(r, in.bond, true);
+            const bool pen = !std::isnan(in.bond.penalty), kn = !std::isnan(in.bond.normal_stiffness), ks = !std::isnan(in.bond.shear_stiffness);
+            if (pen == (kn || ks) || kn != ks)
+                ctx.error(p, in.line, "give either penalty (Pa) or both normal_stiffness and shear_stiffness (Pa/m)");
+        }
+        r.finish();
+        for (const auto& other : spec.interfaces)
+            if ((other.region_a == in.region_a && other.region_b == in.region_b) || (other.region_a == in.region_b && other.region_b == in.region_a))
+                ctx.error(p + ".regions", in.line, "the pair " + in.region_a + "/" + in.region_b + " already has an interface rule");
+        spec.interfaces.push_back(in);
+    }
+    if (const toml::table* t = top.table("contact", false, "a [contact] table")) {
+        Reader r(ctx, *t, "contact");
+        spec.contact_buffer = r.number("buffer", false, "an NBS buffer > 0 in m", [](double v) { return v > 0; }).value_or(0);
+        r.finish();
     }
 
     for (const toml::table* t : top.tables("monitors", false, "[[monitors]] blocks")) {
@@ -671,6 +743,11 @@ void check_against_mesh(const CaseSpec& spec, const MeshNames& names) {
         const auto& m = spec.monitors[i];
         if (m.type != "tilt" && !has_group(m.group)) missing("monitors." + std::to_string(i) + ".group", m.line, m.group);
     }
+    for (std::size_t i = 0; i < spec.interfaces.size(); ++i)
+        for (const auto* r : {&spec.interfaces[i].region_a, &spec.interfaces[i].region_b})
+            if (std::find(names.regions.begin(), names.regions.end(), *r) == names.regions.end())
+                errors.push_back(spec.file + ":" + std::to_string(spec.interfaces[i].line) + ": key 'interfaces." + std::to_string(i) +
+                                 ".regions': the mesh has no region named '" + *r + "'");
     for (std::size_t si = 0; si < spec.stages.size(); ++si) {
         const auto& s = spec.stages[si];
         for (std::size_t i = 0; i < s.loads.size(); ++i)

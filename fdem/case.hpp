@@ -7,6 +7,7 @@
 #pragma once
 
 #include <array>
+#include <cmath>
 #include <map>
 #include <optional>
 #include <string>
@@ -18,12 +19,43 @@ namespace fdem {
 
 enum class Plane { stress, strain };
 
+// Cohesive properties (FORMULATION §6): the fracture of a material's interior, or a bonded (mortared) interface.
+// NaN = not given. Give penalty (Pa) OR normal_stiffness and shear_stiffness (Pa/m).
+struct JointSpec {
+    bool present = false;
+    double tensile_strength = std::nan("");       // f_t, Pa
+    double cohesion = std::nan("");               // c, Pa
+    double friction = std::nan("");               // phi, deg
+    double residual_friction = std::nan("");      // phi_res after breaking (contact), deg
+    double GI = std::nan("");                     // mode I fracture energy, J/m^2
+    double GII = std::nan("");                    // mode II fracture energy, J/m^2
+    double penalty = std::nan("");                // p_j, Pa
+    double normal_stiffness = std::nan("");       // k_n, Pa/m
+    double shear_stiffness = std::nan("");        // k_s, Pa/m
+    int line = 0;
+};
+
+// How two regions meet (FORMULATION §1, §5): tied (one continuum), bonded (cohesive element, then contact),
+// dry (contact with Coulomb friction only). region_a == region_b: two different bodies of one region.
+struct InterfaceSpec {
+    std::string region_a, region_b;
+    std::string kind;                              // "tied" | "bonded" | "dry"
+    double friction = std::nan("");               // dry: phi, deg
+    double normal_penalty = std::nan("");         // p_n, Pa   (or normal_stiffness)
+    double normal_stiffness = std::nan("");       // k_n, Pa/m
+    double tangential_penalty = std::nan("");     // p_t, Pa   (or shear_stiffness; default: the normal one)
+    double shear_stiffness = std::nan("");        // k_s, Pa/m
+    JointSpec bond;                                // bonded: the cohesive law (its stiffness also serves contact)
+    int line = 0;
+};
+
 struct Material {
     std::string name;
     double E = 0;                // Young's modulus, Pa
     double nu = 0;               // Poisson's ratio, -
     double density = 0;          // kg/m^3
     double viscous_damping = 0;  // fraction of the element's critical viscous damping xi, - (FORMULATION §2)
+    JointSpec fracture;          // [materials.NAME.fracture]: present = the material may crack inside
     int line = 0;
 };
 
@@ -37,6 +69,7 @@ struct GeometrySpec {
     // gmsh (.geo script) / msh (mesh file); paths relative to the case file
     std::string file;
     double size_factor = 1;  // multiplies the .geo script's mesh sizes, -
+    bool split_all = false;  // classic FDEM limit: every edge of the mesh crackable (needs fracture properties)
     // wall: the masonry wall generator; the TOML keys are the WallSpec field names (mesh/wall.hpp)
     mesh::WallSpec wall;
     int line = 0;
@@ -113,6 +146,8 @@ struct CaseSpec {
     GeometrySpec geometry;
     std::vector<Material> materials;
     std::map<std::string, std::string> region_material;  // region (2D physical group) -> material name
+    std::vector<InterfaceSpec> interfaces;
+    double contact_buffer = 0;  // m, NBS buffer; 0 = smallest contact edge / 5
     std::vector<MonitorSpec> monitors;
     std::vector<StageSpec> stages;
     double safety = 0.8;  // fraction of the stable time step used, -

@@ -12,6 +12,7 @@
 #include "fdem/case.hpp"
 #include "fdem/errors.hpp"
 #include "fdem/model.hpp"
+#include "fdem/scene.hpp"
 #include "fdem/simulation.hpp"
 #include "mesh/mesh.hpp"
 
@@ -102,11 +103,14 @@ int main(int argc, char** argv) {
         if (a.case_file.empty()) throw fdem::InputError("fdem " + a.command + ": no case file given");
         if (a.command == "check") {
             const fdem::CaseSpec spec = fdem::load_case(a.case_file, a.sets);
-            fdem::mesh::Mesh m = fdem::make_mesh(spec);
-            fdem::Model model = fdem::build_model(spec, std::move(m));
-            const fdem::StepLimit lim = fdem::triangle_step_limit(spec, model);
-            std::cout << a.case_file << ": ok: " << model.n_triangles() << " triangles, " << model.n_nodes()
-                      << " nodes, " << spec.stages.size() << " stage(s), stable time step " << lim.dt << " s\n";
+            fdem::RunOptions quiet;
+            quiet.quiet = true;
+            quiet.threads = a.threads;
+            // Building the simulation validates the laws of contact and fracture too.
+            const fdem::Simulation sim(spec, fdem::build_scene(spec), quiet);
+            std::cout << a.case_file << ": ok: " << sim.model().n_triangles() << " triangles, " << sim.model().n_nodes()
+                      << " nodes, " << sim.model().cohesive.size() << " cohesive elements, " << spec.stages.size()
+                      << " stage(s), time step " << sim.dt() << " s\n";
             return 0;
         }
         fdem::RunOptions opt;

@@ -159,6 +159,22 @@ Model build_model(const CaseSpec& spec, mesh::Mesh mesh) {
     return md;
 }
 
+Model build_model(const CaseSpec& spec, mesh::Mesh mesh, std::vector<mesh::CohesiveElement> cohesive,
+                  std::vector<int> contact_capable) {
+    Model md = build_model(spec, std::move(mesh));
+    for (auto& c : cohesive) {
+        for (int& n : c.n) n = md.node_new_of_old[n];
+        if (c.tri_a >= 0) c.tri_a = md.tri_new_of_old[c.tri_a];
+        if (c.tri_b >= 0) c.tri_b = md.tri_new_of_old[c.tri_b];
+    }
+    for (int& t : contact_capable) t = md.tri_new_of_old[t];
+    std::sort(contact_capable.begin(), contact_capable.end());
+    md.cohesive = std::move(cohesive);
+    md.contact_capable = std::move(contact_capable);
+    md.has_topology = true;
+    return md;
+}
+
 StepLimit triangle_step_limit(const CaseSpec& spec, const Model& model) {
     StepLimit lim;
     lim.dt = 1e300;

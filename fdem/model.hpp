@@ -15,6 +15,7 @@
 #include "fdem/case.hpp"
 #include "fdem/triangle.hpp"
 #include "mesh/mesh.hpp"
+#include "mesh/topology.hpp"
 
 namespace fdem {
 
@@ -30,6 +31,10 @@ struct Model {
     std::vector<int> tri_material;       // per triangle, index into CaseSpec::materials
     std::vector<double> tri_altitude;    // per triangle: smallest altitude in the reference configuration, m
     std::vector<int> inc_ptr, inc_idx;   // node -> 3 * triangle + local
+    // From the topology (empty for a plain continuum), in the model's numbering.
+    std::vector<mesh::CohesiveElement> cohesive;
+    std::vector<int> contact_capable;  // sorted
+    bool has_topology = false;
     // build_model renumbers nodes and triangles for memory locality; these map the input mesh's ids to the model's.
     std::vector<int> node_new_of_old, tri_new_of_old;
 
@@ -47,6 +52,9 @@ std::pair<std::vector<int>, std::vector<int>> reorder_for_locality(mesh::Mesh& m
 // material constants (plane stress or strain), viscous coefficients. Throws InputError for a region without
 // material and mesh::MeshError for a triangle with non-positive reference area.
 Model build_model(const CaseSpec& spec, mesh::Mesh mesh);
+// The same with a topology's cohesive elements and contact-capable triangles (renumbered with the mesh).
+Model build_model(const CaseSpec& spec, mesh::Mesh mesh, std::vector<mesh::CohesiveElement> cohesive,
+                  std::vector<int> contact_capable);
 
 // Stable time step of the triangles alone (FORMULATION §3): min over triangles of h_e / c_p, reduced for
 // viscous damping by (sqrt(1 + xi^2) - xi). Returns the limit (s) and the triangle that sets it.

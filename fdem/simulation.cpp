@@ -29,6 +29,7 @@
 #include <sstream>
 
 #include "fdem/errors.hpp"
+#include "fdem/scene.hpp"
 #include "mesh/gmsh_source.hpp"
 #include "mesh/wall.hpp"
 
@@ -59,8 +60,9 @@ std::string sci(double v, int prec = 4) {
 }  // namespace
 
 double Energies::balance_error() const {
-    const double lhs = external, rhs = kinetic + elastic + damping + viscous;
-    const double scale = std::max({std::abs(external), std::abs(kinetic) + std::abs(elastic) + damping + viscous, 1e-300});
+    const double lhs = external, rhs = kinetic + elastic + joint + contact + damping + viscous + fracture + friction;
+    const double scale = std::max({std::abs(external), std::abs(kinetic) + std::abs(elastic) + std::abs(joint) + std::abs(contact) +
+                                                           damping + viscous + fracture + friction, 1e-300});
     return std::abs(lhs - rhs) / scale;
 }
 
@@ -84,7 +86,12 @@ mesh::Mesh make_mesh(const CaseSpec& spec) {
 }
 
 Simulation::Simulation(CaseSpec spec, Model model, RunOptions options)
-    : spec_(std::move(spec)), model_(std::move(model)), opt_(std::move(options)) {
+    : spec_(std::move(spec)), model_(std::move(model)), opt_(std::move(options)), inter_(spec_, model_) {
+    // The control displacement of the damage records: the curve's x monitor, else the first displacement monitor.
+    for (std::size_t i = 0; i < spec_.monitors.size(); ++i)
+        if (spec_.monitors[i].name == spec_.curve_x) control_monitor_ = static_cast<int>(i);
+    for (std::size_t i = 0; i < spec_.monitors.size() && control_monitor_ < 0; ++i)
+        if (spec_.monitors[i].type == "displacement") control_monitor_ = static_cast<int>(i);
     // Gmsh sets OpenMP's thread count to its own General.NumThreads (1) when it initialises, so the count is
     // set here in every case: --threads, else OMP_NUM_THREADS, else every processor.
     int threads = opt_.threads;
@@ -112,7 +119,10 @@ Simulation::Simulation(CaseSpec spec, Model model, RunOptions options)
         // History header: time, step, stage, monitors, energies.
         history_ = "time,step,stage";
         for (const auto& m : spec_.monitors) history_ += "," + m.name;
-        history_ += ",E_kin,E_el,W_ext,D_damp,D_visc,E_balance\n";
+        history_ += ",E_kin,E_el,E_joint,E_contact,W_ext,D_damp,D_visc,D_frac,D_fric,E_balance";
+        if (inter_.has_joints())
+            history_ += ",broken_unit_I,broken_unit_II,broken_unit_mixed,broken_interface_I,broken_interface_II,broken_interface_mixed";
+        history_ += "\n";
     }
 }
 
@@ -120,6 +130,8 @@ void Simulation::compute_dt() {
     const StepLimit lim = triangle_step_limit(spec_, model_);
     dt_limit_ = lim.dt;
     dt_element_ = lim.element;
+    dt_springs_ = inter_.stable_dt(model_);
+    if (dt_springs_ < dt_limit_) dt_limit_ = dt_springs_, dt_element_ = -1;
     dt_ = spec_.dt_override ? *spec_.dt_override : spec_.safety * lim.dt;
 }
 
@@ -365,6 +377,9 @@ void Simulation::step() {
         }
     }
 
+    // Joint and contact forces, added to f_mod_ in a fixed order by their modules.
+    inter_.add_forces(x, v, dt, f_mod_.data());
+
     // 3. Node loop.
     const int nnb = (nn + kBlock - 1) / kBlock;
     const double alpha = alpha_;
@@ -439,6 +454,10 @@ void Simulation::step() {
     time_ += dt;
     tilt_deg_ += tilt_rate_ * dt;
     ++steps_;
+    if (inter_.has_joints()) {
+        const int broke = inter_.after_step(time_, control_monitor_ >= 0 ? monitor_value(control_monitor_) : 0.0, model_.x.data());
+        broken_total_ += broke;
+    }
 
     // Outputs.
     if (!opt_.out_dir.empty()) {
@@ -521,6 +540,10 @@ Energies Simulation::energies() const {
     e.external = W_ext_;
     e.damping = D_damp_;
     e.viscous = D_visc_;
+    e.joint = inter_.joint_energy();
+    e.contact = inter_.contact_energy();
+    e.fracture = inter_.fracture_dissipation();
+    e.friction = inter_.friction_dissipation();
     return e;
 }
 
@@ -535,8 +558,13 @@ void Simulation::write_history_row() {
         ext = {std::min(ext[0], m), std::max(ext[1], m), m};
     }
     mon_ext_init_ = true;
-    row += "," + format_double(e.kinetic) + "," + format_double(e.elastic) + "," + format_double(e.external) + "," +
-           format_double(e.damping) + "," + format_double(e.viscous) + "," + format_double(e.balance_error()) + "\n";
+    for (double v : {e.kinetic, e.elastic, e.joint, e.contact, e.external, e.damping, e.viscous, e.fracture, e.friction, e.balance_error()})
+        row += "," + format_double(v);
+    if (const auto* c = inter_.counts())
+        for (auto cls : {fracture::JointClass::unit_interior, fracture::JointClass::interface})
+            for (auto mode : {fracture::FractureMode::mode_I, fracture::FractureMode::mode_II, fracture::FractureMode::mixed})
+                row += "," + std::to_string(c->of(cls, mode));
+    row += "\n";
     history_ += row;
 }
 
@@ -558,10 +586,26 @@ void Simulation::write_snapshot() {
         region.i32[e] = model_.mesh.tri_region[e];
         for (int k = 0; k < 3; ++k) tri[3 * e + k] = model_.tris[e].n[k];
     }
+    // Cohesive elements as line cells on their side-A edge, after the triangles: cell_kind 0 triangle, 1 joint;
+    // joint_damage (max over its points) and joint_state (0 intact, 1 damaged, 2 broken), -1 on triangles.
+    std::vector<int> lines;
+    VtuArray kind{"cell_kind", 1, {}, {}, true}, damage{"joint_damage", 1, {}, {}, false}, state{"joint_state", 1, {}, {}, true};
+    kind.i32.assign(nt, 0), damage.f64.assign(nt, -1.0), state.i32.assign(nt, -1);
+    if (const fracture::CohesiveSystem* j = inter_.joints()) {
+        for (int e = 0; e < j->size(); ++e) {
+            lines.push_back(j->element(e).n[0]), lines.push_back(j->element(e).n[1]);
+            kind.i32.push_back(1);
+            damage.f64.push_back(j->damage(e));
+            state.i32.push_back(static_cast<int>(j->state(e)));
+            for (int c = 0; c < 3; ++c) stress.f64.push_back(std::nan(""));
+            mat.i32.push_back(-1), region.i32.push_back(-1);
+        }
+    }
     char name[64];
     std::snprintf(name, sizeof name, "snapshots/step_%09ld.vtu", steps_);
-    write_file_atomic((std::filesystem::path(opt_.out_dir) / name).string(),
-                      vtu_document(model_.X, tri, {}, {disp, vel}, {stress, mat, region}));
+    std::vector<VtuArray> cells{stress, mat, region};
+    if (!lines.empty()) cells.push_back(kind), cells.push_back(damage), cells.push_back(state);
+    write_file_atomic((std::filesystem::path(opt_.out_dir) / name).string(), vtu_document(model_.X, tri, lines, {disp, vel}, cells));
     snapshots_.emplace_back(time_, name);
     write_file_atomic((std::filesystem::path(opt_.out_dir) / "run.pvd").string(), pvd_document(snapshots_));
 }
@@ -571,6 +615,11 @@ void Simulation::flush_files(bool /*force*/) {
     last_flush_ = wall_clock();
     const std::filesystem::path dir(opt_.out_dir);
     write_file_atomic((dir / "history.csv").string(), history_);
+    if (inter_.has_joints()) {
+        std::ostringstream header;
+        fracture::write_cracks_csv_header(header);
+        write_file_atomic((dir / "cracks.csv").string(), header.str() + inter_.cracks_csv());
+    }
     write_file_atomic((dir / "run.log").string(), log_);
 }
 
@@ -614,7 +663,11 @@ void Simulation::run() {
     log("fdem " FDEM_VERSION ": case '" + spec_.name + "' (" + spec_.file + ")");
     log("mesh: " + std::to_string(model_.n_triangles()) + " triangles, " + std::to_string(model_.n_nodes()) + " nodes");
     log("time step: " + sci(dt_) + " s = " + (spec_.dt_override ? std::string("fixed by numerics.dt") : sci(spec_.safety) + " x stable limit") +
-        " " + sci(dt_limit_) + " s (set by triangle " + std::to_string(dt_element_) + ")");
+        " " + sci(dt_limit_) + " s (set by " + (dt_element_ >= 0 ? "triangle " + std::to_string(dt_element_) : std::string("joint/contact springs")) + ")");
+    if (inter_.has_joints())
+        log("cohesive elements: " + std::to_string(inter_.joints()->size()));
+    if (inter_.has_contact())
+        log("contact: " + std::to_string(model_.contact_capable.size()) + " contact-capable triangles, buffer " + sci(inter_.contact()->buffer()) + " m");
     log("threads: " + std::to_string(omp_get_max_threads()));
     if (!spec_.dt_override && spec_.safety > 1)
         log("warning: numerics.safety = " + sci(spec_.safety) + " > 1: the time step exceeds the stability limit");
@@ -659,7 +712,7 @@ void Simulation::write_summary(const std::string& status, const std::string& mes
     cols["step"] = "-";
     cols["stage"] = "-";
     for (const auto& m : spec_.monitors) cols[m.name] = m.unit();
-    for (const char* c : {"E_kin", "E_el", "W_ext", "D_damp", "D_visc"}) cols[c] = "J";
+    for (const char* c : {"E_kin", "E_el", "E_joint", "E_contact", "W_ext", "D_damp", "D_visc", "D_frac", "D_fric"}) cols[c] = "J";
     cols["E_balance"] = "-";
     j["columns"] = cols;
     if (!spec_.curve_x.empty()) {
@@ -706,6 +759,10 @@ void Simulation::write_summary(const std::string& status, const std::string& mes
     en["external_work"] = e.external;
     en["damping"] = e.damping;
     en["viscous"] = e.viscous;
+    en["joint"] = e.joint;
+    en["contact"] = e.contact;
+    en["fracture"] = e.fracture;
+    en["friction"] = e.friction;
     en["balance_error"] = e.balance_error();
     j["energy"] = en;
     Json set = Json::object();
@@ -763,8 +820,7 @@ int run_case(const std::string& case_file, const std::vector<std::string>& overr
     CaseSpec spec = load_case(case_file, overrides);
     RunOptions opt = options;
     if (opt.out_dir.empty()) opt.out_dir = (std::filesystem::path("runs") / spec.name).string();
-    mesh::Mesh m = make_mesh(spec);
-    Model model = build_model(spec, std::move(m));
+    Model model = build_scene(spec);
     Simulation sim(spec, std::move(model), opt);
     sim.run();
     // The result against the reference, on stdout.

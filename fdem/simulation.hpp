@@ -8,12 +8,14 @@
 #include <vector>
 
 #include "fdem/case.hpp"
+#include "fdem/interactions.hpp"
 #include "fdem/model.hpp"
 #include "fdem/output.hpp"
 
 namespace fdem {
 
 // Builds the mesh the case's [geometry] describes (Gmsh API) and checks the case's names against it.
+// (fdem/scene.hpp goes on to the topology and the model.)
 mesh::Mesh make_mesh(const CaseSpec& spec);
 
 struct RunOptions {
@@ -29,6 +31,10 @@ struct Energies {
     double external = 0;    // J, work of loads, gravity and supports (cumulative)
     double damping = 0;     // J, dissipated by local damping (cumulative)
     double viscous = 0;     // J, dissipated by viscous element damping (cumulative)
+    double joint = 0;       // J, elastic energy of the intact cohesive elements
+    double contact = 0;     // J, contact (penalty) energy
+    double fracture = 0;    // J, dissipated by fracture (cumulative)
+    double friction = 0;    // J, dissipated by contact friction (cumulative)
     double balance_error() const;  // |W - (K + E + D)| relative to the largest term
 };
 
@@ -62,6 +68,7 @@ public:
     const std::vector<StageResult>& stage_results() const { return stage_results_; }
     double wall_time() const { return wall_time_; }
     const std::vector<double>& reactions() const { return reaction_; }
+    const Interactions& interactions() const { return inter_; }
     // Largest |value| and final value of each monitor over the history rows written.
     std::vector<std::array<double, 3>> monitor_extrema() const { return mon_ext_; }  // min, max, final
 
@@ -98,8 +105,12 @@ private:
     CaseSpec spec_;
     Model model_;
     RunOptions opt_;
+    Interactions inter_;
+    int control_monitor_ = -1;  // monitor giving the control displacement of the damage records
     double dt_ = 0;
     double dt_limit_ = 0;
+    double dt_springs_ = 0;  // s, bound of joint and contact springs
+    long broken_total_ = 0;
     int dt_element_ = -1;
     double time_ = 0;
     long steps_ = 0;

@@ -1,0 +1,193 @@
+// fdem/interactions.cpp: see interactions.hpp.
+//
+// Contact "materials" are the mesh regions (so that an interface rule, given per pair of regions, is a contact
+// law per pair of contact materials): two triangles of different bodies use the law of their regions' interface,
+// two triangles of one body (the faces of a crack inside a unit) the crack law of their region's material.
+#include "fdem/interactions.hpp"
+
+#include <cmath>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+
+#include "fdem/errors.hpp"
+
+namespace fdem {
+
+namespace {
+
+fracture::CohesiveProps to_props(const JointSpec& j) {
+    fracture::CohesiveProps p;
+    p.tensile_strength = j.tensile_strength;
+    p.cohesion = j.cohesion;
+    p.friction_deg = j.friction;
+    p.residual_friction_deg = j.residual_friction;
+    p.G_I = j.GI;
+    p.G_II = j.GII;
+    p.penalty = j.penalty;
+    p.k_n = j.normal_stiffness;
+    p.k_s = j.shear_stiffness;
+    return p;
+}
+
+const InterfaceSpec* find_interface(const CaseSpec& spec, const std::string& a, const std::string& b) {
+    for (const auto& i : spec.interfaces)
+        if ((i.region_a == a && i.region_b == b) || (i.region_a == b && i.region_b == a)) return &i;
+    return nullptr;
+}
+
+}  // namespace
+
+Interactions::Interactions(const CaseSpec& spec, const Model& model) {
+    if (!model.has_topology) return;
+    const auto& regions = model.mesh.regions;
+    const int nr = static_cast<int>(regions.size());
+    auto material_of = [&](int region) -> const Material& {
+        return spec.materials[spec.material_index(spec.region_material.at(regions[region]))];
+    };
+
+    // Cohesive elements: crackable edges take their material's fracture properties, bonded edges their
+    // interface's. One props entry per material / interface, in that order.
+    if (!model.cohesive.empty()) {
+        std::vector<fracture::CohesiveProps> props;
+        std::vector<int> crack_props(nr, -1);
+        std::vector<std::string> props_key;
+        for (int r = 0; r < nr; ++r)
+            if (material_of(r).fracture.present) {
+                crack_props[r] = static_cast<int>(props.size());
+                props.push_back(to_props(material_of(r).fracture));
+                props_key.push_back("materials." + material_of(r).name + ".fracture");
+            }
+        std::vector<int> bond_props(spec.interfaces.size(), -1);
+        for (std::size_t i = 0; i < spec.interfaces.size(); ++i)
+            if (spec.interfaces[i].kind == "bonded") {
+                bond_props[i] = static_cast<int>(props.size());
+                props.push_back(to_props(spec.interfaces[i].bond));
+                props_key.push_back("interfaces." + std::to_string(i));
+            }
+        // Too-soft penalties: checked against the longest element of each class.
+        std::vector<double> h_max(props.size(), 0.0);
+        std::vector<fracture::CohesiveElement> elems;
+        elems.reserve(model.cohesive.size());
+        for (const auto& c : model.cohesive) {
+            fracture::CohesiveElement e;
+            for (int k = 0; k < 4; ++k) e.n[k] = c.n[k];
+            e.tri_a = c.tri_a;
+            e.tri_b = c.tri_b;
+            e.unit_a = c.body_a;
+            e.unit_b = c.body_b;
+            if (c.kind == mesh::EdgeClass::crackable) {
+                e.kind = fracture::JointClass::unit_interior;
+                e.props = crack_props[c.region_a];
+            } else {
+                e.kind = fracture::JointClass::interface;
+                const InterfaceSpec* in = find_interface(spec, regions[c.region_a], regions[c.region_b]);
+                e.props = in ? bond_props[static_cast<std::size_t>(in - spec.interfaces.data())] : -1;
+            }
+            if (e.props < 0)
+                throw InputError(spec.file + ": no cohesive properties for a joint between regions '" + regions[c.region_a] +
+                                 "' and '" + regions[c.region_b] + "'");
+            const double h = std::hypot(model.X[2 * c.n[1]] - model.X[2 * c.n[0]], model.X[2 * c.n[1] + 1] - model.X[2 * c.n[0] + 1]);
+            h_max[e.props] = std::max(h_max[e.props], h);
+            elems.push_back(e);
+        }
+        std::vector<std::string> problems;
+        for (std::size_t p = 0; p < props.size(); ++p)
+            for (const auto& msg : fracture::check(props[p], h_max[p])) problems.push_back(spec.file + ": [" + props_key[p] + "]: " + msg);
+        if (!problems.empty()) throw InputError(problems);
+        try {
+            fracture::orient_elements(elems, model.mesh.tri.data());
+            joints_ = std::make_unique<fracture::CohesiveSystem>(std::move(elems), std::move(props), spec.thickness,
+                                                                 model.X.data(), model.n_nodes());
+        } catch (const std::invalid_argument& e) {
+            throw InputError(spec.file + ": cohesive elements: " + e.what());
+        }
+    }
+
+    // Contact laws per pair of regions.
+    bool any_contact = false;
+    for (const auto& i : spec.interfaces) any_contact = any_contact || i.kind != "tied";
+    for (const auto& m : spec.materials) any_contact = any_contact || m.fracture.present;
+    if (!any_contact) return;
+    contact::ContactLaws laws(nr);
+    for (int a = 0; a < nr; ++a) {
+        const Material& ma = material_of(a);
+        if (ma.fracture.present) {
+            // Crack faces: the joint penalty as normal penalty, the residual friction.
+            contact::ContactLaw l = contact::ContactLaw::penalty(ma.fracture.penalty, std::tan(ma.fracture.residual_friction * M_PI / 180));
+            l.name = "crack faces of " + ma.name;
+            laws.set_crack(a, l);
+        }
+        for (int b = a; b < nr; ++b) {
+            const InterfaceSpec* in = find_interface(spec, regions[a], regions[b]);
+            if (!in || in->kind == "tied") continue;
+            contact::ContactLaw l;
+            l.name = "interface " + regions[a] + "/" + regions[b];
+            if (in->kind == "dry") {
+                if (!std::isnan(in->normal_penalty)) l.p_n = in->normal_penalty;
+                if (!std::isnan(in->normal_stiffness)) l.k_n = in->normal_stiffness;
+                if (!std::isnan(in->tangential_penalty)) l.p_t = in->tangential_penalty;
+                if (!std::isnan(in->shear_stiffness)) l.k_s = in->shear_stiffness;
+                l.phi_deg = in->friction;
+            } else {  // bonded: after breaking, contact with the joint's stiffness and the residual friction
+                if (!std::isnan(in->bond.penalty)) l.p_n = in->bond.penalty;
+                if (!std::isnan(in->bond.normal_stiffness)) l.k_n = in->bond.normal_stiffness;
+                if (!std::isnan(in->bond.shear_stiffness)) l.k_s = in->bond.shear_stiffness;
+                l.phi_deg = in->bond.residual_friction;
+            }
+            laws.set_interface(a, b, l);
+        }
+    }
+    try {
+        contact::ContactOptions copt;
+        copt.buffer = spec.contact_buffer;
+        std::vector<int> tri_region(model.mesh.tri_region.begin(), model.mesh.tri_region.end());
+        std::vector<int> tri_body = model.mesh.tri_body.empty() ? std::vector<int>(model.n_triangles(), 0) : model.mesh.tri_body;
+        contact_ = std::make_unique<contact::ContactSystem>(model.mesh.tri.data(), model.n_triangles(), model.n_nodes(),
+                                                            spec.thickness, std::move(tri_region), std::move(tri_body), laws, copt);
+    } catch (const std::invalid_argument& e) {
+        throw InputError(spec.file + ": [[interfaces]]: " + e.what());
+    }
+    for (int t : model.contact_capable) contact_->set_capable(t, true);
+    if (joints_)
+        for (int e = 0; e < joints_->size(); ++e) {
+            const auto& el = joints_->element(e);
+            if (el.tri_a >= 0 && el.tri_b >= 0) contact_->exclude_pair(el.tri_a, el.tri_b);
+        }
+}
+
+double Interactions::stable_dt(const Model& model) const {
+    double dt = std::numeric_limits<double>::infinity();
+    if (joints_) dt = std::min(dt, joints_->stable_dt(model.mass.data()));
+    if (contact_) dt = std::min(dt, contact_->stable_dt(model.X.data(), model.mass.data()));
+    return dt;
+}
+
+void Interactions::add_forces(const double* x, const double* v, double dt, double* f) {
+    if (joints_) joints_->add_forces(x, f);
+    if (contact_) contact_->step(x, v, dt, f);
+}
+
+int Interactions::after_step(double time, double control_displacement, const double* x) {
+    if (!joints_) return 0;
+    const auto broken = joints_->update_damage(time, control_displacement, x);
+    if (broken.empty()) return 0;
+    std::ostringstream os;
+    for (const auto& r : broken) {
+        fracture::write_cracks_csv_row(os, r);
+        if (contact_) {
+            if (r.tri_a >= 0) contact_->set_capable(r.tri_a, true);
+            if (r.tri_b >= 0) contact_->set_capable(r.tri_b, true);
+            if (r.tri_a >= 0 && r.tri_b >= 0) contact_->include_pair(r.tri_a, r.tri_b);
+        }
+    }
+    cracks_csv_ += os.str();
+    return static_cast<int>(broken.size());
+}
+
+double Interactions::joint_energy() const { return joints_ ? joints_->elastic_energy() : 0.0; }
+double Interactions::contact_energy() const { return contact_ ? contact_->elastic_energy() : 0.0; }
+double Interactions::fracture_dissipation() const { return joints_ ? joints_->dissipated_energy() : 0.0; }
+double Interactions::friction_dissipation() const { return contact_ ? contact_->friction_dissipation() : 0.0; }
+
+}  // namespace fdem

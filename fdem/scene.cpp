@@ -1,0 +1,58 @@
+// fdem/scene.cpp: see scene.hpp.
+#include "fdem/scene.hpp"
+
+#include <algorithm>
+
+#include "fdem/errors.hpp"
+#include "fdem/simulation.hpp"
+
+namespace fdem {
+
+bool needs_topology(const CaseSpec& spec) {
+    if (spec.geometry.split_all) return true;
+    for (const auto& m : spec.materials)
+        if (m.fracture.present) return true;
+    for (const auto& i : spec.interfaces)
+        if (i.kind != "tied") return true;
+    return false;
+}
+
+mesh::TopologyOptions topology_options(const CaseSpec& spec, const mesh::Mesh& m) {
+    mesh::TopologyOptions opt;
+    for (const auto& region : m.regions) {
+        auto it = spec.region_material.find(region);
+        const int mi = it == spec.region_material.end() ? -1 : spec.material_index(it->second);
+        const bool crackable = mi >= 0 && spec.materials[mi].fracture.present;
+        if (spec.geometry.split_all && !crackable)
+            throw InputError(spec.file + ":" + std::to_string(spec.geometry.line) + ": key 'geometry.split': \"all\" makes every "
+                             "edge crackable, but region '" + region + "' has a material without a [materials." +
+                             (mi >= 0 ? spec.materials[mi].name : std::string("?")) + ".fracture] table");
+        opt.regions.push_back({region, crackable});
+    }
+    for (const auto& i : spec.interfaces) {
+        mesh::InterfaceRule r;
+        r.region_a = i.region_a;
+        r.region_b = i.region_b;
+        r.kind = i.kind == "dry" ? mesh::InterfaceKind::dry : i.kind == "bonded" ? mesh::InterfaceKind::bonded : mesh::InterfaceKind::tied;
+        opt.interfaces.push_back(r);
+    }
+    opt.split_all = spec.geometry.split_all;
+    return opt;
+}
+
+mesh::Topology build_topology_only(const CaseSpec& spec) {
+    mesh::Mesh m = make_mesh(spec);
+    try {
+        return mesh::build_topology(m, topology_options(spec, m));
+    } catch (const mesh::MeshError& e) {
+        throw InputError(spec.file + ": [[interfaces]] / [geometry]: " + e.what());
+    }
+}
+
+Model build_scene(const CaseSpec& spec) {
+    if (!needs_topology(spec)) return build_model(spec, make_mesh(spec));
+    mesh::Topology topo = build_topology_only(spec);
+    return build_model(spec, std::move(topo.mesh), std::move(topo.cohesive), std::move(topo.contact_capable));
+}
+
+}  // namespace fdem

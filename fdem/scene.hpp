@@ -1,0 +1,27 @@
+// fdem/scene.hpp: case -> mesh -> topology (edge classes, split nodes, cohesive and contact sets) -> model.
+#pragma once
+
+#include <vector>
+
+#include "fdem/case.hpp"
+#include "fdem/model.hpp"
+#include "mesh/topology.hpp"
+
+namespace fdem {
+
+// Whether the case needs a topology: any interface rule that is not "tied", any material that may crack, or split = "all".
+bool needs_topology(const CaseSpec& spec);
+
+// The rules handed to mesh::build_topology: a region is crackable when its material has a fracture table;
+// interfaces as the case gives them. Throws InputError (naming the line) for split = "all" with a material that
+// cannot crack.
+mesh::TopologyOptions topology_options(const CaseSpec& spec, const mesh::Mesh& mesh);
+
+// Mesh, topology if needed (MeshError -> InputError naming the [geometry] / [[interfaces]] of the case),
+// then the model with its cohesive elements and contact-capable triangles.
+Model build_scene(const CaseSpec& spec);
+
+// The mesh and its topology, for `fdem mesh`.
+mesh::Topology build_topology_only(const CaseSpec& spec);
+
+}  // namespace fdem
