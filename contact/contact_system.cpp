@@ -24,9 +24,10 @@ inline double smallest_altitude(const double* T) {
     double lmax = 0.0;
     for (int k = 0; k < 3; ++k) {
         const int j = (k + 1) % 3;
-        lmax = std::max(lmax, std::hypot(T[2 * j] - T[2 * k], T[2 * j + 1] - T[2 * k + 1]));
+        const double ex = T[2 * j] - T[2 * k], ey = T[2 * j + 1] - T[2 * k + 1];
+        lmax = std::max(lmax, ex * ex + ey * ey);
     }
-    return area2 / lmax;
+    return area2 / std::sqrt(lmax);
 }
 
 inline void gather(const double* x, const int* t, double* out) {
@@ -262,9 +263,10 @@ void ContactSystem::detect(const double* x) {
 }
 
 void ContactSystem::step(const double* x, const double* v, double dt, double* f) {
-    double vmax = 0.0;
-#pragma omp parallel for schedule(static) reduction(max : vmax) if (n_nodes_ > kParallelMin)
-    for (int k = 0; k < n_nodes_; ++k) vmax = std::max(vmax, std::hypot(v[2 * k], v[2 * k + 1]));
+    double v2max = 0.0;  // max is exact in any order: a deterministic reduction
+#pragma omp parallel for schedule(static) reduction(max : v2max) if (n_nodes_ > kParallelMin)
+    for (int k = 0; k < n_nodes_; ++k) v2max = std::max(v2max, v[2 * k] * v[2 * k] + v[2 * k + 1] * v[2 * k + 1]);
+    const double vmax = std::sqrt(v2max);
     // [MA98]: a pair can only appear once two triangles have moved towards each other by the buffer; each moved
     // at most the accumulated dt max|v|. Anticipate this step's motion so the list is valid until the next call.
     if (dirty_ || 2.0 * (travel_ + dt * vmax) > buffer_) detect(x);

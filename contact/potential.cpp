@@ -150,14 +150,15 @@ void potential_weights(const double* x, bool distance_potential, double* w) {
     }
 }
 
-bool edge_in_triangle(const double* p0, const double* p1, const double* T, const double* w, double* out) {
-    double g[9];
-    area_coordinates(T, g);
+namespace {
+
+// Core of edge_in_triangle on the area coordinates of the segment ends: La[k] = L_k(p0), Lb[k] = L_k(p1).
+bool edge_integrals(const double* La, const double* Lb, double len, const double* w, double* out) {
     double a[3], b[3];
     double lo = 0.0, hi = 1.0;
     for (int k = 0; k < 3; ++k) {
-        a[k] = affine(g + 3 * k, p0[0], p0[1]);
-        b[k] = affine(g + 3 * k, p1[0], p1[1]) - a[k];
+        a[k] = La[k];
+        b[k] = Lb[k] - La[k];
         if (b[k] == 0.0) {
             if (a[k] < 0.0) return false;
         } else if (b[k] > 0.0) {
@@ -179,8 +180,8 @@ bool edge_in_triangle(const double* p0, const double* p1, const double* T, const
             if (s > lo && s < hi) br[nb++] = s;
         }
     br[nb++] = hi;
-    std::sort(br + 1, br + nb - 1);
-    const double len = std::hypot(p1[0] - p0[0], p1[1] - p0[1]);
+    for (int i = 2; i < nb - 1; ++i)  // insertion sort of at most 3 interior breakpoints
+        for (int j = i; j > 1 && br[j] < br[j - 1]; --j) std::swap(br[j], br[j - 1]);
     for (int i = 0; i < 6; ++i) out[i] = 0.0;
     auto phi = [&](double s, double* L) {
         double m = 1e300;
@@ -202,6 +203,32 @@ bool edge_in_triangle(const double* p0, const double* p1, const double* T, const
     }
     out[5] = (hi - lo) * len;
     return out[0] + out[1] > 0.0;
+}
+
+// Area coordinates in T (affine coefficients g) of the three vertices of X: L[3 v + k] = L_k(x_v).
+inline void vertex_coordinates(const double* g, const double* X, double* L) {
+    for (int v = 0; v < 3; ++v)
+        for (int k = 0; k < 3; ++k) L[3 * v + k] = affine(g + 3 * k, X[2 * v], X[2 * v + 1]);
+}
+
+// Separating axis test on the six edge lines: some edge of one triangle has all of the other on its outside.
+inline bool separated(const double* L) {
+    for (int k = 0; k < 3; ++k)
+        if (L[k] <= 0.0 && L[3 + k] <= 0.0 && L[6 + k] <= 0.0) return true;
+    return false;
+}
+
+}  // namespace
+
+bool edge_in_triangle(const double* p0, const double* p1, const double* T, const double* w, double* out) {
+    double g[9], La[3], Lb[3];
+    area_coordinates(T, g);
+    for (int k = 0; k < 3; ++k) {
+        La[k] = affine(g + 3 * k, p0[0], p0[1]);
+        Lb[k] = affine(g + 3 * k, p1[0], p1[1]);
+    }
+    return edge_integrals(La, Lb, std::sqrt((p1[0] - p0[0]) * (p1[0] - p0[0]) + (p1[1] - p0[1]) * (p1[1] - p0[1])),
+                          w, out);
 }
 
 double pair_energy(const double* xa, const double* xb, const PairParams& p) {
@@ -230,19 +257,36 @@ bool pair_contact(const double* xa, const double* xb, const double* va, const do
     for (int i = 0; i < 6; ++i) r.fa[i] = r.fb[i] = 0.0;
     r.energy_normal = r.energy_tangential = r.dissipation = 0.0;
     r.active_edges = 0;
+    double ga[9], gb[9], a_in_b[9], b_in_a[9];
+    area_coordinates(xb, gb);
+    vertex_coordinates(gb, xa, a_in_b);
+    bool apart = separated(a_in_b);
+    if (!apart) {
+        area_coordinates(xa, ga);
+        vertex_coordinates(ga, xb, b_in_a);
+        apart = separated(b_in_a);
+    }
+    if (apart) {
+        for (int s = 0; s < 6; ++s) hist[s] = 0.0;
+        return false;
+    }
     double wa[3], wb[3];
     potential_weights(xa, p.distance_potential, wa);
     potential_weights(xb, p.distance_potential, wb);
     double I[6];
     for (int e = 0; e < 3; ++e) {
         const int e1 = (e + 1) % 3;
-        if (edge_in_triangle(xa + 2 * e, xa + 2 * e1, xb, wb, I)) {
+        const double la = std::sqrt((xa[2 * e1] - xa[2 * e]) * (xa[2 * e1] - xa[2 * e]) +
+                                    (xa[2 * e1 + 1] - xa[2 * e + 1]) * (xa[2 * e1 + 1] - xa[2 * e + 1]));
+        if (edge_integrals(a_in_b + 3 * e, a_in_b + 3 * e1, la, wb, I)) {
             load_edge(xa, va, r.fa, vb, r.fb, e, I, p, hist[e], r);
             ++r.active_edges;
         } else {
             hist[e] = 0.0;
         }
-        if (edge_in_triangle(xb + 2 * e, xb + 2 * e1, xa, wa, I)) {
+        const double lb = std::sqrt((xb[2 * e1] - xb[2 * e]) * (xb[2 * e1] - xb[2 * e]) +
+                                    (xb[2 * e1 + 1] - xb[2 * e + 1]) * (xb[2 * e1 + 1] - xb[2 * e + 1]));
+        if (edge_integrals(b_in_a + 3 * e, b_in_a + 3 * e1, lb, wa, I)) {
             load_edge(xb, vb, r.fb, va, r.fa, e, I, p, hist[3 + e], r);
             ++r.active_edges;
         } else {

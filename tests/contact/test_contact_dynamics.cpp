@@ -111,6 +111,8 @@ TEST_CASE("A block launched at v0 on a flat base stops at v0^2 / (2 mu g) within
         for (int k = s.body_first_node[1]; k < s.body_last_node[1]; ++k) s.v[2 * k] += v0;
         double cx0, cy0, cx, cy, vx, vy;
         s.body_cm(1, cx0, cy0);
+        const double d0 = s.cs->friction_dissipation(), k0 = s.kinetic(), e0 = s.elastic(false);
+        const double c0 = s.cs->elastic_energy();
         double t = 0.0;
         for (; t < 2.0; t += dt) {
             s.step(dt);
@@ -123,7 +125,14 @@ TEST_CASE("A block launched at v0 on a flat base stops at v0^2 / (2 mu g) within
                     "(expected %.4f s)\n",
                     mu, cx - cx0, expected, 100.0 * (cx - cx0 - expected) / expected, t, v0 / (mu * kG));
         CHECK(cx - cx0 == Approx(expected).epsilon(0.02));
-        CHECK(s.cs->friction_dissipation() > 0.9 * 0.5 * 4.0 * v0 * v0 * 0.0);  // sanity: recorded
+        // energy balance: the friction dissipation equals the kinetic energy lost, 1/2 M v0^2 (M = 4 kg)
+        const double dissipated = s.cs->friction_dissipation() - d0;
+        const double lost = k0 - s.kinetic() + (e0 - s.elastic(false)) + (c0 - s.cs->elastic_energy());
+        std::printf("[slide] mu %.2f: friction dissipation %.5f J, kinetic+elastic energy lost %.5f J (1/2 M v0^2 = "
+                    "%.5f J)\n",
+                    mu, dissipated, lost, 0.5 * 4.0 * v0 * v0);
+        CHECK(dissipated == Approx(lost).epsilon(0.01));
+        CHECK(dissipated == Approx(0.5 * 4.0 * v0 * v0).epsilon(0.02));
     }
 }
 
