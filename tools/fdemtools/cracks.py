@@ -3,8 +3,9 @@ elements coloured by mode (tension I, shear II, mixed), unit-interior and interf
 
 Sources: cracks.csv (one row per broken element: time, control displacement, reference midpoint, class, mode)
 and the .vtu snapshot at or before the chosen time (reference points + displacement). A broken element is drawn
-as the mesh edge whose reference midpoint is nearest to its midpoint, at its deformed position; with no
-snapshot it is drawn as a marker at its reference midpoint.
+as the mesh edge whose midpoint, in the snapshot nearest in time to the break, is nearest to the recorded
+midpoint (the fracture module records it in the current configuration), at its deformed position in the chosen
+snapshot; with no snapshot it is drawn as a marker at the recorded midpoint.
 Unit outline: the edges of the triangulation that bound a unit, i.e. edges with one triangle only (free
 boundary) or whose two triangles differ in the cell array `unit` (if the snapshot has one), else `region`, else
 `material`. Edges are matched by their reference coordinates, so duplicated nodes on either side of a joint count
@@ -70,7 +71,7 @@ def snapshots(run_dir: str) -> list:
 def pick_snapshot(snaps: list, time: float | None):
     if not snaps:
         return None
-    if time is None:
+    if time is None or not all(np.isfinite(t) for t, _ in snaps):  # no times known: the last snapshot
         return snaps[-1]
     before = [s for s in snaps if s[0] <= time * (1 + 1e-12) + 1e-300]
     return before[-1] if before else snaps[0]
@@ -125,6 +126,34 @@ def geometry(vtu: dict, scale: float = 1.0):
             "edge_mid_ref": mid_ref}
 
 
+def match_edges(run_dir: str, geo: dict, pts, times):
+    """Index (into geo['edges']) of the mesh edge of each broken element.
+
+    The fracture module records an element's midpoint in the current configuration at breaking, so each crack is
+    matched against the edge midpoints of the snapshot nearest in time to its break (same mesh in every snapshot
+    of a run); if the snapshots carry no times or differ in size, against the reference midpoints."""
+    from scipy.spatial import cKDTree
+    snaps = snapshots(run_dir)
+    st = np.array([t for t, _ in snaps], dtype=float)
+    if not len(snaps) or not np.isfinite(st).all():
+        return cKDTree(geo["edge_mid_ref"]).query(pts)[1]
+    which = np.argmin(np.abs(st[None, :] - np.asarray(times, float)[:, None]), axis=1)
+    idx = np.zeros(len(pts), dtype=np.int64)
+    e = geo["edges"]
+    for j in np.unique(which):
+        v = read_vtu(snaps[j][1])
+        X = v["points"][:, :2]
+        u = v["point_data"].get("displacement")
+        if X.shape != geo["X"].shape or u is None:
+            mids = geo["edge_mid_ref"]
+        else:
+            xj = X + u[:, :2]
+            mids = 0.5 * (xj[e[:, 0]] + xj[e[:, 1]])
+        sel = which == j
+        idx[sel] = cKDTree(mids).query(pts[sel])[1]
+    return idx
+
+
 def draw(run_dir: str, prefix: str, time: float | None = None, displacement: float | None = None,
          scale: float = 1.0, partial: bool = False) -> tuple:
     run = load_run(run_dir, allow_unfinished=partial, need_history=False)
@@ -167,10 +196,12 @@ def draw(run_dir: str, prefix: str, time: float | None = None, displacement: flo
         pts = np.column_stack((cr["x"][keep], cr["y"][keep]))
         cls, mode = cr["class"][keep], cr["mode"][keep]
         segs = None
+        matched = None
         if geo is not None:
-            _, idx = cKDTree(geo["edge_mid_ref"]).query(pts)
+            idx = match_edges(run_dir, geo, pts, cr["time"][keep])
             ends = geo["edges"][idx]
             segs = geo["x"][ends]  # (k, 2, 2) deformed
+            matched = geo["edge_mid_ref"][idx]
         for c in CLASS_STYLE:
             for m in MODE_COLOURS:
                 s = (cls == c) & (mode == m)
@@ -209,7 +240,8 @@ def draw(run_dir: str, prefix: str, time: float | None = None, displacement: flo
     else:
         ax.text(0.5, 0.02, "no broken elements at this time", transform=ax.transAxes, ha="center", fontsize=9)
     files = save(fig, prefix)
-    return files, {"time": time, "snapshot": snap[1] if snap else None, "counts": counts}
+    return files, {"time": time, "snapshot": snap[1] if snap else None, "counts": counts,
+                   "matched_reference_midpoints": matched if keep.any() else None}
 
 
 def cmd_cracks(args):

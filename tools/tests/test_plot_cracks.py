@@ -108,3 +108,34 @@ def test_cracks_csv_of_the_fracture_module(tmp_path):
     assert list(cr["class"]) == ["interface", "unit"] and list(cr["time"]) == [0.3, 0.6]
     files, info = cracks.draw(run, str(tmp_path / "c"))
     assert info["counts"]["interface_I"] == 1 and info["counts"]["unit_mixed"] == 1
+
+
+def test_cracks_matched_in_the_deformed_configuration(tmp_path):
+    """The upper block moves by a whole edge length (0.05 m): a crack recorded at its current midpoint at t = 1 s
+    must be matched to the edge that is there at that time, not to the edge whose reference midpoint is there."""
+    import json as _json
+    run = tmp_path / "run"
+    os.makedirs(run / "snapshots")
+    X, tri, unit = two_blocks()
+    for k, tk in enumerate((0.0, 1.0)):
+        disp = np.zeros_like(X)
+        disp[:, 0] = 0.05 * tk * (unit_nodes(X, tri, unit) == 1)
+        write_vtu(str(run / "snapshots" / f"s{k}.vtu"), X, tri, disp, {"region": unit})
+    (run / "run.pvd").write_text('<VTKFile type="Collection"><Collection>'
+                                 '<DataSet timestep="0" file="snapshots/s0.vtu"/>'
+                                 '<DataSet timestep="1" file="snapshots/s1.vtu"/></Collection></VTKFile>')
+    (run / "summary.json").write_text(_json.dumps({"status": "completed", "case": "moved"}))
+    (run / "cracks.csv").write_text("time,control_displacement,x,y,class,unit_a,unit_b,mode\n"
+                                    "1.0,0.05,0.15,0.175,unit,1,1,I\n"    # vertical edge x = 0.1 (ref), moved to 0.15
+                                    "0.0,0.0,0.1,0.025,unit,0,0,II\n")    # lower block, never moves
+    files, info = cracks.draw(str(run), str(tmp_path / "c"))
+    m = info["matched_reference_midpoints"]
+    assert np.allclose(m[0], [0.1, 0.175]) and np.allclose(m[1], [0.1, 0.025])
+
+
+def unit_nodes(X, tri, unit):
+    """Unit of each node (nodes are not shared between the two blocks)."""
+    u = np.zeros(len(X), int)
+    for t, b in zip(tri, unit):
+        u[t] = b
+    return u
