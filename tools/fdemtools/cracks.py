@@ -192,7 +192,6 @@ def draw(run_dir: str, prefix: str, time: float | None = None, displacement: flo
     counts = {}
     if keep.any():
         from matplotlib.collections import LineCollection
-        from scipy.spatial import cKDTree
         pts = np.column_stack((cr["x"][keep], cr["y"][keep]))
         cls, mode = cr["class"][keep], cr["mode"][keep]
         segs = None
