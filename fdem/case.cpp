@@ -553,6 +553,29 @@ CaseSpec load_case(const std::string& path, const std::vector<std::string>& over
         }
     }
 
+    if (const toml::table* t = top.table("groups", false, "a [groups.NAME] table per extra group")) {
+        for (const auto& [k, v] : *t) {
+            GroupSpec g;
+            g.name = std::string(k.str());
+            const std::string p = "groups." + g.name;
+            if (!v.is_table()) {
+                ctx.error(p, line_of(&v), "expected a table with box = [xmin, ymin, xmax, ymax] or nearest = [x, y]");
+                continue;
+            }
+            Reader r(ctx, *v.as_table(), p);
+            g.line = r.line();
+            if (auto b = r.numbers("box", false, "[xmin, ymin, xmax, ymax] in m", 4)) {
+                g.box = std::array<double, 4>{(*b)[0], (*b)[1], (*b)[2], (*b)[3]};
+                if (!((*b)[2] >= (*b)[0] && (*b)[3] >= (*b)[1])) ctx.error(p + ".box", g.line, "expected xmin <= xmax and ymin <= ymax");
+            }
+            g.nearest = r.vec2("nearest", false, "[x, y] in m");
+            g.within = r.string("within", false, "the name of a physical group to select from").value_or("");
+            if (g.box.has_value() == g.nearest.has_value()) ctx.error(p, g.line, "give exactly one of box or nearest");
+            r.finish();
+            spec.groups.push_back(g);
+        }
+    }
+
     for (const toml::table* t : top.tables("interfaces", false, "[[interfaces]] blocks")) {
         const std::string p = "interfaces." + std::to_string(spec.interfaces.size());
         Reader r(ctx, *t, p);

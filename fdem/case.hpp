@@ -99,6 +99,16 @@ struct SupportSpec {
     int line = 0;
 };
 
+// A node group defined in the case: the nodes inside a box, or the node(s) nearest to a point
+// (every copy of a split node at that place).
+struct GroupSpec {
+    std::string name;
+    std::optional<std::array<double, 4>> box;     // [xmin, ymin, xmax, ymax], m
+    std::optional<std::array<double, 2>> nearest;  // [x, y], m
+    std::string within;                            // optional: only nodes of this physical group
+    int line = 0;
+};
+
 struct MonitorSpec {
     std::string name;
     std::string type;  // "displacement" | "velocity" | "reaction" | "load" | "tilt"
@@ -146,6 +156,7 @@ struct CaseSpec {
     GeometrySpec geometry;
     std::vector<Material> materials;
     std::map<std::string, std::string> region_material;  // region (2D physical group) -> material name
+    std::vector<GroupSpec> groups;
     std::vector<InterfaceSpec> interfaces;
     double contact_buffer = 0;  // m, NBS buffer; 0 = smallest contact edge / 5
     std::vector<MonitorSpec> monitors;

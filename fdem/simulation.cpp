@@ -78,6 +78,38 @@ mesh::Mesh make_mesh(const CaseSpec& spec) {
     } catch (const mesh::MeshError& e) {
         throw InputError(spec.file + ":" + std::to_string(g.line) + ": [geometry]: " + e.what());
     }
+    // Case-defined node groups, added as point groups so the topology carries them to every node copy.
+    for (const GroupSpec& gs : spec.groups) {
+        if (m.find_group(gs.name))
+            throw InputError(spec.file + ":" + std::to_string(gs.line) + ": key 'groups." + gs.name + "': the mesh already has a group of that name");
+        std::vector<int> candidates;
+        if (!gs.within.empty()) {
+            const auto* w = m.find_group(gs.within);
+            if (!w) throw InputError(spec.file + ":" + std::to_string(gs.line) + ": key 'groups." + gs.name + ".within': no group named '" + gs.within + "' in the mesh");
+            candidates = w->nodes;
+        } else {
+            for (int k = 0; k < m.n_nodes(); ++k) candidates.push_back(k);
+        }
+        mesh::PhysicalGroup g;
+        g.name = gs.name;
+        g.dim = 0;
+        if (gs.box) {
+            const auto& b = *gs.box;
+            const double tol = 1e-9 * std::max({1.0, std::abs(b[0]), std::abs(b[1]), std::abs(b[2]), std::abs(b[3])});
+            for (int k : candidates)
+                if (m.xy[2 * k] >= b[0] - tol && m.xy[2 * k] <= b[2] + tol && m.xy[2 * k + 1] >= b[1] - tol && m.xy[2 * k + 1] <= b[3] + tol)
+                    g.nodes.push_back(k);
+        } else {
+            double best = 1e300;
+            for (int k : candidates) best = std::min(best, std::hypot(m.xy[2 * k] - (*gs.nearest)[0], m.xy[2 * k + 1] - (*gs.nearest)[1]));
+            for (int k : candidates)
+                if (std::hypot(m.xy[2 * k] - (*gs.nearest)[0], m.xy[2 * k + 1] - (*gs.nearest)[1]) <= best * (1 + 1e-12) + 1e-15) g.nodes.push_back(k);
+        }
+        if (g.nodes.empty())
+            throw InputError(spec.file + ":" + std::to_string(gs.line) + ": key 'groups." + gs.name + "': selects no node of the mesh");
+        std::sort(g.nodes.begin(), g.nodes.end());
+        m.groups.push_back(std::move(g));
+    }
     MeshNames names;
     names.regions = m.regions;
     for (const auto& grp : m.groups) names.groups.push_back(grp.name), names.group_dims.push_back(grp.dim);
