@@ -3,7 +3,8 @@
 // DATA LAYOUT ASSUMPTIONS
 // - Node arrays (x, f, node_mass) are the engine's: x and f interleaved 2 per node (x0 y0 x1 y1 ...), m 1 per node.
 // - Elements are indexed 0..size()-1 in the order the engine gave them; every per-element array below uses that
-//   index: law_[e] (AoS struct, read whole by the kernel), length_[e], damage_[3e + i] (i = end 0, midpoint, end 1),
+//   index: law_[e] (AoS struct, read whole by the kernel), length_[e], history_[3e + i] (i = end 0, midpoint, end 1;
+//   the damage and what the second-order dissipation needs from the previous step),
 //   force_[8e + 2k + {0,1}] (k = a0, a1, b0, b1), energy_[e], dissipated_[e].
 // - active_ lists the intact elements in ascending order; broken ones leave it and their force slots are zeroed,
 //   so the node gather (CSR built once over all elements) stays valid without rebuilding.
@@ -138,7 +139,9 @@ CohesiveSystem::CohesiveSystem(std::vector<CohesiveElement> elems, std::vector<C
 
   law_.resize(ne);
   for (int e = 0; e < ne; ++e) law_[e] = make_law(props_[elems_[e].props], length_[e]);
-  damage_.assign(3 * std::size_t(ne), 0.0);
+  history_.resize(3 * std::size_t(ne));
+  for (int e = 0; e < ne; ++e)
+    for (int i = 0; i < 3; ++i) history_[3 * e + i] = initial_history(law_[e]);
   force_.assign(8 * std::size_t(ne), 0.0);
   energy_.assign(ne, 0.0);
   dissipated_.assign(ne, 0.0);
@@ -191,7 +194,7 @@ double CohesiveSystem::stable_dt(const double* node_mass) const {
   }
   double dt = std::numeric_limits<double>::infinity();
   for (int v = 0; v < num_nodes_; ++v)
-    if (k_node[v] > 0.0) dt = std::min(dt, 2.0 * std::sqrt(node_mass[v] / k_node[v]));
+    if (k_node[v] > 0.0 && node_mass[v] > 0.0) dt = std::min(dt, 2.0 * std::sqrt(node_mass[v] / k_node[v]));
   return dt;
 }
 
@@ -232,8 +235,8 @@ void CohesiveSystem::add_forces(const double* x, double* f) {
     for (int i = 0; i < 3; ++i) {
       const double o = dx[i] * nx + dy[i] * ny;
       const double s = dx[i] * tx + dy[i] * ty;
-      const PointResponse r = evaluate_point(L, o, s, damage_[3 * e + i]);
-      damage_[3 * e + i] = r.damage;
+      const PointResponse r = evaluate_point(L, o, s, history_[3 * e + i]);
+      history_[3 * e + i] = r.history;
       const double w = kSimpson[i] * area;
       Tx[i] = w * (r.sigma * nx + r.tau * tx);
       Ty[i] = w * (r.sigma * ny + r.tau * ty);
@@ -241,7 +244,7 @@ void CohesiveSystem::add_forces(const double* x, double* f) {
       dissipated += w * r.dissipated;
       DI += r.damage_I;
       DII += r.damage_II;
-      all_broken = all_broken && r.damage >= 1.0;
+      all_broken = all_broken && r.history.damage >= 1.0;
     }
     // Midpoint traction shared half-half by the two ends (N at xi = 1/2).
     const double fa0x = Tx[0] + 0.5 * Tx[1], fa0y = Ty[0] + 0.5 * Ty[1];
@@ -341,7 +344,8 @@ double CohesiveSystem::dissipated_energy() const {
 }
 
 double CohesiveSystem::damage(int e) const {
-  return std::max(damage_[3 * e], std::max(damage_[3 * e + 1], damage_[3 * e + 2]));
+  const PointHistory* h = &history_[3 * std::size_t(e)];
+  return std::max(h[0].damage, std::max(h[1].damage, h[2].damage));
 }
 
 JointState CohesiveSystem::state(int e) const {

@@ -82,7 +82,8 @@ class CohesiveSystem {
   double length(int e) const { return length_[e]; }  // reference length h, m
 
   // Largest stable central-difference step (s) of the joint springs on their own: min over nodes of
-  // 2 sqrt(m / k), k the Gershgorin bound of the joint stiffness on that node (N/m). node_mass: kg per node.
+  // 2 sqrt(m / k), k the Gershgorin bound of the joint stiffness on that node (N/m). node_mass: kg per node
+  // (nodes with m <= 0 are taken as fixed and skipped).
   // Returns +infinity when no element is intact. The engine combines it with the triangles' limit and a safety factor.
   double stable_dt(const double* node_mass) const;
 
@@ -105,7 +106,7 @@ class CohesiveSystem {
 
   // Output for VTU snapshots: damage per element = max over its points; state intact / damaged / broken.
   double damage(int e) const;
-  double point_damage(int e, int point) const { return damage_[3 * e + point]; }
+  double point_damage(int e, int point) const { return history_[3 * e + point].damage; }
   JointState state(int e) const;
   void damage_per_element(double* out) const;
   void state_per_element(std::uint8_t* out) const;
@@ -118,10 +119,10 @@ class CohesiveSystem {
   double thickness_;
   int num_nodes_;
   // Hot, per element (index e): law constants (AoS: the kernel reads them all together), reference length,
-  // damage at the 3 points (3e + i), force buffer (8e: a0x a0y a1x a1y b0x b0y b1x b1y), energies.
+  // history at the 3 points (3e + i), force buffer (8e: a0x a0y a1x a1y b0x b0y b1x b1y), energies.
   std::vector<JointLaw> law_;
   std::vector<double> length_;
-  std::vector<double> damage_;
+  std::vector<PointHistory> history_;
   std::vector<double> force_;
   std::vector<double> energy_;
   std::vector<double> dissipated_;

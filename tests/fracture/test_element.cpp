@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iomanip>
 #include <sstream>
 #include <stdexcept>
 
@@ -67,11 +68,9 @@ TEST_CASE("mode I on one element: peak f_t and dissipated energy G_I for a stiff
     const ModeIResult r = pull_mode_I(p, h, n);
     CHECK(r.peak == Approx(f_t).epsilon(0.01));
     CHECK(r.work == Approx(G_I).epsilon(0.02));
-    // The bookkeeping sums (z(D_old) - z(D_new)) E_0(o): a left Riemann sum of kappa f_t o_t, whose error is at most
-    // f_t o_t max(dD) = f_t do.
-    const double d_o = 1.05 * (2.0 * h * f_t / p_j + (G_I - prepeak) / (0.38631 * f_t)) / n;
-    CHECK(std::abs(r.dissipated - G_I) <= f_t * d_o);
-    CHECK(std::abs(r.dissipated - r.work) <= f_t * d_o);
+    // The module's own bookkeeping (second order in the increment) against G_I and against the measured work.
+    CHECK(r.dissipated == Approx(G_I).epsilon(1e-6));
+    CHECK(r.dissipated == Approx(r.work).epsilon(1e-4));
     CHECK(r.breaks == 1);
     CHECK(r.mode == FractureMode::mode_I);
     const double o_p = 2.0 * h * f_t / p_j, o_t = (G_I - prepeak) / (0.38631 * f_t);
@@ -81,17 +80,18 @@ TEST_CASE("mode I on one element: peak f_t and dissipated energy G_I for a stiff
     // passes above.
     const double ycode = (prepeak + 3.0 * 0.38631 * G_I) / G_I;
     CHECK(ycode > 1.15);
-    WARN("p_j = " << p_j << " Pa: peak " << r.peak / f_t << " f_t, work " << r.work / G_I << " G_I (pre-peak "
+    WARN(std::setprecision(8) << "p_j = " << p_j << " Pa: peak " << r.peak / f_t << " f_t, work " << r.work / G_I << " G_I (pre-peak "
                   << prepeak / G_I << " G_I), booked dissipation " << r.dissipated / G_I << " G_I");
   }
 }
 
-TEST_CASE("dissipation bookkeeping converges at first order in the damage increment", "[convergence]") {
+TEST_CASE("dissipation bookkeeping converges at second order in the damage increment", "[convergence]") {
   const CohesiveProps p = stone(7e9);
-  const double e1 = std::abs(pull_mode_I(p, 0.025, 2000).dissipated - p.G_I);
-  const double e2 = std::abs(pull_mode_I(p, 0.025, 20000).dissipated - p.G_I);
-  WARN("|dissipated - G_I| = " << e1 << " J/m^2 (2000 increments), " << e2 << " (20000)");
-  CHECK(e1 / e2 == Approx(10.0).epsilon(0.15));
+  const double e1 = std::abs(pull_mode_I(p, 0.025, 100).dissipated - p.G_I);
+  const double e2 = std::abs(pull_mode_I(p, 0.025, 1000).dissipated - p.G_I);
+  WARN("|dissipated - G_I| = " << e1 << " J/m^2 (100 increments), " << e2 << " (1000)");
+  CHECK(e1 < 1e-3 * p.G_I);
+  CHECK(e1 / e2 > 50.0);  // second order: 100
 }
 
 TEST_CASE("mode II under constant compression: peak c + sigma tan(phi) and dissipated energy G_II", "[unit]") {
@@ -124,7 +124,7 @@ TEST_CASE("mode II under constant compression: peak c + sigma tan(phi) and dissi
     // element stored leaves with it; contact takes over the overlap).
     const double shear_work = el.work - work0;
     CHECK(shear_work == Approx(p.G_II).epsilon(0.02));
-    CHECK(std::abs(el.dissipated() - (p.G_II + work0)) <= f_s * s_end / n);  // first-order bookkeeping bound
+    CHECK(el.dissipated() == Approx(p.G_II + work0).epsilon(1e-6));
     const BreakRecord& b = el.breaks[0];
     CHECK(b.mode == FractureMode::mode_II);
     // Residual friction: the element hands the edge to contact with mu = tan(phi_res); the residual shear
@@ -449,10 +449,11 @@ TEST_CASE("break records and counts and cracks.csv", "[unit]") {
   CHECK(sys.intact_count() == 1);
   CHECK(sys.counts().of(JointClass::interface, FractureMode::mode_I) == 1);
   CHECK(sys.counts().total() == 1);
-  // One jump from D = 0 to 1 at fixed o books the whole energy the undamaged joint would store there
-  // (the exact G_I needs a gradual path, see the mode I test).
+  // One jump from D = 0 to 1 carries no path information: the booked energy lies between G_I A (the straight path
+  // resolved finely) and the undamaged energy at the end state; the exact G_I needs a gradual path (mode I test).
   const double o_p1 = sys.law(1).opening_peak;
-  CHECK(sys.dissipated_energy() == Approx(iface.tensile_strength * (o_p1 * 2.0 / 3.0 + o - o_p1) * h * 0.1));
+  CHECK(sys.dissipated_energy() >= iface.G_I * h * 0.1);
+  CHECK(sys.dissipated_energy() <= iface.tensile_strength * (o_p1 * 2.0 / 3.0 + o - o_p1) * h * 0.1);
   // The broken element no longer acts, even if its faces come back into overlap (contact's job now).
   x[13] = x[15] = 1e-6;
   std::fill(f.begin(), f.end(), 0.0);

@@ -81,41 +81,43 @@ TEST_CASE("point law: branches and continuity at o_p and undamaged compression a
   const JointLaw L = make_joint_law(4e12, 2e12, 3e6, 100.0, 4e6, std::tan(0.5), 500.0);
   CHECK(L.opening_range == Approx(softening_range(100.0, 3e6, opening_at_peak(3e6, 4e12))));
   const double o_p = L.opening_peak;
+  // History with damage D and no path information (trial = D: a new increment starts from this state).
+  auto H = [](double D) { return PointHistory{D, D, 0.0}; };
 
-  auto r = evaluate_point(L, 0.5 * o_p, 0.0, 0.0);
+  auto r = evaluate_point(L, 0.5 * o_p, 0.0, H(0.0));
   CHECK(r.sigma == Approx(0.75 * 3e6));
-  CHECK(r.damage == 0.0);
+  CHECK(r.history.damage == 0.0);
   CHECK(r.energy == Approx((0.25 - 0.125 / 3.0) * 3e6 * o_p));
-  r = evaluate_point(L, o_p, 0.0, 0.0);
+  r = evaluate_point(L, o_p, 0.0, H(0.0));
   CHECK(r.sigma == Approx(3e6));
   CHECK(r.energy == Approx((2.0 / 3.0) * 3e6 * o_p));
   // Initial slope equals K_n on both sides of o = 0.
   const double tiny = 1e-6 * o_p;
-  CHECK(evaluate_point(L, tiny, 0.0, 0.0).sigma / tiny == Approx(4e12).epsilon(1e-5));
-  CHECK(evaluate_point(L, -tiny, 0.0, 0.0).sigma / -tiny == Approx(4e12).epsilon(1e-12));
+  CHECK(evaluate_point(L, tiny, 0.0, H(0.0)).sigma / tiny == Approx(4e12).epsilon(1e-5));
+  CHECK(evaluate_point(L, -tiny, 0.0, H(0.0)).sigma / -tiny == Approx(4e12).epsilon(1e-12));
   // Softening: D = (o - o_p)/o_t, sigma = z(D) f_t.
-  r = evaluate_point(L, o_p + 0.3 * L.opening_range, 0.0, 0.0);
-  CHECK(r.damage == Approx(0.3));
+  r = evaluate_point(L, o_p + 0.3 * L.opening_range, 0.0, H(0.0));
+  CHECK(r.history.damage == Approx(0.3));
   CHECK(r.sigma == Approx(softening(0.3) * 3e6));
   // Damaged joint in compression keeps the full penalty; in tension it is scaled by z(D).
-  r = evaluate_point(L, -o_p, 0.0, 0.7);
+  r = evaluate_point(L, -o_p, 0.0, H(0.7));
   CHECK(r.sigma == Approx(-4e12 * o_p));
-  CHECK(r.damage == 0.7);
-  r = evaluate_point(L, 0.5 * o_p, 0.0, 0.7);
+  CHECK(r.history.damage == 0.7);
+  r = evaluate_point(L, 0.5 * o_p, 0.0, H(0.7));
   CHECK(r.sigma == Approx(0.75 * 3e6 * softening(0.7)));
   // Irreversible: a smaller trial damage leaves the history alone and dissipates nothing.
-  r = evaluate_point(L, o_p + 0.1 * L.opening_range, 0.0, 0.5);
-  CHECK(r.damage == 0.5);
+  r = evaluate_point(L, o_p + 0.1 * L.opening_range, 0.0, H(0.5));
+  CHECK(r.history.damage == 0.5);
   CHECK(r.dissipated == 0.0);
   // Shear strength rises with compression: f_s = c + sigma_c tan(phi); plateau beyond s_p; odd in s.
   const double sigma_c = 2e6, o_c = -sigma_c / 4e12;
   const double f_s = 4e6 + sigma_c * std::tan(0.5);
   const double s_p = 2.0 * f_s / 2e12;
-  r = evaluate_point(L, o_c, s_p, 0.0);
+  r = evaluate_point(L, o_c, s_p, H(0.0));
   CHECK(r.tau == Approx(f_s));
   CHECK(r.sigma == Approx(-sigma_c));
-  CHECK(evaluate_point(L, o_c, -s_p, 0.0).tau == Approx(-f_s));
-  CHECK(evaluate_point(L, 0.0, 2.0 * 4e6 / 2e12, 0.0).tau == Approx(4e6));  // no compression: f_s = c
+  CHECK(evaluate_point(L, o_c, -s_p, H(0.0)).tau == Approx(-f_s));
+  CHECK(evaluate_point(L, 0.0, 2.0 * 4e6 / 2e12, H(0.0)).tau == Approx(4e6));  // no compression: f_s = c
   CHECK(shear_strength(1e6, 4e6, 0.7) == 4e6);                              // tension does not raise it
 }
 
