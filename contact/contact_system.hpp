@@ -107,6 +107,7 @@ private:
     std::vector<double> pair_f_;   // 12 per pair
     std::vector<double> pair_e_;   // 3 per pair: normal energy, tangential energy, dissipation
     std::vector<char> pair_on_;
+    std::vector<double> box_;      // 4 per triangle: xmin, xmax, ymin, ymax (m), capable ones, this step
 
     double energy_normal_ = 0.0, energy_tangential_ = 0.0, dissipation_ = 0.0;
     ContactStats stats_;

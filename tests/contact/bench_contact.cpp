@@ -3,6 +3,7 @@
 #include <catch2/catch.hpp>
 
 #include <cstdio>
+#include <cstdlib>
 #include <ctime>
 #include <fstream>
 #include <omp.h>
@@ -101,8 +102,11 @@ Result measure(int threads, bool boundary_only) {
 TEST_CASE("Benchmark: contact on a dry-joint wall of >= 50,000 triangles, 1 and 2 threads", "[.bench]") {
     const int saved = omp_get_max_threads();
     std::vector<Result> res;
+    // FDEM_BENCH_THREADS=N measures N threads only (for profiling); default 1 and 2.
+    std::vector<int> counts = {1, 2};
+    if (const char* env = std::getenv("FDEM_BENCH_THREADS")) counts = {std::atoi(env)};
     for (bool boundary : {true, false})
-        for (int th : {1, 2}) res.push_back(measure(th, boundary));
+        for (int th : counts) res.push_back(measure(th, boundary));
     omp_set_num_threads(saved);
     const std::string path = std::string(FDEM_TEST_TMP) + "/../../bench_contact.csv";
     std::ofstream csv(path);
