@@ -504,6 +504,8 @@ CaseSpec load_case(const std::string& path, const std::vector<std::string>& over
         } else if (g.type == "wall") {
             read_wall(ctx, r, g.wall);
         }
+        g.min_angle = r.number("min_angle", false, "a minimum triangle angle in [0, 60) deg (sliver check)",
+                               [](double v) { return v >= 0 && v < 60; }).value_or(10.0);
         g.split_all = r.string("split", false, "\"joints\" (default) or \"all\" (every edge crackable, the classic FDEM limit)",
                                {"joints", "all"}).value_or("joints") == "all";
         r.finish();

@@ -69,6 +69,7 @@ struct GeometrySpec {
     // gmsh (.geo script) / msh (mesh file); paths relative to the case file
     std::string file;
     double size_factor = 1;  // multiplies the .geo script's mesh sizes, -
+    double min_angle = 10;   // deg, smallest triangle angle accepted (sliver check)
     bool split_all = false;  // classic FDEM limit: every edge of the mesh crackable (needs fracture properties)
     // wall: the masonry wall generator; the TOML keys are the WallSpec field names (mesh/wall.hpp)
     mesh::WallSpec wall;

@@ -5,6 +5,7 @@
 
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <iostream>
 #include <string>
 #include <vector>
@@ -15,6 +16,8 @@
 #include "fdem/scene.hpp"
 #include "fdem/simulation.hpp"
 #include "mesh/mesh.hpp"
+#include "mesh/quality.hpp"
+#include "mesh/vtu.hpp"
 
 namespace {
 
@@ -27,6 +30,8 @@ const char* kUsage =
     "      snapshots/*.vtu + run.pvd, run.log\n"
     "  fdem check CASE.toml [--set KEY=VALUE ...]\n"
     "      validate a case and its mesh without running\n"
+    "  fdem mesh CASE.toml [--out DIR] [--set KEY=VALUE ...]\n"
+    "      mesh only: writes DIR/mesh.vtu (regions, bodies, edge classes) and prints statistics\n"
     "  fdem --help | --version\n"
     "\n"
     "options:\n"
@@ -98,8 +103,8 @@ int main(int argc, char** argv) {
             return 0;
         }
         const Args a = parse_args(argc, argv);
-        if (a.command != "run" && a.command != "check")
-            throw fdem::InputError("unknown command '" + a.command + "' (commands: run, check; see fdem --help)");
+        if (a.command != "run" && a.command != "check" && a.command != "mesh")
+            throw fdem::InputError("unknown command '" + a.command + "' (commands: run, check, mesh; see fdem --help)");
         if (a.case_file.empty()) throw fdem::InputError("fdem " + a.command + ": no case file given");
         if (a.command == "check") {
             const fdem::CaseSpec spec = fdem::load_case(a.case_file, a.sets);
@@ -111,6 +116,15 @@ int main(int argc, char** argv) {
             std::cout << a.case_file << ": ok: " << sim.model().n_triangles() << " triangles, " << sim.model().n_nodes()
                       << " nodes, " << sim.model().cohesive.size() << " cohesive elements, " << spec.stages.size()
                       << " stage(s), time step " << sim.dt() << " s\n";
+            return 0;
+        }
+        if (a.command == "mesh") {
+            const fdem::CaseSpec spec = fdem::load_case(a.case_file, a.sets);
+            const fdem::mesh::Topology topo = fdem::build_topology_only(spec);
+            const std::filesystem::path dir = a.out.empty() ? std::filesystem::path("runs") / spec.name : std::filesystem::path(a.out);
+            std::filesystem::create_directories(dir);
+            fdem::mesh::write_topology_vtu((dir / "mesh.vtu").string(), topo);
+            std::cout << fdem::mesh::format_stats(fdem::mesh::mesh_stats(topo)) << "mesh written to " << (dir / "mesh.vtu").string() << "\n";
             return 0;
         }
         fdem::RunOptions opt;

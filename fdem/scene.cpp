@@ -43,7 +43,12 @@ mesh::TopologyOptions topology_options(const CaseSpec& spec, const mesh::Mesh& m
 mesh::Topology build_topology_only(const CaseSpec& spec) {
     mesh::Mesh m = make_mesh(spec);
     try {
-        return mesh::build_topology(m, topology_options(spec, m));
+        mesh::TopologyOptions opt = topology_options(spec, m);
+        if (!needs_topology(spec))  // no joints and no cracks: every body is tied into one continuum, as in a run
+            for (std::size_t a = 0; a < m.regions.size(); ++a)
+                for (std::size_t b = a; b < m.regions.size(); ++b)
+                    opt.interfaces.push_back({m.regions[a], m.regions[b], mesh::InterfaceKind::tied});
+        return mesh::build_topology(m, opt);
     } catch (const mesh::MeshError& e) {
         throw InputError(spec.file + ": [[interfaces]] / [geometry]: " + e.what());
     }

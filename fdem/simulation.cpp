@@ -31,6 +31,7 @@
 #include "fdem/errors.hpp"
 #include "fdem/scene.hpp"
 #include "mesh/gmsh_source.hpp"
+#include "mesh/quality.hpp"
 #include "mesh/wall.hpp"
 
 namespace fdem {
@@ -75,6 +76,7 @@ mesh::Mesh make_mesh(const CaseSpec& spec) {
         else if (g.type == "msh") m = mesh::read_msh_file(g.file);
         else if (g.type == "wall") m = mesh::generate_wall(g.wall);
         else throw InputError(spec.file + ": key 'geometry.type': unsupported geometry '" + g.type + "'");
+        mesh::check_quality(m, g.min_angle);
     } catch (const mesh::MeshError& e) {
         throw InputError(spec.file + ":" + std::to_string(g.line) + ": [geometry]: " + e.what());
     }
@@ -530,14 +532,20 @@ bool Simulation::stage_finished() {
     return false;
 }
 
+// Monitors describe the state at the last force evaluation t^n, where reactions and loads were computed:
+// after a step x holds x^{n+1} = x^n + dt v^{n+1/2}, so the displacement at t^n is x - dt v (velocities are
+// the half-step ones). Pairing u^{n+1} with R^n would put the force one step behind the displacement and
+// bias the energy of hysteresis loops by about k dt times the integral of the squared velocity.
 double Simulation::monitor_value(int i) const {
     const MonitorSpec& m = spec_.monitors[i];
-    if (m.type == "tilt") return tilt_deg_;
+    const double lag = steps_ > 0 ? dt_ : 0.0;
+    if (m.type == "tilt") return tilt_deg_ - tilt_rate_ * lag;
     const auto& grp = model_.group(m.group);
     const int c = m.component;
     double s = 0;
     if (m.type == "displacement" || m.type == "velocity") {
-        for (int k : grp.nodes) s += m.type == "displacement" ? model_.x[2 * k + c] - model_.X[2 * k + c] : model_.v[2 * k + c];
+        for (int k : grp.nodes)
+            s += m.type == "displacement" ? model_.x[2 * k + c] - lag * model_.v[2 * k + c] - model_.X[2 * k + c] : model_.v[2 * k + c];
         return grp.nodes.empty() ? 0.0 : s / static_cast<double>(grp.nodes.size());
     }
     if (m.type == "reaction") {
@@ -581,7 +589,8 @@ Energies Simulation::energies() const {
 
 void Simulation::write_history_row() {
     const Energies e = energies();
-    std::string row = format_double(time_) + "," + std::to_string(steps_) + "," + std::to_string(stage_ + 1);
+    // The row describes t^n, the time of the last force evaluation (see monitor_value).
+    std::string row = format_double(steps_ > 0 ? time_ - dt_ : time_) + "," + std::to_string(steps_) + "," + std::to_string(stage_ + 1);
     for (std::size_t i = 0; i < spec_.monitors.size(); ++i) {
         const double m = monitor_value(static_cast<int>(i));
         row += "," + format_double(m);
@@ -610,12 +619,14 @@ void Simulation::write_snapshot() {
         vel.f64[3 * k] = model_.v[2 * k], vel.f64[3 * k + 1] = model_.v[2 * k + 1], vel.f64[3 * k + 2] = 0;
     }
     VtuArray stress{"stress", 3, {}, {}, false}, mat{"material", 1, {}, {}, true}, region{"region", 1, {}, {}, true};
-    stress.f64.resize(3 * nt), mat.i32.resize(nt), region.i32.resize(nt);
+    VtuArray body{"unit", 1, {}, {}, true};  // the body (unit, beam, base) a triangle belongs to
+    stress.f64.resize(3 * nt), mat.i32.resize(nt), region.i32.resize(nt), body.i32.resize(nt);
     std::vector<int> tri(3 * nt);
     for (int e = 0; e < nt; ++e) {
         triangle_stress(model_.tris[e], model_.mat[model_.tris[e].mat], model_.x.data(), &stress.f64[3 * e]);
         mat.i32[e] = model_.tri_material[e];
         region.i32[e] = model_.mesh.tri_region[e];
+        body.i32[e] = model_.mesh.tri_body.empty() ? 0 : model_.mesh.tri_body[e];
         for (int k = 0; k < 3; ++k) tri[3 * e + k] = model_.tris[e].n[k];
     }
     // Cohesive elements as line cells on their side-A edge, after the triangles: cell_kind 0 triangle, 1 joint;
@@ -630,12 +641,12 @@ void Simulation::write_snapshot() {
             damage.f64.push_back(j->damage(e));
             state.i32.push_back(static_cast<int>(j->state(e)));
             for (int c = 0; c < 3; ++c) stress.f64.push_back(std::nan(""));
-            mat.i32.push_back(-1), region.i32.push_back(-1);
+            mat.i32.push_back(-1), region.i32.push_back(-1), body.i32.push_back(-1);
         }
     }
     char name[64];
     std::snprintf(name, sizeof name, "snapshots/step_%09ld.vtu", steps_);
-    std::vector<VtuArray> cells{stress, mat, region};
+    std::vector<VtuArray> cells{stress, mat, region, body};
     if (!lines.empty()) cells.push_back(kind), cells.push_back(damage), cells.push_back(state);
     write_file_atomic((std::filesystem::path(opt_.out_dir) / name).string(), vtu_document(model_.X, tri, lines, {disp, vel}, cells));
     snapshots_.emplace_back(time_, name);
@@ -696,6 +707,8 @@ void Simulation::run() {
     log("mesh: " + std::to_string(model_.n_triangles()) + " triangles, " + std::to_string(model_.n_nodes()) + " nodes");
     log("time step: " + sci(dt_) + " s = " + (spec_.dt_override ? std::string("fixed by numerics.dt") : sci(spec_.safety) + " x stable limit") +
         " " + sci(dt_limit_) + " s (set by " + (dt_element_ >= 0 ? "triangle " + std::to_string(dt_element_) : std::string("joint/contact springs")) + ")");
+    if (!model_.has_topology && model_.mesh.n_bodies() > 1)
+        log("no interface or fracture rules: the " + std::to_string(model_.mesh.n_bodies()) + " bodies of the mesh are tied into one continuum");
     if (inter_.has_joints())
         log("cohesive elements: " + std::to_string(inter_.joints()->size()));
     if (inter_.has_contact())
