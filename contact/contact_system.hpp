@@ -10,6 +10,19 @@
 //   (forces 12 p, energies) is written by one thread per pair in parallel and then added serially in pair order,
 //   so the result has the same bits for any thread count.
 //   "No index" is -1.
+//
+// HOW THE ENGINE USES IT
+//   ContactLaws laws(n_classes);             // a "material" here is any integer class: the region index works
+//   laws.set_interface(ra, rb, law);         // dry interface / broken bond between two bodies of classes ra, rb
+//   laws.set_crack(r, law);                  // faces of a crack inside one body (residual friction); optional,
+//                                            // defaults to the interface law (r, r)
+//   ContactSystem cs(tri, n_tri, n_nodes, t, tri_class, tri_body, laws);   // throws std::invalid_argument
+//   cs.set_capable(e, true) for free-boundary / dry-interface triangles; cs.exclude_pair(ea, eb) for the two
+//   triangles of every intact cohesive element; when it breaks: include_pair + set_capable on both.
+//   dt = min(dt_triangles, cs.stable_dt(x, node_mass)) * safety.
+//   each step, after zeroing f and before the update: cs.step(x, v, dt, f)  (adds contact forces).
+//   energies: cs.elastic_energy() (J, set_compute_energy(true) on the steps that report it),
+//   cs.friction_dissipation() (J, cumulative). For reaction monitors, pass a zeroed array instead of f and add.
 #pragma once
 
 #include <cstdint>
