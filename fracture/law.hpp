@@ -1,9 +1,10 @@
 // fracture/law.hpp: the cohesive traction-separation law of FORMULATION §6 as small pure functions.
 //
 // One integration point of a cohesive element sees an opening `o` (m, positive when the faces separate,
-// negative when they overlap) and a slip `s` (m, either sign). Its only history is the damage `D` in [0, 1],
-// the largest value ever reached (irreversible). Everything here is per unit crack area: stresses in Pa,
-// energies in J/m^2. Tension is positive.
+// negative when they overlap) and a slip `s` (m, either sign). Its physical history is the damage `D` in [0, 1],
+// the largest value ever reached (irreversible); PointHistory also keeps two numbers of the previous evaluation for
+// the energy bookkeeping. Everything here is per unit crack area: stresses in Pa, energies in J/m^2. Tension is
+// positive.
 //
 // Continuous law ([K25] Eqs. 6-13, [MAW99], [M04] ch. 7):
 //   sigma(o, D) = K_n o                                  o < 0   (undamaged linear penalty; K_n o == 2 (o/o_p) f_t)
@@ -15,6 +16,9 @@
 // K_n, K_s (Pa/m) are the initial slopes of the law: p_j / h for a penalty joint (then o_p = 2 h f_t / p_j as in
 // FORMULATION), or the measured k_n, k_s of a zero-thickness interface. Writing the compressive branch as K_n o
 // instead of 2 (o/o_p) f_t is the same number and stays defined when it matters least (f_t tiny).
+// The shear curve depends on f_s and so on the current compression: like friction, that coupling is not a
+// potential, so a cycle of normal stress at fixed slip can move energy between the bookkeeping terms; it is bounded
+// by the pre-peak shear energy (2/3) f_s s_p and vanishes at constant compression.
 //
 // Energy-exact ranges: the whole area under sigma(o) in pure mode I is (2/3) f_t o_p + kappa f_t o_t with
 // kappa = int_0^1 z(D) dD, so o_t = (G_I - (2/3) f_t o_p) / (kappa f_t) makes it exactly G_I (likewise s_t, G_II).
@@ -133,7 +137,10 @@ inline PointResponse evaluate_point(const JointLaw& L, double o, double s, const
 
   // Damage components (signed: negative below the elastic limit), D_trial = |(D_I, D_II)^+|.
   const double dI = (o - o_p) * L.inv_opening_range;
-  const double dII = o < 0.0 ? (a_s - s_p) / shear_softening_range(L, f_s, s_p) : (a_s - s_p) * L.inv_slip_range0;
+  // Below the limit only the sign and rough size of dII matter (onset interpolation), so the zero-compression range
+  // serves there and spares the compressed joints of a precompressed wall a division per point.
+  const double dII = (o < 0.0 && a_s > s_p) ? (a_s - s_p) / shear_softening_range(L, f_s, s_p)
+                                            : (a_s - s_p) * L.inv_slip_range0;
   r.damage_I = dI > 0.0 ? dI : 0.0;
   r.damage_II = dII > 0.0 ? dII : 0.0;
   double trial;

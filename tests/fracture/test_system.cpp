@@ -173,7 +173,7 @@ TEST_CASE("throughput of the joint force loop on a 51200-triangle block intact a
   const int saved = omp_get_max_threads();
   std::printf("block: %d triangles, %zu cohesive elements, %d nodes\n", nt, g.elems.size(), g.num_nodes());
   std::printf("state,threads,intact_elements,steps,median_step_s,triangle_steps_per_s_median,triangle_steps_per_s_best\n");
-  for (const char* state : {"intact", "fragmented"}) {
+  for (const char* state : {"intact", "compressed", "fragmented"}) {
     for (int threads : {1, 2}) {
       omp_set_num_threads(threads);
       CohesiveSystem sys(g.elems, {stone()}, 0.1, g.x.data(), g.num_nodes());
@@ -181,6 +181,8 @@ TEST_CASE("throughput of the joint force loop on a 51200-triangle block intact a
       std::vector<double> x;
       if (std::string(state) == "intact") {
         x = positions(g, 1.0, 2e-7);  // small strains: every element in its pre-peak branch
+      } else if (std::string(state) == "compressed") {
+        x = positions(g, 1.0, -2e-7);  // every joint overlapping a little (a precompressed wall)
       } else {
         x = positions(g, 1.0, 2.4e-2);  // most elements broken, the rest damaged (softening branch, exp)
       }
