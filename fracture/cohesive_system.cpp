@@ -7,7 +7,8 @@
 //   the damage and what the second-order dissipation needs from the previous step),
 //   force_[8e + 2k + {0,1}] (k = a0, a1, b0, b1), energy_[e], dissipated_[e].
 // - active_ lists the intact elements in ascending order; broken ones leave it and their force slots are zeroed,
-//   so the node gather (CSR built once over all elements) stays valid without rebuilding.
+//   so the node gather (CSR over the intact elements, slots in element order) stays valid between rebuilds, which
+//   happen once a quarter of its slots belong to broken elements.
 //
 // Kinematics and forces ([M04] ch. 7, [MAW99]). With N0 = 1 - xi, N1 = xi along the edge, the gap is
 //   d(xi) = sum_k N_k (x_Bk - x_Ak),  o = d.n,  s = d.t,
