@@ -127,6 +127,8 @@ TEST_CASE("mode II under constant compression: peak c + sigma tan(phi) and dissi
     CHECK(el.dissipated() == Approx(p.G_II + work0).epsilon(1e-6));
     const BreakRecord& b = el.breaks[0];
     CHECK(b.mode == FractureMode::mode_II);
+    CHECK(el.sys.counts().of(JointClass::unit_interior, FractureMode::mode_II) == 1);
+    CHECK(el.sys.counts().total() == 1);
     // Residual friction: the element hands the edge to contact with mu = tan(phi_res); the residual shear
     // sigma tan(phi_res) itself is the contact module's (tested with the engine).
     CHECK(b.residual_friction == Approx(std::tan(30.0 * kPi / 180.0)));
