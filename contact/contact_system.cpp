@@ -186,7 +186,13 @@ void ContactSystem::detect(const double* x) {
             buffer_ = std::isfinite(lmin) ? lmin / 5.0 : 0.0;  // FORMULATION §5 default
         }
     }
-    std::vector<double> icx(n), icy(n), ir(n);
+    // scratch kept between detections: no allocation, no page faults on the hot path
+    std::vector<double>& icx = cx_;
+    std::vector<double>& icy = cy_;
+    std::vector<double>& ir = cr_;
+    icx.resize(n);
+    icy.resize(n);
+    ir.resize(n);
 #pragma omp parallel for schedule(static) if (n > kParallelMin)
     for (int i = 0; i < n; ++i) {
         double T[6];
@@ -203,7 +209,8 @@ void ContactSystem::detect(const double* x) {
 
     // Drop pairs that share a node or an intact cohesive element, in parallel into flags, then compact in order.
     const int nc = cand_.size();
-    std::vector<char> keep(nc);
+    std::vector<char>& keep = keep_;
+    keep.resize(nc);
 #pragma omp parallel for schedule(static) if (nc > kParallelMin)
     for (int p = 0; p < nc; ++p) {
         const int a = cand_.a[p], b = cand_.b[p];
@@ -222,9 +229,10 @@ void ContactSystem::detect(const double* x) {
                 }
         keep[p] = ok ? 1 : 0;
     }
-    std::vector<int> na, nb;
-    na.reserve(nc);
-    nb.reserve(nc);
+    std::vector<int>& na = new_a_;
+    std::vector<int>& nb = new_b_;
+    na.clear();
+    nb.clear();
     for (int p = 0; p < nc; ++p)
         if (keep[p]) {
             na.push_back(cand_.a[p]);
@@ -234,13 +242,18 @@ void ContactSystem::detect(const double* x) {
 
     // Carry the sliding history of pairs that persist ([K25] Eq. 4 needs the accumulated delta_s): old pairs
     // bucketed by their first triangle (counting sort, O(P)), each new pair looks in its bucket.
-    std::vector<double> nh(6 * static_cast<size_t>(np), 0.0);
+    std::vector<double>& nh = new_hist_;
+    nh.assign(6 * static_cast<size_t>(np), 0.0);
     const int op = static_cast<int>(pair_a_.size());
     if (op > 0) {
-        std::vector<int> start(n_tri_ + 1, 0), order(op);
+        std::vector<int>& start = csr_start_;
+        std::vector<int>& order = csr_order_;
+        start.assign(n_tri_ + 1, 0);
+        order.resize(op);
         for (int p = 0; p < op; ++p) ++start[pair_a_[p] + 1];
         for (int t = 0; t < n_tri_; ++t) start[t + 1] += start[t];
-        std::vector<int> fill(start.begin(), start.end() - 1);
+        std::vector<int>& fill = csr_fill_;
+        fill.assign(start.begin(), start.end() - 1);
         for (int p = 0; p < op; ++p) order[fill[pair_a_[p]]++] = p;
 #pragma omp parallel for schedule(static) if (np > kParallelMin)
         for (int p = 0; p < np; ++p) {

@@ -115,7 +115,10 @@ private:
     std::vector<double> hist_;  // 6 per pair
     // scratch
     std::vector<int> items_;
-    std::vector<double> cx_, cy_, cr_;  // per triangle (only capable ones meaningful)
+    std::vector<double> cx_, cy_, cr_;  // per capable triangle at the last detection: bounding circles (m)
+    std::vector<char> keep_;
+    std::vector<int> new_a_, new_b_, csr_start_, csr_order_, csr_fill_;
+    std::vector<double> new_hist_;
     CandidatePairs cand_;
     NbsWorkspace ws_;
     std::vector<double> pair_f_;   // 12 per pair
