@@ -280,44 +280,53 @@ TEST_CASE("A block on a slowly tilting base overturns at atan(b/h) if mu > b/h, 
 }
 
 TEST_CASE("A frictionless undamped collision of two elastic blocks conserves momentum and energy", "[regression]") {
-    BlockSim s;
-    s.gx = s.gy = 0.0;
-    s.add_block(0.0, 0.0, 0.2, 0.1, 4, 2);
-    s.add_block(0.25, 0.03, 0.2, 0.1, 4, 2);
-    s.finish(dry_joint_mu(5e9, 5e9, 0.0));
-    const double dt = 0.25 * s.stable_dt();
-    for (int k = s.body_first_node[0]; k < s.body_last_node[0]; ++k) s.v[2 * k] = 1.0;
-    for (int k = s.body_first_node[1]; k < s.body_last_node[1]; ++k) s.v[2 * k] = -0.5;
-    auto momentum = [&](double& px, double& py, double& scale) {
-        px = py = scale = 0.0;
-        for (int k = 0; k < s.n_nodes(); ++k) {
-            px += s.m[2 * k] * s.v[2 * k];
-            py += s.m[2 * k + 1] * s.v[2 * k + 1];
-            scale += s.m[2 * k] * std::hypot(s.v[2 * k], s.v[2 * k + 1]);
+    for (int law_kind = 0; law_kind < 2; ++law_kind) {  // k_n (distance potential) and p_n (Munjiza potential)
+        BlockSim s;
+        s.gx = s.gy = 0.0;
+        s.add_block(0.0, 0.0, 0.2, 0.1, 4, 2);
+        s.add_block(0.25, 0.03, 0.2, 0.1, 4, 2);
+        if (law_kind == 0) {
+            s.finish(dry_joint_mu(5e9, 5e9, 0.0));
+        } else {
+            ContactLaws laws(1);
+            laws.set_interface(0, 0, ContactLaw::penalty(5e7, 0.0));
+            s.finish(laws);
         }
-    };
-    double px0, py0, sc0;
-    momentum(px0, py0, sc0);
-    const double e0 = s.kinetic() + s.elastic(false);
-    double max_contact = 0.0;
-    for (double t = 0.0; t < 0.1; t += dt) {
-        s.step(dt);
-        max_contact = std::max(max_contact, s.cs->elastic_energy());
+        const double dt = 0.25 * s.stable_dt();
+        for (int k = s.body_first_node[0]; k < s.body_last_node[0]; ++k) s.v[2 * k] = 1.0;
+        for (int k = s.body_first_node[1]; k < s.body_last_node[1]; ++k) s.v[2 * k] = -0.5;
+        auto momentum = [&](double& px, double& py, double& scale) {
+            px = py = scale = 0.0;
+            for (int k = 0; k < s.n_nodes(); ++k) {
+                px += s.m[2 * k] * s.v[2 * k];
+                py += s.m[2 * k + 1] * s.v[2 * k + 1];
+                scale += s.m[2 * k] * std::hypot(s.v[2 * k], s.v[2 * k + 1]);
+            }
+        };
+        double px0, py0, sc0;
+        momentum(px0, py0, sc0);
+        const double e0 = s.kinetic() + s.elastic(false);
+        double max_contact = 0.0;
+        for (double t = 0.0; t < 0.1; t += dt) {
+            s.step(dt);
+            max_contact = std::max(max_contact, s.cs->elastic_energy());
+        }
+        double px, py, sc;
+        momentum(px, py, sc);
+        const double e1 = s.kinetic() + s.elastic(false) + s.cs->elastic_energy();
+        double v0x, v0y, v1x, v1y;
+        s.body_velocity(0, v0x, v0y);
+        s.body_velocity(1, v1x, v1y);
+        std::printf("[collision] %s: momentum change %.3g (relative %.3g), energy change %.4f %% (peak contact energy %.3g J "
+                    "of %.3g J), velocities after: %.4f %.4f m/s\n",
+                    law_kind == 0 ? "k_n law" : "p_n law", std::hypot(px - px0, py - py0),
+                    std::hypot(px - px0, py - py0) / sc0, 100.0 * (e1 - e0) / e0,
+                    max_contact, e0, v0x, v1x);
+        CHECK(max_contact > 0.1 * e0);  // they did collide
+        CHECK(v1x > 0.0);
+        CHECK(std::hypot(px - px0, py - py0) <= 1e-10 * sc0);
+        CHECK(std::fabs(e1 - e0) < 0.01 * e0);
     }
-    double px, py, sc;
-    momentum(px, py, sc);
-    const double e1 = s.kinetic() + s.elastic(false) + s.cs->elastic_energy();
-    double v0x, v0y, v1x, v1y;
-    s.body_velocity(0, v0x, v0y);
-    s.body_velocity(1, v1x, v1y);
-    std::printf("[collision] momentum change %.3g (relative %.3g), energy change %.4f %% (peak contact energy %.3g J "
-                "of %.3g J), velocities after: %.4f %.4f m/s\n",
-                std::hypot(px - px0, py - py0), std::hypot(px - px0, py - py0) / sc0, 100.0 * (e1 - e0) / e0,
-                max_contact, e0, v0x, v1x);
-    CHECK(max_contact > 0.1 * e0);  // they did collide
-    CHECK(v1x > 0.0);
-    CHECK(std::hypot(px - px0, py - py0) <= 1e-10 * sc0);
-    CHECK(std::fabs(e1 - e0) < 0.01 * e0);
 }
 
 TEST_CASE("Two blocks pressed through a dry joint of stiffness k_n close by q / k_n at 50, 25, 12.5 mm",
