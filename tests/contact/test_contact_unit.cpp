@@ -599,3 +599,78 @@ TEST_CASE("Flat overlap with Munjiza's potential: pressure slope 3 p_n (1/H_A + 
     const double fy = r.fa[1] + r.fa[3] + r.fa[5];
     CHECK(fy == Approx(3.0 * pn * d * (1.0 / (0.6 + d) + 1.0 / 0.7) * 1.0 * t).epsilon(1e-4));
 }
+
+TEST_CASE("ContactSystem pair list = brute force minus shared-node and excluded pairs, capable only", "[unit]") {
+    // Structured meshes of 8 blocks (nodes shared inside a block), placed so that blocks overlap their neighbours;
+    // every third triangle not capable; a few cross-block pairs excluded.
+    std::vector<double> xy;
+    std::vector<int> tri, body;
+    const int n = 12;  // cells per side
+    for (int b = 0; b < 8; ++b) {
+        const int off = static_cast<int>(xy.size() / 2);
+        const double x0 = 0.09 * (b % 4), y0 = 0.09 * (b / 4);
+        for (int j = 0; j <= n; ++j)
+            for (int i = 0; i <= n; ++i) {
+                xy.push_back(x0 + 0.1 * i / n);
+                xy.push_back(y0 + 0.1 * j / n);
+            }
+        for (int j = 0; j < n; ++j)
+            for (int i = 0; i < n; ++i) {
+                const int a = off + j * (n + 1) + i, c = a + n + 2;
+                tri.insert(tri.end(), {a, a + 1, c, a, c, c - 1});
+                body.push_back(b);
+                body.push_back(b);
+            }
+    }
+    const int nt = static_cast<int>(tri.size() / 3), nn = static_cast<int>(xy.size() / 2);
+    ContactLaws laws(1);
+    laws.set_default(ContactLaw::penalty(1e9, 0.3));
+    ContactSystem cs(tri.data(), nt, nn, 0.1, std::vector<int>(nt, 0), body, laws, ContactOptions{0.002, true});
+    std::vector<char> capable(nt);
+    for (int t = 0; t < nt; ++t) {
+        capable[t] = t % 3 != 0;
+        cs.set_capable(t, capable[t] != 0);
+    }
+    std::set<std::pair<int, int>> excluded;
+    for (int t = 1; t < nt; t += 97) {
+        const int u = (t * 31) % nt;
+        if (u == t) continue;
+        cs.exclude_pair(t, u);
+        excluded.emplace(std::min(t, u), std::max(t, u));
+    }
+    std::vector<double> v(2 * nn, 0.0), f(2 * nn, 0.0);
+    cs.step(xy.data(), v.data(), 1e-6, f.data());
+    // brute force with the same circles
+    std::vector<double> cx, cy, r;
+    std::vector<int> id;
+    for (int t = 0; t < nt; ++t) {
+        if (!capable[t]) continue;
+        const int* q = &tri[3 * t];
+        const double gx = (xy[2 * q[0]] + xy[2 * q[1]] + xy[2 * q[2]]) / 3.0;
+        const double gy = (xy[2 * q[0] + 1] + xy[2 * q[1] + 1] + xy[2 * q[2] + 1]) / 3.0;
+        double r2 = 0.0;
+        for (int k = 0; k < 3; ++k)
+            r2 = std::max(r2, (xy[2 * q[k]] - gx) * (xy[2 * q[k]] - gx) +
+                                  (xy[2 * q[k] + 1] - gy) * (xy[2 * q[k] + 1] - gy));
+        cx.push_back(gx);
+        cy.push_back(gy);
+        r.push_back(std::sqrt(r2));
+        id.push_back(t);
+    }
+    CandidatePairs brute;
+    brute_force_pairs(cx.data(), cy.data(), r.data(), id.data(), static_cast<int>(id.size()), 0.002, brute);
+    std::set<std::pair<int, int>> expected;
+    for (int p = 0; p < brute.size(); ++p) {
+        const int a = brute.a[p], b = brute.b[p];
+        bool share = false;
+        for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < 3; ++j) share = share || tri[3 * a + i] == tri[3 * b + j];
+        if (!share && !excluded.count({a, b})) expected.emplace(a, b);
+    }
+    std::set<std::pair<int, int>> got;
+    for (size_t p = 0; p < cs.pair_a().size(); ++p) got.emplace(cs.pair_a()[p], cs.pair_b()[p]);
+    CHECK(got.size() == cs.pair_a().size());
+    CHECK(expected.size() > 1000);
+    CHECK(got == expected);
+    CHECK(cs.stats().active_pairs > 100);  // overlapping blocks do push
+}
