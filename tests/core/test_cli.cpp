@@ -117,7 +117,7 @@ TEST_CASE("bad command lines give exit code 1", "[unit]") {
     CHECK(testing::run_fdem("--help", dir).code == 0);
 }
 
-TEST_CASE("a run writes history, summary, snapshots and a pvd collection", "[unit]") {
+TEST_CASE("a run writes history and summary and snapshots and a pvd collection", "[unit]") {
     const auto dir = testing::tmp_dir("cli_run");
     const auto path = testing::write_text(dir / "case.toml", kGood);
     const auto r = testing::run_fdem("run \"" + path + "\" --quiet --out \"" + (dir / "run").string() + "\"", dir);

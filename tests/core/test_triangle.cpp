@@ -263,7 +263,7 @@ TEST_CASE("cantilever tip deflection converges monotonically to Timoshenko-Goodi
     CHECK(prev_err < 0.05);
 }
 
-TEST_CASE("1e5 steps at 0.9 of the computed time step stay stable; 3 x stops with exit code 2", "[unit]") {
+TEST_CASE("1e5 steps at 0.9 of the computed time step stay stable and 3 x stops with exit code 2", "[unit]") {
     const std::string text = R"(
 [case]
 name = "stability"

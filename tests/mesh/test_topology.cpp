@@ -104,7 +104,7 @@ TopologyOptions dry_crackable_units() {
 
 }  // namespace
 
-TEST_CASE("CASES A wall: dry joint length equals bed plus head joints; splitting invariants", "[unit]") {
+TEST_CASE("CASES A wall: dry joint length equals bed plus head joints and splitting invariants hold", "[unit]") {
     const Mesh m = generate_wall(cases_a_wall());
     const Topology topo = build_topology(m, dry_crackable_units());
     CHECK(check_invariants(m, topo) > 100);
@@ -150,7 +150,7 @@ TEST_CASE("non-crackable units: nodes shared inside, split only at joints", "[un
                         by_edge.contact_capable.end()));
 }
 
-TEST_CASE("tied units form one continuum; split_all separates every triangle", "[unit]") {
+TEST_CASE("tied units form one continuum and split_all separates every triangle", "[unit]") {
     const Mesh m = generate_wall(cases_a_wall(0.1));
     TopologyOptions o;
     o.interfaces = {{"units", "units", InterfaceKind::tied}};
