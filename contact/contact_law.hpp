@@ -50,6 +50,10 @@ public:
     int n_materials() const { return n_materials_; }
     // Used for every combination not set explicitly (optional).
     void set_default(const ContactLaw& law);
+    // Combinations with no law (and no default) never form contact pairs, instead of being an error: for
+    // scenes that declare where surfaces can touch (regions tied together, a beam that cannot crack).
+    void set_unlisted_never_touch(bool on) { unlisted_never_touch_ = on; }
+    bool unlisted_never_touch() const { return unlisted_never_touch_; }
     // nullptr when neither the combination nor a default was set; ContactSystem then throws at
     // construction if two triangles with that combination exist.
     const ContactLaw* interface(int material_a, int material_b) const;
@@ -63,6 +67,7 @@ private:
     std::vector<char> crack_set_;
     ContactLaw default_;
     bool default_set_ = false;
+    bool unlisted_never_touch_ = false;
 };
 
 }  // namespace fdem::contact

@@ -78,6 +78,7 @@ ContactSystem::ContactSystem(const int* tri, int n_tri, int n_nodes, double thic
         for (int b = a; b < n_mat_; ++b) {
             if (!present[b]) continue;
             const ContactLaw* law = laws.interface(a, b);
+            if (!law && laws.unlisted_never_touch()) continue;  // index stays -1: never a pair
             if (!law) {
                 std::ostringstream os;
                 os << "no contact law for the interface between materials " << a << " and " << b;
@@ -227,6 +228,7 @@ void ContactSystem::detect(const double* x) {
                     ok = false;
                     break;
                 }
+        if (ok && law_of(a, b) < 0) ok = false;  // a combination that never touches
         keep[p] = ok ? 1 : 0;
     }
     std::vector<int>& na = new_a_;

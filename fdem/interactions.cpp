@@ -109,7 +109,10 @@ Interactions::Interactions(const CaseSpec& spec, const Model& model) {
     for (const auto& i : spec.interfaces) any_contact = any_contact || i.kind != "tied";
     for (const auto& m : spec.materials) any_contact = any_contact || m.fracture.present;
     if (!any_contact) return;
+    // Contact happens only where the case says surfaces can touch: region pairs with a dry or bonded rule and the
+    // crack faces of cracking materials. Other combinations (tied regions, a beam that cannot crack) never pair.
     contact::ContactLaws laws(nr);
+    laws.set_unlisted_never_touch(true);
     for (int a = 0; a < nr; ++a) {
         const Material& ma = material_of(a);
         if (ma.fracture.present) {

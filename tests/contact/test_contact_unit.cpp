@@ -176,7 +176,7 @@ TEST_CASE("Contact force is minus the gradient of the contact energy for rigid m
     }
 }
 
-TEST_CASE("Action equals reaction: forces and moments of a pair sum to zero; symmetry", "[unit]") {
+TEST_CASE("Action equals reaction: forces and moments of a pair sum to zero and swap symmetrically", "[unit]") {
     std::mt19937_64 rng(7);
     std::uniform_real_distribution<double> u(-0.5, 0.5);
     int overlapping = 0;
@@ -675,4 +675,29 @@ TEST_CASE("ContactSystem pair list = brute force minus shared-node and excluded 
     CHECK(expected.size() > 1000);
     CHECK(got == expected);
     CHECK(cs.stats().active_pairs > 100);  // overlapping blocks do push
+}
+
+TEST_CASE("Combinations without a law never touch when the laws say so, and are an error otherwise", "[unit]") {
+    // Triangle 0 (material 0) overlaps triangle 1 (material 1): no law for 0/1.
+    const std::vector<double> x = {0.0, -1e-4, 1.0, -1e-4, 0.5, 0.6, -1.0, -1.0, 2.0, 0.0, -1.0, 0.0};
+    const int tri[6] = {0, 1, 2, 3, 4, 5};
+    ContactLaws laws(2);
+    laws.set_interface(0, 0, ContactLaw::stiffness(1e9, 1e9, 30.0));
+    laws.set_interface(1, 1, ContactLaw::stiffness(1e9, 1e9, 30.0));
+    CHECK_THROWS_AS(ContactSystem(tri, 2, 6, 0.1, {0, 1}, {0, 1}, laws), std::invalid_argument);
+    laws.set_unlisted_never_touch(true);
+    ContactSystem cs(tri, 2, 6, 0.1, {0, 1}, {0, 1}, laws);
+    cs.set_capable(0, true);
+    cs.set_capable(1, true);
+    std::vector<double> v(12, 0.0), f(12, 0.0);
+    cs.step(x.data(), v.data(), 1e-4, f.data());
+    CHECK(cs.pair_a().empty());
+    for (double fi : f) CHECK(fi == 0.0);
+    // The same overlap with a law between 0 and 1 does push.
+    laws.set_interface(0, 1, ContactLaw::stiffness(1e9, 1e9, 30.0));
+    ContactSystem cs2(tri, 2, 6, 0.1, {0, 1}, {0, 1}, laws);
+    cs2.set_capable(0, true);
+    cs2.set_capable(1, true);
+    cs2.step(x.data(), v.data(), 1e-4, f.data());
+    CHECK(f[1] + f[3] + f[5] > 0);
 }
