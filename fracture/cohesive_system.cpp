@@ -95,6 +95,7 @@ CohesiveSystem::CohesiveSystem(std::vector<CohesiveElement> elems, std::vector<C
   // Longest edge per class: the penalty form is too soft first there.
   std::vector<double> h_max(props_.size(), 0.0);
   length_.assign(ne, 0.0);
+  ref_mid_.assign(2 * std::size_t(ne), 0.0);
   for (int e = 0; e < ne; ++e) {
     const CohesiveElement& el = elems_[e];
     const std::string where = "cohesive element " + std::to_string(e) + ": ";
@@ -117,6 +118,8 @@ CohesiveSystem::CohesiveSystem(std::vector<CohesiveElement> elems, std::vector<C
       continue;
     }
     length_[e] = h;
+    ref_mid_[2 * e] = 0.5 * (X[2 * el.n[0]] + X[2 * el.n[1]]);
+    ref_mid_[2 * e + 1] = 0.5 * (X[2 * el.n[0] + 1] + X[2 * el.n[1] + 1]);
     for (int k = 0; k < 2; ++k) {
       const double dx = X[2 * el.n[2 + k]] - X[2 * el.n[k]], dy = X[2 * el.n[2 + k] + 1] - X[2 * el.n[k] + 1];
       if (std::sqrt(dx * dx + dy * dy) > 1e-9 * h)
@@ -313,6 +316,9 @@ std::vector<BreakRecord> CohesiveSystem::update_damage(double time, double contr
     rec.damage_II = break_DII_[e];
     rec.mode = classify_mode(rec.damage_I, rec.damage_II);
     rec.residual_friction = residual_friction(e);
+    rec.length = length_[e];
+    rec.x_ref = ref_mid_[2 * e];
+    rec.y_ref = ref_mid_[2 * e + 1];
     out.push_back(rec);
     ++counts_.count[int(el.kind)][int(rec.mode)];
     // Whatever the element still stores (only compression can remain at D = 1) leaves with it: book it as
@@ -367,7 +373,9 @@ double CohesiveSystem::residual_friction(int e) const {
 }
 
 void write_cracks_csv_header(std::ostream& os) {
-  os << "time_s,control_displacement_m,x_m,y_m,class,unit_a,unit_b,mode,D_I,D_II,element,tri_a,tri_b\n";
+  // x_m, y_m: current midpoint at breaking; x_ref_m, y_ref_m: reference midpoint (to find the mesh edge).
+  os << "time_s,control_displacement_m,x_m,y_m,class,unit_a,unit_b,mode,D_I,D_II,element,tri_a,tri_b,length_m,x_ref_m,"
+        "y_ref_m\n";
 }
 
 void write_cracks_csv_row(std::ostream& os, const BreakRecord& r) {
@@ -375,7 +383,7 @@ void write_cracks_csv_row(std::ostream& os, const BreakRecord& r) {
   line.precision(10);
   line << r.time << ',' << r.control_displacement << ',' << r.x << ',' << r.y << ',' << to_string(r.kind) << ','
        << r.unit_a << ',' << r.unit_b << ',' << to_string(r.mode) << ',' << r.damage_I << ',' << r.damage_II << ','
-       << r.element << ',' << r.tri_a << ',' << r.tri_b << '\n';
+       << r.element << ',' << r.tri_a << ',' << r.tri_b << ',' << r.length << ',' << r.x_ref << ',' << r.y_ref << '\n';
   os << line.str();
 }
 

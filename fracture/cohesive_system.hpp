@@ -53,6 +53,8 @@ struct BreakRecord {
   FractureMode mode;
   double damage_I, damage_II;   // mean over the 3 points of D_I, D_II at the step it broke (may exceed 1)
   double residual_friction;     // tan(phi_res) of its class: the friction coefficient contact must use on this edge
+  double length;                // reference length h of the element, m (crack length = sum over records)
+  double x_ref, y_ref;          // midpoint of the element in the reference configuration, m
 };
 
 // Counts of broken elements per class and mode, for history columns.
@@ -122,6 +124,7 @@ class CohesiveSystem {
   // history at the 3 points (3e + i), force buffer (8e: a0x a0y a1x a1y b0x b0y b1x b1y), energies.
   std::vector<JointLaw> law_;
   std::vector<double> length_;
+  std::vector<double> ref_mid_;        // cold: reference midpoint, 2 per element
   std::vector<PointHistory> history_;
   std::vector<double> force_;
   std::vector<double> energy_;

@@ -471,8 +471,12 @@ TEST_CASE("break records and counts and cracks.csv", "[unit]") {
   std::ostringstream os;
   write_cracks_csv_header(os);
   write_cracks_csv_row(os, recs[0]);
-  CHECK(os.str().rfind("time_s,control_displacement_m,x_m,y_m,class,unit_a,unit_b,mode,D_I,D_II,element,tri_a,tri_b\n"
-                       "1.5,0.004,0.03,",
+  CHECK(recs[0].length == Approx(h));
+  CHECK(recs[0].x_ref == Approx(1.5 * h));
+  CHECK(recs[0].y_ref == 0.0);
+  CHECK(os.str().rfind("time_s,control_displacement_m,x_m,y_m,class,unit_a,unit_b,mode,D_I,D_II,element,tri_a,tri_b,"
+                       "length_m,x_ref_m,y_ref_m\n1.5,0.004,0.03,",
                        0) == 0);
   CHECK(os.str().find(",interface,3,4,I,") != std::string::npos);
+  CHECK(os.str().find(",1,2,3,0.02,0.03,0\n") != std::string::npos);
 }
