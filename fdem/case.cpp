@@ -648,6 +648,8 @@ CaseSpec load_case(const std::string& path, const std::vector<std::string>& over
         spec.safety = r.number("safety", false, "a time-step safety factor in (0, 4] (above 1 the run is unstable)",
                                [](double v) { return v > 0 && v <= 4; }).value_or(0.8);
         if (auto dt = r.number("dt", false, "a fixed time step > 0 in s", positive)) spec.dt_override = dt;
+        spec.mass_scale = r.number("mass_scale", false, "an inertial mass multiplier >= 1 (quasi-static density scaling)",
+                                   [](double v) { return v >= 1; }).value_or(1.0);
         r.finish();
     }
 

@@ -163,6 +163,9 @@ struct CaseSpec {
     std::vector<MonitorSpec> monitors;
     std::vector<StageSpec> stages;
     double safety = 0.8;  // fraction of the stable time step used, -
+    // Inertial mass multiplier for quasi-static runs (density scaling, as UDEC/3DEC do): the time step grows by
+    // sqrt(mass_scale); gravity keeps the physical mass. 1 = physical dynamics.
+    double mass_scale = 1;
     std::optional<double> dt_override;  // s, a fixed time step (tests of the stability limit), bypasses the safety factor
     double history_interval = 0;   // s; 0 = every 100 steps
     double snapshot_interval = 0;  // s; 0 = only at the end of each stage

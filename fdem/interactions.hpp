@@ -25,6 +25,10 @@ public:
 
     // Stable step bound of joint and contact springs (s); +inf when there are none.
     double stable_dt(const Model& model) const;
+    // Whether the next add_forces must evaluate the contact energy (it costs a polygon clip per active pair).
+    void want_energy(bool on) {
+        if (contact_) contact_->set_compute_energy(on);
+    }
     // Adds joint and contact forces (N) at positions x, velocities v, to f.
     void add_forces(const double* x, const double* v, double dt, double* f);
     // After the update: removes broken joints, makes their triangles contact-capable, records them.

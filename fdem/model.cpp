@@ -136,14 +136,16 @@ Model build_model(const CaseSpec& spec, mesh::Mesh mesh) {
         const double h = det / std::max({l0, l1, l2});
         md.tri_altitude[e] = h;
         // [M04]: eta = xi 2 h sqrt(E rho), xi = 1 critical.
-        t.eta = mat.viscous_damping * 2 * h * std::sqrt(mat.E * mat.density);
+        t.eta = mat.viscous_damping * 2 * h * std::sqrt(mat.E * mat.density * spec.mass_scale);  // inertial density
         md.tri_material[e] = mi;
         const double m3 = mat.density * t.A0t / 3.0;  // lumped mass, FORMULATION §1
         for (int k = 0; k < 3; ++k) md.mass[n[k]] += m3;
     }
     md.inv_mass.resize(nn);
+    md.grav_mass = md.mass;
     for (int k = 0; k < nn; ++k) {
         if (!(md.mass[k] > 0)) throw mesh::MeshError("node " + std::to_string(k) + " belongs to no triangle");
+        md.mass[k] *= spec.mass_scale;
         md.inv_mass[k] = 1.0 / md.mass[k];
     }
     // Incidence CSR in increasing (triangle, local) order.
@@ -182,7 +184,8 @@ StepLimit triangle_step_limit(const CaseSpec& spec, const Model& model) {
     for (std::size_t i = 0; i < spec.materials.size(); ++i) {
         const double xi = spec.materials[i].viscous_damping;
         // Damped central difference: dt <= (2 / omega) (sqrt(1 + xi^2) - xi).
-        factor[i] = (std::sqrt(1 + xi * xi) - xi) / p_wave_speed(spec.materials[i], spec.plane);
+        // Density scaling slows the waves by sqrt(mass_scale).
+        factor[i] = (std::sqrt(1 + xi * xi) - xi) * std::sqrt(spec.mass_scale) / p_wave_speed(spec.materials[i], spec.plane);
     }
     for (int e = 0; e < model.n_triangles(); ++e) {
         const double dt = model.tri_altitude[e] * factor[model.tri_material[e]];

@@ -25,7 +25,8 @@ struct Model {
     Plane plane = Plane::stress;
 
     std::vector<double> X, x, v;        // 2 per node: m, m, m/s
-    std::vector<double> mass, inv_mass;  // per node: kg, 1/kg
+    std::vector<double> mass, inv_mass;  // per node: inertial mass (kg, times numerics.mass_scale), 1/kg
+    std::vector<double> grav_mass;       // per node: physical mass, kg (gravity)
     std::vector<TriangleRef> tris;
     std::vector<MaterialConst> mat;
     std::vector<int> tri_material;       // per triangle, index into CaseSpec::materials

@@ -166,7 +166,7 @@ void Simulation::compute_dt() {
     dt_element_ = lim.element;
     dt_springs_ = inter_.stable_dt(model_);
     if (dt_springs_ < dt_limit_) dt_limit_ = dt_springs_, dt_element_ = -1;
-    dt_ = spec_.dt_override ? *spec_.dt_override : spec_.safety * lim.dt;
+    dt_ = spec_.dt_override ? *spec_.dt_override : spec_.safety * dt_limit_;
 }
 
 void Simulation::log(const std::string& line) {
@@ -314,6 +314,10 @@ void Simulation::begin_stage(int s) {
     next_snapshot_ = si > 0 ? time_ + si : 1e300;
     log("stage " + std::to_string(s + 1) + "/" + std::to_string(spec_.stages.size()) + " '" + st.name + "' starts at t = " +
         sci(time_) + " s (local damping " + sci(alpha_) + ")");
+    if (s == 0) {  // initial velocities and deformation are energy put in, like external work
+        const Energies e0 = energies();
+        W_ext_ += e0.kinetic + e0.elastic + e0.joint + e0.contact;
+    }
     if (s == 0 && !opt_.out_dir.empty()) write_history_row();
 }
 
@@ -411,7 +415,16 @@ void Simulation::step() {
         }
     }
 
-    // Joint and contact forces, added to f_mod_ in a fixed order by their modules.
+    // Joint and contact forces, added to f_mod_ in a fixed order by their modules. The contact energy is only
+    // evaluated on the steps whose energies are reported or checked.
+    {
+        const StageSpec& st = spec_.stages[stage_];
+        const double hi = st.history_interval ? *st.history_interval : spec_.history_interval;
+        const bool row_next = opt_.out_dir.empty() ? false
+                              : hi > 0                ? time_ + dt + 1e-9 * dt >= next_history_
+                                                      : ((steps_ + 1) % history_every_steps_) == 0;
+        inter_.want_energy(row_next || (steps_ + 1) % 1000 == 0 || energy_every_step_);
+    }
     inter_.add_forces(x, v, dt, f_mod_.data());
 
     // 3. Node loop.
@@ -421,6 +434,7 @@ void Simulation::step() {
     const int* inc_ptr = model_.inc_ptr.data();
     const int* inc_idx = model_.inc_idx.data();
     const double* mass = model_.mass.data();
+    const double* gmass = model_.grav_mass.data();
     const double* inv_mass = model_.inv_mass.data();
     double* xw = model_.x.data();
     double* vw = model_.v.data();
@@ -441,7 +455,7 @@ void Simulation::step() {
                 const double* r = tf + 2 * static_cast<std::size_t>(inc_idx[j]);
                 fi0 += r[0], fi1 += r[1];
             }
-            const double fe[2] = {fext[2 * k] + mass[k] * gx, fext[2 * k + 1] + mass[k] * gy};
+            const double fe[2] = {fext[2 * k] + gmass[k] * gx, fext[2 * k + 1] + gmass[k] * gy};
             const double fin[2] = {fi0, fi1};
             for (int c = 0; c < 2; ++c) {
                 const int d = 2 * k + c;
@@ -511,6 +525,16 @@ void Simulation::step() {
         }
     }
     if (opt_.progress && (steps_ & 255) == 0) progress_line(false);
+    if (steps_ % 1000 == 0) check_energy(energies());
+}
+
+// A run whose energy grows with no work put in has gone unstable even if no triangle has inverted yet
+// (e.g. contact springs stepped beyond their limit, which damping can hide for a while).
+void Simulation::check_energy(const Energies& e) {
+    const double held = e.kinetic + e.elastic + e.joint + e.contact + e.damping + e.viscous + e.fracture + e.friction;
+    if (held > 10 * std::abs(e.external) + 1e-9)
+        fail("energy grew without work: " + sci(held) + " J held or dissipated against " + sci(e.external) +
+             " J put in (unstable; reduce numerics.safety)");
 }
 
 bool Simulation::stage_finished() {
@@ -589,6 +613,7 @@ Energies Simulation::energies() const {
 
 void Simulation::write_history_row() {
     const Energies e = energies();
+    if (steps_ > 0) check_energy(e);
     // The row describes t^n, the time of the last force evaluation (see monitor_value).
     std::string row = format_double(steps_ > 0 ? time_ - dt_ : time_) + "," + std::to_string(steps_) + "," + std::to_string(stage_ + 1);
     for (std::size_t i = 0; i < spec_.monitors.size(); ++i) {
@@ -714,6 +739,9 @@ void Simulation::run() {
     if (inter_.has_contact())
         log("contact: " + std::to_string(model_.contact_capable.size()) + " contact-capable triangles, buffer " + sci(inter_.contact()->buffer()) + " m");
     log("threads: " + std::to_string(omp_get_max_threads()));
+    if (spec_.mass_scale != 1)
+        log("mass scaling: inertial mass x " + sci(spec_.mass_scale) + " (time step x " + sci(std::sqrt(spec_.mass_scale)) +
+            "); gravity uses the physical mass");
     if (!spec_.dt_override && spec_.safety > 1)
         log("warning: numerics.safety = " + sci(spec_.safety) + " > 1: the time step exceeds the stability limit");
     if (!opt_.out_dir.empty()) write_summary("running", "");
@@ -735,9 +763,17 @@ void Simulation::run() {
     wall_time_ = wall_clock() - wall_start_;
     const double tps = static_cast<double>(steps_) * model_.n_triangles() / std::max(wall_time_, 1e-9);
     log("done: " + std::to_string(steps_) + " steps in " + human_time(wall_time_) + " (" + sci(tps, 3) + " triangle-steps/s)");
+    if (const contact::ContactSystem* c = inter_.contact()) {
+        const auto& st = c->stats();
+        log("contact: " + std::to_string(st.detections) + " detections, " + std::to_string(st.candidate_pairs) + " candidate pairs (" +
+            std::to_string(st.active_pairs) + " active) at the end, " + sci(st.pair_evaluations / std::max(wall_time_, 1e-9), 3) +
+            " pair evaluations/s; " + sci(100 * st.time_detection / std::max(wall_time_, 1e-9), 3) + " % of the run in detection, " +
+            sci(100 * st.time_forces / std::max(wall_time_, 1e-9), 3) + " % in contact forces");
+    }
     const Energies e = energies();
-    log("energy: kinetic " + sci(e.kinetic) + " J, elastic " + sci(e.elastic) + " J, external work " + sci(e.external) +
-        " J, damping " + sci(e.damping) + " J, viscous " + sci(e.viscous) + " J, balance error " + sci(100 * e.balance_error(), 3) + " %");
+    log("energy: kinetic " + sci(e.kinetic) + " J, elastic " + sci(e.elastic) + " J, joints " + sci(e.joint) + " J, contact " +
+        sci(e.contact) + " J, external work " + sci(e.external) + " J, damping " + sci(e.damping) + " J, viscous " + sci(e.viscous) +
+        " J, fracture " + sci(e.fracture) + " J, friction " + sci(e.friction) + " J, balance error " + sci(100 * e.balance_error(), 3) + " %");
     if (!opt_.out_dir.empty()) {
         flush_files(true);
         write_summary("completed", "");
@@ -817,6 +853,7 @@ void Simulation::write_summary(const std::string& status, const std::string& mes
     if (spec_.geometry.type == "rectangle") set["mesh_size_m"] = spec_.geometry.mesh_size;
     if (!spec_.geometry.file.empty()) set["geometry_file"] = spec_.geometry.file;
     set["safety"] = spec_.safety;
+    set["mass_scale"] = spec_.mass_scale;
     if (spec_.dt_override) set["dt_fixed_s"] = *spec_.dt_override;
     Json mats = Json::object();
     for (const auto& m : spec_.materials) {
