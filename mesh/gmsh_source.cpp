@@ -235,15 +235,20 @@ void require_readable(const std::string& path) {
 }
 }  // namespace
 
-Mesh mesh_geo_file(const std::string& path, double size_factor) {
+namespace {
+// Opens a .geo or .msh through the API, meshes in 2D when asked, and extracts the Mesh; every Gmsh failure
+// becomes a MeshError naming the file.
+Mesh open_and_extract(const std::string& path, bool generate, double size_factor) {
     require_readable(path);
     GmshSession session;
-    gmsh::option::setNumber("Mesh.MeshSizeFactor", size_factor);
+    if (generate) gmsh::option::setNumber("Mesh.MeshSizeFactor", size_factor);
     try {
         gmsh::open(path);
         throw_on_gmsh_error("reading '" + path + "'");
-        gmsh::model::mesh::generate(2);
-        throw_on_gmsh_error("meshing '" + path + "'");
+        if (generate) {
+            gmsh::model::mesh::generate(2);
+            throw_on_gmsh_error("meshing '" + path + "'");
+        }
     } catch (const MeshError&) {
         throw;
     } catch (const std::exception& e) {
@@ -258,26 +263,10 @@ Mesh mesh_geo_file(const std::string& path, double size_factor) {
         throw MeshError(path + ": " + e.what());
     }
 }
+}  // namespace
 
-Mesh read_msh_file(const std::string& path) {
-    require_readable(path);
-    GmshSession session;
-    try {
-        gmsh::open(path);
-        throw_on_gmsh_error("reading '" + path + "'");
-    } catch (const MeshError&) {
-        throw;
-    } catch (const std::exception& e) {
-        throw MeshError("Gmsh failed on '" + path + "': " + e.what());
-    } catch (...) {
-        throw_on_gmsh_error("Gmsh failed on '" + path + "'");
-        throw MeshError("Gmsh failed on '" + path + "'");
-    }
-    try {
-        return extract_current_model();
-    } catch (const MeshError& e) {
-        throw MeshError(path + ": " + e.what());
-    }
-}
+Mesh mesh_geo_file(const std::string& path, double size_factor) { return open_and_extract(path, true, size_factor); }
+
+Mesh read_msh_file(const std::string& path) { return open_and_extract(path, false, 1.0); }
 
 }  // namespace fdem::mesh
