@@ -1,0 +1,282 @@
+#!/usr/bin/env python3
+"""Writes the case files of cases/lourenco2005/ from reference.csv and the shared settings below.
+
+The case files are committed; this script documents how they were made and keeps the numerical settings identical
+across the walls of a family (rerun it after changing a setting: /usr/bin/python3 cases/lourenco2005/make_cases.py).
+"""
+import csv
+import os
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+G = 9.81            # m/s^2
+RHO = 2400.0        # kg/m^3, stone and concrete (assumed, CASES.md §A)
+T = 0.2             # m, wall thickness
+L, H = 1.0, 1.0     # m, wall length and height
+BEAM_H = 0.2        # m, beam depth (assumed)
+BASE_H = 0.1        # m, base slab depth (assumed)
+W_WALL = RHO * G * L * H * T            # N
+W_BEAM = RHO * G * L * BEAM_H * T       # N
+
+# Numerical settings shared by every wall of a variant (FORMULATION §3-5). The time step is fixed because the engine
+# (fdem/simulation.cpp) chose it from the triangles alone although the joint springs set a stable limit of 1.99e-6 s
+# on this mesh (reported to the engine owner); 1.5e-6 s = 0.76 of that limit.
+K25 = dict(mesh=0.025, penalty=1.0e10, rate=0.1, until=0.008, damping=0.8, dt=1.5e-6)
+DEC = dict(mesh=0.05, rate=0.1, until=0.008, damping=0.8)
+
+
+def rows():
+    with open(os.path.join(HERE, "reference.csv")) as f:
+        return list(csv.DictReader(f))
+
+
+COMMON_GEOMETRY = """[geometry]
+type = "wall"
+length = 1.0             # m
+courses = 10
+unit_length = 0.2        # m, sandstone block 200 x 100 x 200 mm
+unit_height = 0.1        # m
+bond = "running"         # half blocks at the ends of alternate courses
+joint = "dry"
+beam_height = 0.2        # m (assumed)
+base = "slab"
+base_height = 0.1        # m (assumed)
+base_overhang = 0.1      # m
+mesh_size = {mesh}       # m, in the blocks
+mesh_size_beam = 0.1     # m
+mesh_size_base = 0.1     # m
+"""
+
+COMMON_TAIL = """
+[materials.concrete]     # beam and base slab: elastic, no cracking (FORMULATION §8)
+E = 1.0e9                # Pa (assumed: 1-2x the wall modulus; a stiffer value makes the small beam/base triangles
+                         # at the wall corners set a time step several times smaller)
+nu = 0.2
+density = 2400.0         # kg/m^3
+
+[regions]
+units = "stone"
+beam = "concrete"
+base = "concrete"
+
+{interfaces}
+[[interfaces]]           # the beam is bonded to the top course (tied: shared nodes), so it can rotate with the wall
+regions = ["units", "beam"]
+kind = "tied"
+
+[groups.actuator]        # one node at mid-depth of the beam's left end: the beam stays free to rotate
+nearest = [0.0, 1.1]
+within = "beam_left"
+
+[groups.stopper]         # left face of the bottom-left block: restrained against sliding (fix x)
+box = [-0.001, -0.001, 0.001, 0.09]
+within = "wall_left"
+
+[[monitors]]
+name = "u_beam"          # m, horizontal displacement of the loaded point
+type = "displacement"
+group = "actuator"
+component = "x"
+
+[[monitors]]
+name = "H"               # N, actuator reaction (negative while pushing in +x)
+type = "reaction"
+group = "actuator"
+component = "x"
+
+[[monitors]]
+name = "V_base"          # N, vertical base reaction (= N once precompressed)
+type = "reaction"
+group = "base_bottom"
+component = "y"
+
+[[monitors]]
+name = "H_stopper"       # N, reaction of the sliding restraint
+type = "reaction"
+group = "stopper"
+component = "x"
+
+[[monitors]]
+name = "u_top_right"     # m
+type = "displacement"
+group = "wall_top_right"
+component = "x"
+
+[[monitors]]
+name = "v_top_right"     # m, uplift of the top right corner (rocking)
+type = "displacement"
+group = "wall_top_right"
+component = "y"
+
+{numerics}
+[output]
+history_interval = 0.0005  # s
+snapshot_interval = 0.01   # s
+curve = {{ x = "u_beam", y = "H" }}
+
+[reference]
+monitor = "H"
+quantity = "peak"
+value = {exp_N}          # N, measured peak (average of the tests)
+tolerance = 0.25
+source = "Lourenco et al. 2005, average of the tests at N = {N} kN"
+
+[[stages]]
+name = "precompression"  # gravity and N - self-weight on the beam, ramped, then damped to rest
+equilibrium = 1e-3
+max_duration = 0.02      # s
+local_damping = 0.8
+gravity = [0.0, -9.81]   # m/s^2
+gravity_ramp = 0.01      # s
+  [[stages.supports]]
+  group = "base_bottom"
+  fix = "xy"
+  [[stages.supports]]
+  group = "stopper"
+  fix = "x"
+  [[stages.loads]]
+  group = "beam_top"
+  force = [0.0, {F_top}]  # N = -(N - wall and beam self-weight {W:.1f} N)
+  ramp = 0.01            # s
+
+[[stages]]
+name = "shear"           # horizontal displacement at constant rate, N held
+until = {{ monitor = "u_beam", value = {until} }}
+local_damping = {damping}
+  [[stages.supports]]
+  group = "actuator"
+  vx = {rate}              # m/s
+  ramp = 0.005           # s
+"""
+
+
+def header(title, r, variant_text, s, fname):
+    return f"""# {title}
+# Reproduces: Lourenco, Oliveira, Roca, Orduna, "Dry joint stone masonry walls subjected to in-plane combined loading",
+#   J. Struct. Eng. 131(11) 2005: dry-joint sandstone wall 1000 x 1000 x 200 mm, blocks 200 x 100 x 200 mm, running
+#   bond, RC beam on top free to rotate, bottom-left block restrained against sliding; N = {r['N_kN']} kN
+#   (sigma = {r['sigma_MPa']} MPa), then horizontal displacement of the beam until well past peak.
+#   Measured peak {r['experiment_kN']} kN; published FDEM [K25] {r['fdem_k25_kN']} kN (reference.csv, CASES.md §A).
+# Model (FORMULATION §8): the wall stands on a concrete base slab (fixed at base_bottom) through a dry joint, so it can
+#   rock and slide; the beam is tied to the top course; N is a force on beam_top equal to N minus the self-weight of
+#   wall and beam ({W_WALL:.1f} + {W_BEAM:.1f} N, gravity on), so that the base carries N as in the test. The actuator is a
+#   single node at the beam's left end, mid-depth: horizontal velocity prescribed, vertical free, the beam rotates.
+{variant_text}
+# Assumed values (not published): Poisson 0.2, density 2400 kg/m^3 (CASES.md); beam 200 mm deep and base 100 mm deep,
+#   both concrete with E = 1 GPa (elastic, no cracking); loading rate {s['rate']} m/s up to {s['until'] * 1000:g} mm;
+#   local damping {s['damping']} in both stages; the numerical settings above are the same for all four walls.
+# Run:  ./run.sh cases/lourenco2005/{fname}   or the family: tools/fdem-tools validate cases/lourenco2005
+# Generated by cases/lourenco2005/make_cases.py from reference.csv.
+"""
+
+
+def k25_case(r):
+    N = float(r["N_kN"]) * 1e3
+    E = float(r["E_wall_k25_MPa"]) * 1e6
+    s = K25
+    fname = f"k25_N{r['N_kN']}.toml"
+    variant = f"""# Variant [K25]: the blocks take the wall modulus calibrated per precompression in [K25] (E = {r['E_wall_k25_MPa']} MPa at
+#   this N) and may crack (cohesive elements on every edge inside a block: f_t 3.7 MPa, c 5.2 MPa, G_I 110 N/m,
+#   G_II 770 N/m, friction 35 deg, residual 35 deg); joints between blocks and at the base are dry (f_t = c = 0),
+#   friction 31.8 deg, contact penalty p_n = {s['penalty']:g} Pa (assumed; same for the crack faces, the joint penalty
+#   p_j of the blocks: the smallest value > 5.7e9 Pa that the fracture-energy check of the 25 mm mesh allows, x 1.75).
+# Mesh: {s['mesh'] * 1000:g} mm in the blocks (the [K25] size, from the single-stone study), 100 mm in the beam and base.
+# Time step fixed at {s['dt']:g} s (0.76 of the stable limit set by the joint springs)."""
+    text = header(f"Dry-joint sandstone wall, N = {r['N_kN']} kN, [K25]-style FDEM (block cracking, wall modulus)", r, variant, s, fname)
+    text += f"""[case]
+name = "lourenco2005_k25_N{r['N_kN']}"
+description = "Dry-joint sandstone wall (Lourenco 2005), N = {r['N_kN']} kN, [K25] style: per-wall modulus, cracking blocks"
+thickness = 0.2          # m
+plane = "stress"
+
+""" + COMMON_GEOMETRY.format(mesh=s["mesh"]) + f"""
+[materials.stone]
+E = {E:.4g}              # Pa, [K25] wall modulus at N = {r['N_kN']} kN
+nu = 0.2                 # assumed
+density = 2400.0         # kg/m^3, assumed
+  [materials.stone.fracture]
+  tensile_strength = 3.7e6   # Pa
+  cohesion = 5.2e6           # Pa
+  friction = 35.0            # deg
+  residual_friction = 35.0   # deg
+  GI = 110.0                 # J/m^2
+  GII = 770.0                # J/m^2
+  penalty = {s['penalty']:g}         # Pa, joint penalty p_j (assumed)
+"""
+    interfaces = f"""[[interfaces]]           # dry joints between blocks
+regions = ["units", "units"]
+kind = "dry"
+friction = 31.8          # deg
+normal_penalty = {s['penalty']:g}  # Pa (assumed)
+
+[[interfaces]]           # dry joint between the bottom course and the base
+regions = ["units", "base"]
+kind = "dry"
+friction = 31.8          # deg
+normal_penalty = {s['penalty']:g}  # Pa (assumed)
+"""
+    numerics = f"""[numerics]
+dt = {s['dt']:g}              # s, see the header
+"""
+    W = W_WALL + W_BEAM
+    text += COMMON_TAIL.format(interfaces=interfaces, numerics=numerics, exp_N=float(r["experiment_kN"]) * 1e3,
+                               N=r["N_kN"], F_top=f"{-(N - W):.1f}", W=W, until=s["until"], damping=s["damping"],
+                               rate=s["rate"])
+    return fname, text
+
+
+def dec_case(r):
+    N = float(r["N_kN"]) * 1e3
+    s = DEC
+    kn = float(r["kn_3dec_N_per_mm3"]) * 1e9   # N/mm^3 -> Pa/m
+    ks = float(r["ks_3dec_N_per_mm3"]) * 1e9
+    fname = f"dec_N{r['N_kN']}.toml"
+    variant = f"""# Variant 3DEC style (Bui et al. 2017): elastic blocks with the stone modulus E = 15.5 GPa, no block cracking, and
+#   the joint compliance in measured joint stiffnesses k_n = E_b E_m / ((E_b - E_m) h_b) = {r['kn_3dec_N_per_mm3']} N/mm^3,
+#   k_s = k_n / (2 (1 + nu)) = {r['ks_3dec_N_per_mm3']} N/mm^3 (h_b = 100 mm, E_m = {r['E_wall_k25_MPa']} MPa), friction 32 deg,
+#   on the joints between blocks and at the base.
+# Mesh: {s['mesh'] * 1000:g} mm in the blocks (elastic blocks need no crack resolution), 100 mm in the beam and base."""
+    text = header(f"Dry-joint sandstone wall, N = {r['N_kN']} kN, 3DEC-style model (stone modulus, joint stiffness)", r, variant, s, fname)
+    text += f"""[case]
+name = "lourenco2005_dec_N{r['N_kN']}"
+description = "Dry-joint sandstone wall (Lourenco 2005), N = {r['N_kN']} kN, 3DEC style: E 15.5 GPa, joint k_n/k_s"
+thickness = 0.2          # m
+plane = "stress"
+
+""" + COMMON_GEOMETRY.format(mesh=s["mesh"]) + """
+[materials.stone]
+E = 1.55e10              # Pa, Bui et al. 2017
+nu = 0.2
+density = 2400.0         # kg/m^3, assumed
+"""
+    interfaces = f"""[[interfaces]]           # dry joints between blocks
+regions = ["units", "units"]
+kind = "dry"
+friction = 32.0          # deg
+normal_stiffness = {kn:.4g}   # Pa/m ({r['kn_3dec_N_per_mm3']} N/mm^3)
+shear_stiffness = {ks:.4g}    # Pa/m ({r['ks_3dec_N_per_mm3']} N/mm^3)
+
+[[interfaces]]           # dry joint between the bottom course and the base
+regions = ["units", "base"]
+kind = "dry"
+friction = 32.0          # deg
+normal_stiffness = {kn:.4g}   # Pa/m
+shear_stiffness = {ks:.4g}    # Pa/m
+"""
+    W = W_WALL + W_BEAM
+    text += COMMON_TAIL.format(interfaces=interfaces, numerics="", exp_N=float(r["experiment_kN"]) * 1e3,
+                               N=r["N_kN"], F_top=f"{-(N - W):.1f}", W=W, until=s["until"], damping=s["damping"],
+                               rate=s["rate"])
+    return fname, text
+
+
+def main():
+    for r in rows():
+        for make in (k25_case, dec_case):
+            fname, text = make(r)
+            with open(os.path.join(HERE, fname), "w") as f:
+                f.write(text)
+            print("wrote", fname)
+
+
+if __name__ == "__main__":
+    main()
