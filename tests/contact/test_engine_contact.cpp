@@ -1,0 +1,416 @@
+// tests/contact/test_engine_contact.cpp: the closed-form contact checks of test_contact_dynamics.cpp, run through
+// the engine (case text -> Gmsh .geo -> topology -> Interactions -> Simulation) as a user's case file would be.
+//
+// DATA LAYOUT
+//   Every test writes its own .geo (rectangles that touch but are NOT fragmented, so the bodies share no node and
+//   the topology classifies their touching edges as dry when an [[interfaces]] rule of kind "dry" names the two
+//   regions) and its case text into build/tests/tmp/<name>/, then builds the Simulation with fdem::build_scene
+//   (testing::make_simulation skips the topology, so it would tie the bodies into one continuum).
+//   Rectangle i (1-based, OpenCASCADE) owns curves 4i-3 (bottom), 4i-2 (right), 4i-1 (top), 4i (left); the groups
+//   <name>_bottom / <name>_top are checked against their node coordinates before they are used.
+//   Body quantities are taken over the nodes of the region's physical surface (model numbering): centre of mass
+//   and mean velocity weighted by the lumped nodal mass (kg).
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "core/engine_helpers.hpp"
+#include "fdem/scene.hpp"
+
+namespace {
+
+constexpr double kG = 9.81;  // m/s^2
+constexpr double kDeg = M_PI / 180.0;
+
+struct Rect {
+    std::string name;
+    double x, y, w, h;  // m
+    double size;        // m, mesh size
+};
+
+// A .geo script with one physical surface per rectangle and curve groups <name>_bottom and <name>_top.
+std::string geo_of(const std::vector<Rect>& rects) {
+    std::ostringstream g;
+    g.precision(17);
+    g << "SetFactory(\"OpenCASCADE\");\n";
+    for (std::size_t i = 0; i < rects.size(); ++i) {
+        const Rect& r = rects[i];
+        g << "Rectangle(" << i + 1 << ") = {" << r.x << ", " << r.y << ", 0, " << r.w << ", " << r.h << "};\n";
+    }
+    for (std::size_t i = 0; i < rects.size(); ++i) {
+        const Rect& r = rects[i];
+        const std::size_t c = 4 * i + 1;
+        g << "MeshSize{ PointsOf{ Surface{" << i + 1 << "}; } } = " << r.size << ";\n";
+        g << "Physical Surface(\"" << r.name << "\") = {" << i + 1 << "};\n";
+        g << "Physical Curve(\"" << r.name << "_bottom\") = {" << c << "};\n";
+        g << "Physical Curve(\"" << r.name << "_top\") = {" << c + 2 << "};\n";
+    }
+    return g.str();
+}
+
+// The Simulation of a case whose [geometry] is `file = "blocks.geo"` (written next to the case), with topology.
+fdem::Simulation make_contact_sim(const std::string& name, const std::vector<Rect>& rects, const std::string& case_text,
+                                  const std::vector<std::string>& overrides = {}) {
+    const auto dir = testing::tmp_dir(name);
+    testing::write_text(dir / "blocks.geo", geo_of(rects));
+    const std::string path = testing::write_text(dir / "case.toml", case_text);
+    fdem::CaseSpec spec = fdem::load_case(path, overrides);
+    fdem::Model model = fdem::build_scene(spec);
+    fdem::RunOptions opt;
+    opt.quiet = true;
+    // A few hundred triangles: one thread is fastest (the 1 vs 2 thread identity is tested through the CLI below).
+    opt.threads = 1;
+    fdem::Simulation sim(spec, std::move(model), opt);
+    // Contact energy is otherwise evaluated on reported steps only; these tests read energies between steps.
+    sim.energy_every_step(true);
+    return sim;
+}
+
+// Common case head: thickness 0.1 m, one elastic material (E 1 GPa, rho 2000 kg/m^3), the given regions.
+std::string case_head(const std::string& name, const std::vector<std::string>& regions, double E = 1.0e9,
+                      double rho = 2000.0) {
+    std::ostringstream c;
+    c.precision(17);
+    c << "[case]\nname = \"" << name << "\"\nthickness = 0.1\n"
+      << "[geometry]\ntype = \"gmsh\"\nfile = \"blocks.geo\"\n"
+      << "[materials.m]\nE = " << E << "\nnu = 0.2\ndensity = " << rho << "\n[regions]\n";
+    for (const auto& r : regions) c << r << " = \"m\"\n";
+    return c.str();
+}
+
+std::string dry_interface(const std::string& a, const std::string& b, double phi_deg, double kn) {
+    std::ostringstream c;
+    c.precision(17);
+    c << "[[interfaces]]\nregions = [\"" << a << "\", \"" << b << "\"]\nkind = \"dry\"\nfriction = " << phi_deg
+      << "\nnormal_stiffness = " << kn << "\n";
+    return c.str();
+}
+
+const std::vector<int>& nodes_of(const fdem::Simulation& sim, const std::string& group) {
+    return sim.model().group(group).nodes;
+}
+
+// Mass-weighted centre (m) or mean velocity (m/s) of a group's nodes, component c.
+double body_mean(const fdem::Simulation& sim, const std::string& group, const std::vector<double>& field, int c) {
+    const fdem::Model& md = sim.model();
+    double s = 0, m = 0;
+    for (int k : nodes_of(sim, group)) s += md.mass[k] * field[2 * k + c], m += md.mass[k];
+    return s / m;
+}
+
+double max_shift(const fdem::Simulation& sim, const std::string& group, const std::vector<double>& x0) {
+    const fdem::Model& md = sim.model();
+    double d = 0;
+    for (int k : nodes_of(sim, group)) d = std::max(d, std::hypot(md.x[2 * k] - x0[2 * k], md.x[2 * k + 1] - x0[2 * k + 1]));
+    return d;
+}
+
+// Every node of `group` lies at reference height y (checks the curve numbering the .geo relies on).
+void require_at_height(const fdem::Simulation& sim, const std::string& group, double y) {
+    const auto& nodes = nodes_of(sim, group);
+    REQUIRE(!nodes.empty());
+    for (int k : nodes) REQUIRE(sim.model().X[2 * k + 1] == Approx(y).margin(1e-9));
+}
+
+// Steps until the current stage ends, tracking the largest energy balance error seen (sampled every `every` steps).
+void run_stage(fdem::Simulation& sim, int s, double& worst_balance, int every = 50) {
+    sim.begin_stage(s);
+    long n = 0;
+    while (!sim.stage_finished()) {
+        sim.step();
+        if (++n % every == 0) worst_balance = std::max(worst_balance, sim.energies().balance_error());
+    }
+    worst_balance = std::max(worst_balance, sim.energies().balance_error());
+}
+
+// A block (0.2 x 0.1 m, 4 kg) on a fixed base 2 m long; the base is coarser than the block.
+std::vector<Rect> block_on_base() {
+    return {{"base", -0.5, -0.1, 2.0, 0.1, 0.1}, {"block", 0.0, 0.0, 0.2, 0.1, 0.05}};
+}
+
+}  // namespace
+
+TEST_CASE("engine: a block resting on a fixed base settles and then drifts less than 1e-6 m over 1 s",
+          "[engine][regression]") {
+    const double kn = 5e9;  // Pa/m
+    const std::string text = case_head("rest", {"base", "block"}) + dry_interface("base", "block", 30.0, kn) + R"(
+[[stages]]
+name = "settle"
+duration = 0.3
+local_damping = 0.7
+gravity = [0.0, -9.81]
+  [[stages.supports]]
+  group = "base"
+  fix = "xy"
+[[stages]]
+name = "free"
+duration = 1.0
+local_damping = 0.0
+)";
+    auto sim = make_contact_sim("engine_rest", block_on_base(), text);
+    REQUIRE(sim.interactions().has_contact());
+    require_at_height(sim, "block_bottom", 0.0);
+    double bal = 0;
+    run_stage(sim, 0, bal);
+    const std::vector<double> x0 = sim.model().x;
+    const double cx0 = body_mean(sim, "block", sim.model().x, 0), cy0 = body_mean(sim, "block", sim.model().x, 1);
+    // Overlap: mean depth of the block's bottom nodes below the base top y = 0.
+    double overlap = 0;
+    for (int k : nodes_of(sim, "block_bottom")) overlap -= sim.model().x[2 * k + 1];
+    overlap /= static_cast<double>(nodes_of(sim, "block_bottom").size());
+    run_stage(sim, 1, bal);
+    const double cx = body_mean(sim, "block", sim.model().x, 0), cy = body_mean(sim, "block", sim.model().x, 1);
+    const double shift = max_shift(sim, "block", x0);
+    const double expected_overlap = 2000 * kG * 0.1 / kn;  // rho g h / k_n, m
+    std::printf("[engine rest] dt %.3g s, settled overlap %.4g m (rho g h / k_n = %.4g m), drift over 1 s: centre %.3g m, "
+                "max node %.3g m, worst energy balance %.3g %%\n",
+                sim.dt(), overlap, expected_overlap, std::hypot(cx - cx0, cy - cy0), shift, 100 * bal);
+    CHECK(shift < 1e-6);
+    CHECK(overlap == Approx(expected_overlap).epsilon(0.05));
+}
+
+TEST_CASE("engine: a block launched at v0 on a flat base stops within 2 % of v0^2 / (2 mu g)",
+          "[engine][regression]") {
+    for (double mu : {0.3, 0.6}) {
+        const std::string text = case_head("slide", {"base", "block"}) +
+                                 dry_interface("base", "block", std::atan(mu) / kDeg, 5e9) + R"(
+[[stages]]
+name = "slide"
+duration = 2.0
+local_damping = 0.0
+gravity = [0.0, -9.81]
+  [[stages.supports]]
+  group = "base"
+  fix = "xy"
+)";
+        auto sim = make_contact_sim("engine_slide", block_on_base(), text);
+        const double v0 = 1.0;  // m/s
+        // Launched at t = 0 so the engine books the initial kinetic energy as energy put in.
+        for (int k : nodes_of(sim, "block")) sim.model().v[2 * k] = v0;
+        const double cx0 = body_mean(sim, "block", sim.model().x, 0);
+        sim.begin_stage(0);
+        double bal = 0, t_stop = -1;
+        long n = 0;
+        while (!sim.stage_finished()) {
+            sim.step();
+            if (++n % 50 == 0) bal = std::max(bal, sim.energies().balance_error());
+            if (body_mean(sim, "block", sim.model().v, 0) <= 0.0) {
+                t_stop = sim.time();
+                break;
+            }
+        }
+        REQUIRE(t_stop > 0);
+        const fdem::Energies e = sim.energies();
+        bal = std::max(bal, e.balance_error());
+        const double dist = body_mean(sim, "block", sim.model().x, 0) - cx0;
+        const double expected = v0 * v0 / (2 * mu * kG);
+        std::printf("[engine slide] mu %.2f: stop distance %.5f m, expected %.5f m (error %.2f %%), stop time %.4f s "
+                    "(expected %.4f s), friction dissipation %.5f J (1/2 M v0^2 = %.5f J), worst balance %.3g %%\n",
+                    mu, dist, expected, 100 * (dist - expected) / expected, t_stop, v0 / (mu * kG), e.friction, 0.5 * 4.0 * v0 * v0,
+                    100 * bal);
+        CHECK(dist == Approx(expected).epsilon(0.02));
+        CHECK(e.friction == Approx(0.5 * 4.0 * v0 * v0).epsilon(0.02));
+        CHECK(bal < 0.01);
+    }
+}
+
+namespace {
+
+// Block on the base with gravity rotated to theta (the same problem as an incline): the rotation is ramped in
+// 0.3 s under local damping (no overshoot of the static shear), then the block runs undamped for 0.5 s.
+std::string incline_case(double phi_deg, double theta) {
+    std::ostringstream c;
+    c.precision(17);
+    const double gx = kG * std::sin(theta), gy = -kG * std::cos(theta);
+    c << case_head("incline", {"base", "block"}) << dry_interface("base", "block", phi_deg, 5e9)
+      << "[[stages]]\nname = \"tilt\"\nduration = 0.4\nlocal_damping = 0.7\ngravity = [" << gx << ", " << gy
+      << "]\ngravity_ramp = 0.3\n  [[stages.supports]]\n  group = \"base\"\n  fix = \"xy\"\n"
+      << "[[stages]]\nname = \"free\"\nduration = 0.5\nlocal_damping = 0.0\ngravity = [" << gx << ", " << gy << "]\n";
+    return c.str();
+}
+
+}  // namespace
+
+TEST_CASE("engine: a block on an incline sticks below phi - 1 deg and slides above phi + 1 deg at g (sin - mu cos)",
+          "[engine][regression]") {
+    const double phi = 30.0, mu = std::tan(phi * kDeg);
+    SECTION("sticks at phi - 1 deg") {
+        const double theta = (phi - 1.0) * kDeg;
+        auto sim = make_contact_sim("engine_incline_stick", block_on_base(), incline_case(phi, theta));
+        double bal = 0;
+        run_stage(sim, 0, bal);
+        const double cx0 = body_mean(sim, "block", sim.model().x, 0);
+        run_stage(sim, 1, bal);
+        const double slip = body_mean(sim, "block", sim.model().x, 0) - cx0;
+        std::printf("[engine incline] theta = phi - 1 deg: slip over 0.5 s = %.3g m, worst balance %.3g %%\n", slip, 100 * bal);
+        CHECK(std::fabs(slip) < 1e-6);
+        CHECK(bal < 0.01);
+    }
+    SECTION("slides at phi + 1 and phi + 5 deg") {
+        for (double dtheta : {1.0, 5.0}) {
+            const double theta = (phi + dtheta) * kDeg;
+            auto sim = make_contact_sim("engine_incline_slide", block_on_base(), incline_case(phi, theta));
+            double bal = 0;
+            run_stage(sim, 0, bal);
+            // Least-squares fit of x_cm(t) = c0 + c1 t + c2 t^2 over the undamped stage; a = 2 c2.
+            sim.begin_stage(1);
+            const double t0 = sim.time();
+            double S[5] = {0, 0, 0, 0, 0}, R[3] = {0, 0, 0};
+            long n = 0;
+            while (!sim.stage_finished()) {
+                sim.step();
+                if (++n % 20 != 0) continue;
+                bal = std::max(bal, sim.energies().balance_error());
+                const double t = sim.time() - t0, cx = body_mean(sim, "block", sim.model().x, 0);
+                double tp = 1.0;
+                for (int p = 0; p < 5; ++p, tp *= t) S[p] += tp;
+                R[0] += cx, R[1] += cx * t, R[2] += cx * t * t;
+            }
+            bal = std::max(bal, sim.energies().balance_error());
+            const double M[3][3] = {{S[0], S[1], S[2]}, {S[1], S[2], S[3]}, {S[2], S[3], S[4]}};
+            auto det3 = [](const double A[3][3]) {
+                return A[0][0] * (A[1][1] * A[2][2] - A[1][2] * A[2][1]) - A[0][1] * (A[1][0] * A[2][2] - A[1][2] * A[2][0]) +
+                       A[0][2] * (A[1][0] * A[2][1] - A[1][1] * A[2][0]);
+            };
+            double M2[3][3];
+            for (int r = 0; r < 3; ++r)
+                for (int c = 0; c < 3; ++c) M2[r][c] = c == 2 ? R[r] : M[r][c];
+            const double a = 2.0 * det3(M2) / det3(M);
+            const double expected = kG * (std::sin(theta) - mu * std::cos(theta));
+            std::printf("[engine incline] theta = phi + %.0f deg: acceleration %.5f m/s^2, expected %.5f (error %.2f %%), "
+                        "worst balance %.3g %%\n",
+                        dtheta, a, expected, 100 * (a - expected) / expected, 100 * bal);
+            CHECK(a == Approx(expected).epsilon(0.03));
+            CHECK(bal < 0.01);
+        }
+    }
+}
+
+TEST_CASE("engine: a frictionless undamped collision of two elastic blocks conserves momentum and energy",
+          "[engine][regression]") {
+    const std::string text = case_head("collision", {"a", "b"}) + dry_interface("a", "b", 0.0, 5e9) + R"(
+[[stages]]
+name = "collide"
+duration = 0.1
+local_damping = 0.0
+)";
+    auto sim = make_contact_sim("engine_collision", {{"a", 0.0, 0.0, 0.2, 0.1, 0.05}, {"b", 0.25, 0.03, 0.2, 0.1, 0.05}}, text);
+    fdem::Model& md = sim.model();
+    for (int k : nodes_of(sim, "a")) md.v[2 * k] = 1.0;
+    for (int k : nodes_of(sim, "b")) md.v[2 * k] = -0.5;
+    auto momentum = [&](double& px, double& py, double& scale) {
+        px = py = scale = 0;
+        for (int k = 0; k < md.n_nodes(); ++k) {
+            px += md.mass[k] * md.v[2 * k];
+            py += md.mass[k] * md.v[2 * k + 1];
+            scale += md.mass[k] * std::hypot(md.v[2 * k], md.v[2 * k + 1]);
+        }
+    };
+    double px0, py0, sc0;
+    momentum(px0, py0, sc0);
+    sim.begin_stage(0);
+    const fdem::Energies e0 = sim.energies();
+    const double E0 = e0.kinetic + e0.elastic + e0.contact;
+    double bal = 0, max_contact = 0;
+    long n = 0;
+    while (!sim.stage_finished()) {
+        sim.step();
+        const fdem::Energies e = sim.energies();
+        max_contact = std::max(max_contact, e.contact);
+        if (++n % 50 == 0) bal = std::max(bal, e.balance_error());
+    }
+    const fdem::Energies e1 = sim.energies();
+    bal = std::max(bal, e1.balance_error());
+    const double E1 = e1.kinetic + e1.elastic + e1.contact;
+    double px, py, sc;
+    momentum(px, py, sc);
+    const double va = body_mean(sim, "a", md.v, 0), vb = body_mean(sim, "b", md.v, 0);
+    std::printf("[engine collision] momentum change %.3g (relative %.3g), energy change %.4f %% (peak contact energy %.3g J of "
+                "%.3g J), velocities after %.4f %.4f m/s, worst balance %.3g %%\n",
+                std::hypot(px - px0, py - py0), std::hypot(px - px0, py - py0) / sc0, 100 * (E1 - E0) / E0, max_contact, E0,
+                va, vb, 100 * bal);
+    CHECK(max_contact > 0.1 * E0);  // they did collide
+    CHECK(vb > 0.0);
+    CHECK(std::hypot(px - px0, py - py0) <= 1e-10 * sc0);
+    CHECK(std::fabs(E1 - E0) < 0.01 * E0);
+    CHECK(bal < 0.01);
+}
+
+TEST_CASE("engine: two blocks pressed through a dry interface close by q / k_n within 5 % at two mesh sizes",
+          "[engine][convergence]") {
+    const double kn = 1e10, q = 1e6, W = 0.2, H = 0.1;  // Pa/m, Pa, m, m
+    for (double size : {0.05, 0.025}) {
+        std::ostringstream c;
+        c.precision(17);
+        c << case_head("pressed", {"lower", "upper"}, 3e10, 2500.0) << dry_interface("lower", "upper", 35.0, kn)
+          << "[[stages]]\nname = \"press\"\nduration = 0.03\nlocal_damping = 0.8\n"
+          << "  [[stages.supports]]\n  group = \"lower_bottom\"\n  fix = \"xy\"\n"
+          << "  [[stages.loads]]\n  group = \"upper_top\"\n  pressure = " << q << "\n  ramp = 0.005\n";
+        // Non-matching meshes: the upper block is 10 % finer.
+        auto sim = make_contact_sim("engine_pressed", {{"lower", 0.0, 0.0, W, H, size}, {"upper", 0.0, H, W, H, 0.9 * size}}, c.str());
+        require_at_height(sim, "lower_top", H);
+        require_at_height(sim, "upper_bottom", H);
+        require_at_height(sim, "upper_top", 2 * H);
+        double bal = 0;
+        run_stage(sim, 0, bal);
+        const fdem::Model& md = sim.model();
+        // Closure: the lower top surface interpolated at each node of the upper bottom surface.
+        std::map<double, double> top;
+        for (int k : nodes_of(sim, "lower_top")) top[md.x[2 * k]] = md.x[2 * k + 1];
+        double sum = 0;
+        int n = 0;
+        for (int k : nodes_of(sim, "upper_bottom")) {
+            const double xk = md.x[2 * k];
+            auto hi = top.lower_bound(xk);
+            if (hi == top.begin() || hi == top.end()) continue;
+            auto lo = std::prev(hi);
+            sum += lo->second + (hi->second - lo->second) * (xk - lo->first) / (hi->first - lo->first) - md.x[2 * k + 1];
+            ++n;
+        }
+        REQUIRE(n > 0);
+        const double closure = sum / n;
+        const fdem::Energies e = sim.energies();
+        std::printf("[engine pressed] mesh %.4f m: %d triangles, closure %.4g m, q/k_n = %.4g m (error %.2f %%), kinetic %.3g J, "
+                    "worst balance %.3g %%\n",
+                    size, md.n_triangles(), closure, q / kn, 100 * (closure - q / kn) / (q / kn), e.kinetic, 100 * bal);
+        CHECK(closure == Approx(q / kn).epsilon(0.05));
+        CHECK(bal < 0.01);
+    }
+}
+
+TEST_CASE("engine: history.csv of a sliding two-block stack is the same for 1 and 2 threads", "[engine][regression]") {
+    const auto dir = testing::tmp_dir("engine_threads");
+    testing::write_text(dir / "blocks.geo", geo_of({{"base", -0.5, -0.1, 2.0, 0.1, 0.1},
+                                                     {"a", 0.0, 0.0, 0.2, 0.1, 0.05},
+                                                     {"b", 0.02, 0.1, 0.2, 0.1, 0.05}}));
+    const double theta = 40 * kDeg;
+    std::ostringstream c;
+    c.precision(17);
+    c << case_head("threads", {"base", "a", "b"}) << dry_interface("base", "a", 30.0, 5e9) << dry_interface("a", "b", 25.0, 5e9)
+      << "[[monitors]]\nname = \"ux_b\"\ntype = \"displacement\"\ngroup = \"b\"\ncomponent = \"x\"\n"
+      << "[output]\nhistory_interval = 0.002\n"
+      << "[[stages]]\nname = \"slide\"\nduration = 0.1\nlocal_damping = 0.0\ngravity = [" << kG * std::sin(theta) << ", "
+      << -kG * std::cos(theta) << "]\n  [[stages.supports]]\n  group = \"base\"\n  fix = \"xy\"\n";
+    const std::string path = testing::write_text(dir / "case.toml", c.str());
+    std::string hist[2];
+    for (int threads : {1, 2}) {
+        const auto out = dir / ("out" + std::to_string(threads));
+        const auto r = testing::run_fdem("run \"" + path + "\" --quiet --threads " + std::to_string(threads) + " --out \"" +
+                                             out.string() + "\"",
+                                         dir);
+        INFO(r.out << r.err);
+        REQUIRE(r.code == 0);
+        hist[threads - 1] = testing::read_text(out / "history.csv");
+    }
+    REQUIRE(hist[0].size() > 1000);
+    CHECK(hist[0] == hist[1]);
+    // The blocks did slide (the check compares a run with contact forces, not a resting one).
+    const auto last = hist[0].substr(hist[0].rfind('\n', hist[0].size() - 2) + 1);
+    std::printf("[engine threads] last history row: %s", last.c_str());
+}
