@@ -13,7 +13,7 @@ from .common import (FORCE_UNITS, LENGTH_UNITS, STRESS_UNITS, ToolError, check_f
                      read_table, write_json)
 
 PROG = "fdem-tools"
-COMMAND_MODULES = ["plots", "cracks", "batch", "study"]  # modules with an add_parser(subparsers) function
+COMMAND_MODULES = ["plots", "cracks", "batch", "study", "validate"]  # modules with an add_parser(subparsers) function
 
 
 def _units_args(p, x_default="m", y_default="N"):

@@ -1,0 +1,119 @@
+"""`validate`: family runs, report contents and the quasi-static check, with the stand-in fdem (no physics)."""
+import csv
+import os
+
+import pytest
+
+from fdemtools import validate
+
+FAKE = os.path.join(os.path.dirname(os.path.abspath(__file__)), "fake_fdem.py")
+REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+
+CASE = """[case]
+name = "{name}"
+thickness = 0.1
+rate = 0.2
+[geometry]
+type = "rectangle"
+width = 1.0
+height = 1.0
+mesh_size = {h}
+[[stages]]
+name = "pre"
+duration = 1.0
+local_damping = 0.8
+[[stages]]
+name = "shear"
+duration = 1.0
+local_damping = 0.8
+  [[stages.supports]]
+  group = "top"
+  vx = 0.01
+"""
+
+
+def family(tmp_path, sizes=(0.1, 0.05)):
+    fam = tmp_path / "fam"
+    fam.mkdir()
+    for i, h in enumerate(sizes):
+        (fam / f"c{i}.toml").write_text(CASE.format(name=f"c{i}", h=h))
+    # c0: experiment 11 kN, published 12 kN; c1: none (no row)
+    (fam / "reference.csv").write_text("cases,experiment_kN,fdem_k25_kN\nc0 other,11,12\n")
+    return fam
+
+
+def read_csv(p):
+    with open(p, newline="") as f:
+        return list(csv.DictReader(f))
+
+
+def test_family_report_and_half_rate_check(tmp_path, cli):
+    fam = family(tmp_path)
+    out = tmp_path / "out"
+    log = tmp_path / "calls.log"
+    rc, o, err = cli("validate", fam, "--fdem", FAKE, "--out-dir", out, "--set", "rate=0.2", "--rate-key", "rate",
+                     "--jobs", "2", env={"FAKE_FDEM_LOG": str(log)})
+    assert rc == 0, err
+    rows = {r["case"]: r for r in read_csv(out / "report.csv")}
+    assert set(rows) == {"c0", "c1"}
+    # fake peak = 10 kN (1 + h)(1 + rate) with rate = 0.2 and h = 0.1 (it reads h from --set only, not the case)
+    for name, h in (("c0", 0.1), ("c1", 0.05)):
+        r = rows[name]
+        assert r["status"] == "completed"
+        assert float(r["peak_load_kN"]) == pytest.approx(13.2, rel=1e-12)
+        # fake curve: the load reaches its peak at half of the final 1 mm
+        assert float(r["disp_at_peak_mm"]) == pytest.approx(0.5, rel=1e-9)
+        # linear ascending branch: stiffness = peak / 0.5 mm
+        assert float(r["initial_stiffness_kN_mm"]) == pytest.approx(13.2 / 0.5, rel=1e-9)
+        assert float(r["mesh_size_m"]) == h
+        assert float(r["loading_rate_m_s"]) == 0.01
+        assert r["local_damping"] == "0.8 / 0.8"
+        assert float(r["wall_time_s"]) == pytest.approx(1.0)
+        assert float(r["mesh_size_m"]) == h  # what the report states comes from the case file
+    assert float(rows["c0"]["error_vs_experiment"]) == pytest.approx(13.2 / 11 - 1, rel=1e-9)
+    assert float(rows["c0"]["error_vs_published_fdem"]) == pytest.approx(13.2 / 12 - 1, rel=1e-9)
+    assert rows["c1"]["error_vs_experiment"] == ""  # no reference row, no [reference]
+    md = (out / "report.md").read_text()
+    # half the rate: 10 (1.1)(1.1) against 10 (1.1)(1.2): -8.3 %, not quasi-static
+    assert "change -8.3 %" in md and "NOT quasi-static" in md
+    assert "Mean absolute error against the experiments: 20.0 % over 1 case(s)" in md
+    assert "NOT the same for every case" in md  # the mesh sizes differ
+    calls = log.read_text().splitlines()
+    assert len(calls) == 3 and sum('"rate": "0.1"' in c for c in calls) == 1
+
+    # resumable: nothing runs again
+    rc, o, err = cli("validate", fam, "--fdem", FAKE, "--out-dir", out, "--set", "rate=0.2", "--rate-key", "rate",
+                     env={"FAKE_FDEM_LOG": str(log)})
+    assert rc == 0, err
+    assert len(log.read_text().splitlines()) == 3
+
+
+def test_failed_run_exits_2_and_is_reported(tmp_path, cli):
+    fam = family(tmp_path, sizes=(0.1,))
+    out = tmp_path / "out"
+    rc, o, err = cli("validate", fam, "--fdem", FAKE, "--out-dir", out, "--set", "fail=true", "--no-rate-check")
+    assert rc == 2
+    assert "did not complete" in err
+    rows = read_csv(out / "report.csv")
+    assert rows[0]["status"] == "failed"
+    assert "Not run (--no-rate-check)" in (out / "report.md").read_text()
+
+
+def test_bad_input_is_one_line(tmp_path, cli):
+    rc, o, err = cli("validate", tmp_path / "nowhere", "--fdem", FAKE)
+    assert rc == 1 and "no such family folder" in err and len(err.strip().splitlines()) == 1
+    fam = family(tmp_path)
+    rc, o, err = cli("validate", fam, "--fdem", FAKE, "--rate-case", "zz")
+    assert rc == 1 and "no such case" in err
+
+
+def test_rate_and_settings_of_the_wall_cases():
+    case = os.path.join(REPO, "cases", "lourenco2005", "k25_N100.toml")
+    if not os.path.isfile(case):
+        pytest.skip("wall cases not present")
+    tree = validate.read_case(case, [("stages.1.supports.0.vx", "0.05")])
+    key, rate = validate.rate_key(tree)
+    assert key == "stages.1.supports.0.vx" and rate == 0.05
+    s = validate.numerical_settings(tree)
+    assert s["mesh_size_m"] == 0.025
+    assert "stone p_j=1e+10 Pa" in s["penalties"] and "units/units normal_penalty=1e+10 Pa" in s["penalties"]
