@@ -164,6 +164,23 @@ void run_stage(fdem::Simulation& sim, int s, BalanceWatch& bw) {
     while (!sim.stage_finished()) bw.step(sim);
 }
 
+// Numeric rows of a CSV text with a header line.
+std::vector<std::vector<double>> csv_rows(const std::string& text) {
+    std::vector<std::vector<double>> rows;
+    std::istringstream in(text);
+    std::string line;
+    std::getline(in, line);  // header
+    while (std::getline(in, line)) {
+        if (line.empty()) continue;
+        std::vector<double> row;
+        std::istringstream ls(line);
+        std::string cell;
+        while (std::getline(ls, cell, ',')) row.push_back(std::stod(cell));
+        rows.push_back(row);
+    }
+    return rows;
+}
+
 // A block (0.2 x 0.1 m, 4 kg) on a fixed base 2 m long; the base is coarser than the block.
 std::vector<Rect> block_on_base() {
     return {{"base", -0.5, -0.1, 2.0, 0.1, 0.1}, {"block", 0.0, 0.0, 0.2, 0.1, 0.05}};
@@ -375,14 +392,17 @@ local_damping = 0.0
     CHECK(vb > 0.0);
     CHECK(std::hypot(px - px0, py - py0) <= 1e-10 * sc0);
     CHECK(std::fabs(E1 - E0) < 0.01 * E0);
+    // Measured 2.8 % (engine) against 0.38 % (at t^n): Simulation::energies() adds the kinetic energy of the
+    // half-step velocities v^{n+1/2} to the elastic energy at x^{n+1} (and the contact energy at x^n); after the
+    // impact the blocks vibrate and that staggering shows as a balance error. The engine must fix it (report).
     CHECK(bal.engine < 0.01);
     CHECK(bal.at_tn < 0.01);
 }
 
-TEST_CASE("engine: two blocks pressed through a dry interface close by q / k_n within 5 % at two mesh sizes",
+TEST_CASE("engine: two blocks pressed through a dry interface close by q / k_n within 5 % at three mesh sizes",
           "[engine][convergence]") {
     const double kn = 1e10, q = 1e6, W = 0.2, H = 0.1;  // Pa/m, Pa, m, m
-    for (double size : {0.05, 0.025}) {
+    for (double size : {0.05, 0.025, 0.0125}) {
         std::ostringstream c;
         c.precision(17);
         c << case_head("pressed", {"lower", "upper"}, 3e10, 2500.0) << dry_interface("lower", "upper", 35.0, kn)
@@ -449,7 +469,53 @@ TEST_CASE("engine: history.csv of a sliding two-block stack is the same for 1 an
     }
     REQUIRE(hist[0].size() > 1000);
     CHECK(hist[0] == hist[1]);
-    // The blocks did slide (the check compares a run with contact forces, not a resting one).
-    const auto last = hist[0].substr(hist[0].rfind('\n', hist[0].size() - 2) + 1);
-    std::printf("[engine threads] last history row: %s", last.c_str());
+    // The blocks did slide (the check compares a run with contact forces, not a resting one): column 4 is ux_b.
+    const auto rows = csv_rows(hist[0]);
+    REQUIRE(rows.size() > 10);
+    std::printf("[engine threads] %zu history rows, final ux_b %.4g m, E_fric %.4g J\n", rows.size(), rows.back()[3],
+                rows.back()[rows.back().size() - 2]);
+    CHECK(rows.back()[3] > 1e-3);
+}
+
+TEST_CASE("engine: every history.csv row of a block settling on a base, stage ends included, balances energy within 1 %",
+          "[engine][regression]") {
+    const auto dir = testing::tmp_dir("engine_history_balance");
+    testing::write_text(dir / "blocks.geo", geo_of(block_on_base()));
+    const std::string text = case_head("history_balance", {"base", "block"}) + dry_interface("base", "block", 30.0, 5e9) + R"(
+[output]
+history_interval = 0.01
+[[stages]]
+name = "settle"
+duration = 0.2
+local_damping = 0.7
+gravity = [0.0, -9.81]
+  [[stages.supports]]
+  group = "base"
+  fix = "xy"
+[[stages]]
+name = "free"
+duration = 0.1
+local_damping = 0.0
+)";
+    const std::string path = testing::write_text(dir / "case.toml", text);
+    const auto r = testing::run_fdem("run \"" + path + "\" --quiet --threads 1 --out \"" + (dir / "out").string() + "\"", dir);
+    INFO(r.out << r.err);
+    REQUIRE(r.code == 0);
+    const auto rows = csv_rows(testing::read_text(dir / "out" / "history.csv"));
+    REQUIRE(rows.size() > 20);
+    // Columns: time, step, stage, E_kin, E_el, E_joint, E_contact, W_ext, D_damp, D_visc, D_frac, D_fric, E_balance.
+    double worst = 0, t_worst = 0, contact_ref = 0;
+    for (const auto& row : rows) {
+        REQUIRE(row.size() == 13);
+        if (row[0] < 0.01) continue;  // from rest under gravity: see BalanceWatch
+        if (row[0] > 0.19 && row[0] < 0.2) contact_ref = row[6];
+        if (row[12] > worst) worst = row[12], t_worst = row[0];
+    }
+    std::printf("[engine history] %zu rows, worst E_balance %.3g %% at t = %.4g s; E_contact %.4g J at t = 0.19 s, %.4g J in the "
+                "last row (t = %.4g s)\n",
+                rows.size(), 100 * worst, t_worst, contact_ref, rows.back()[6], rows.back()[0]);
+    // Measured 43 % on the row Simulation::run() writes at the end of stage 1: that step did not evaluate the contact
+    // energy (want_energy was off), so its E_contact holds only the tangential part. The engine must fix it (report).
+    CHECK(worst < 0.01);
+    CHECK(rows.back()[6] == Approx(contact_ref).epsilon(0.01));  // at rest the contact energy does not change
 }
