@@ -21,7 +21,7 @@ W_BEAM = RHO * G * L * BEAM_H * T       # N
 # (fdem/simulation.cpp) chose it from the triangles alone although the joint springs set a stable limit of 1.99e-6 s
 # on this mesh (reported to the engine owner); 1.5e-6 s = 0.76 of that limit.
 K25 = dict(mesh=0.025, penalty=1.0e10, rate=0.1, until=0.008, damping=0.8, dt=1.5e-6)
-DEC = dict(mesh=0.05, rate=0.1, until=0.008, damping=0.8)
+DEC = dict(mesh=0.05, rate=0.01, until=0.008, damping=0.8)
 
 
 def rows():
