@@ -519,3 +519,66 @@ local_damping = 0.0
     CHECK(worst < 0.01);
     CHECK(rows.back()[6] == Approx(contact_ref).epsilon(0.01));  // at rest the contact energy does not change
 }
+
+namespace {
+
+// Tilting table through stages.tilt_rate: a b x h block (mesh 50 mm) on the base, gravity ramped to theta0 under
+// damping, then rotated at 1 deg/s undamped. Returns the tilt (deg, the engine's tilt monitor plus theta0) of the
+// first event and whether it was overturning (block rotation > 0.01 rad) rather than sliding (bottom-left corner
+// moved > 0.5 mm along the base with rotation < 0.005 rad).
+double tilt_until_event(double b, double h, double mu, double theta0_deg, bool& overturned) {
+    const double th0 = theta0_deg * kDeg;
+    std::ostringstream c;
+    c.precision(17);
+    // A stiff joint: a compliant one lets the corner sink and tips the block earlier (~0.9 deg at 5e9 Pa/m, module test).
+    c << case_head("tilt", {"base", "block"}) << dry_interface("base", "block", std::atan(mu) / kDeg, 2e10)
+      << "[[monitors]]\nname = \"tilt\"\ntype = \"tilt\"\n"
+      << "[[stages]]\nname = \"incline\"\nduration = 0.4\nlocal_damping = 0.7\ngravity = [" << kG * std::sin(th0) << ", "
+      << -kG * std::cos(th0) << "]\ngravity_ramp = 0.3\n  [[stages.supports]]\n  group = \"base\"\n  fix = \"xy\"\n"
+      << "[[stages]]\nname = \"tilt\"\nduration = 6.0\nlocal_damping = 0.0\ntilt_rate = 1.0\ngravity = ["
+      << kG * std::sin(th0) << ", " << -kG * std::cos(th0) << "]\n";
+    auto sim = make_contact_sim("engine_tilt", {{"base", -0.5, -0.1, 2.0, 0.1, 0.1}, {"block", 0.0, 0.0, b, h, 0.05}}, c.str());
+    const fdem::Model& md = sim.model();
+    // Bottom-left and top-left corners of the block (reference coordinates).
+    int bl = -1, tl = -1;
+    for (int k : nodes_of(sim, "block")) {
+        if (std::hypot(md.X[2 * k], md.X[2 * k + 1]) < 1e-9) bl = k;
+        if (std::hypot(md.X[2 * k], md.X[2 * k + 1] - h) < 1e-9) tl = k;
+    }
+    REQUIRE(bl >= 0);
+    REQUIRE(tl >= 0);
+    auto angle = [&] { return std::atan2(md.x[2 * tl + 1] - md.x[2 * bl + 1], md.x[2 * tl] - md.x[2 * bl]); };
+    BalanceWatch bw;
+    run_stage(sim, 0, bw);
+    const double ref = angle(), x_bl0 = md.x[2 * bl];
+    sim.begin_stage(1);
+    overturned = false;
+    while (!sim.stage_finished()) {
+        sim.step();
+        const double rot = std::fabs(angle() - ref);
+        if (rot > 0.01) {
+            overturned = true;
+            return theta0_deg + sim.monitor_value(0);
+        }
+        if (md.x[2 * bl] - x_bl0 > 5e-4 && rot < 0.005) return theta0_deg + sim.monitor_value(0);
+    }
+    return 1e9;
+}
+
+}  // namespace
+
+TEST_CASE("engine: a block on a table tilting at 1 deg/s overturns at atan(b/h) if mu > b/h, else slides at atan(mu)",
+          "[engine][regression]") {
+    const double b = 0.1, h = 0.2;
+    bool over = false;
+    const double a1 = tilt_until_event(b, h, 0.7, std::atan(b / h) / kDeg - 2.0, over);
+    std::printf("[engine tilt] mu 0.7 > b/h: event at %.2f deg (%s), expected overturning at %.2f deg\n", a1,
+                over ? "overturning" : "sliding", std::atan(b / h) / kDeg);
+    CHECK(over);
+    CHECK(a1 == Approx(std::atan(b / h) / kDeg).margin(1.0));
+    const double a2 = tilt_until_event(b, h, 0.3, std::atan(0.3) / kDeg - 2.0, over);
+    std::printf("[engine tilt] mu 0.3 < b/h: event at %.2f deg (%s), expected sliding at %.2f deg\n", a2,
+                over ? "overturning" : "sliding", std::atan(0.3) / kDeg);
+    CHECK_FALSE(over);
+    CHECK(a2 == Approx(std::atan(0.3) / kDeg).margin(1.0));
+}
