@@ -1,0 +1,51 @@
+// Long validation runs (ctest label "validation", excluded from ./test.sh; run with ./test.sh -L validation).
+// Each runs a committed case file through the fdem executable and checks the result it prints into summary.json
+// against the reference the case names: the tolerances are the acceptance limits of issue 5 / CASES.md, not fitted.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <string>
+
+#include "core/engine_helpers.hpp"
+
+namespace {
+
+// The number after "key": in the "reference" object of summary.json (the engine writes it flat, one level deep).
+double reference_number(const std::string& summary, const std::string& key) {
+    const auto ref = summary.find("\"reference\"");
+    REQUIRE(ref != std::string::npos);
+    const auto k = summary.find("\"" + key + "\"", ref);
+    REQUIRE(k != std::string::npos);
+    const auto colon = summary.find(':', k);
+    return std::stod(summary.substr(colon + 1));
+}
+
+std::string run_case(const std::string& rel_case, const std::string& name) {
+    const auto dir = testing::tmp_dir(name);
+    const std::string cmd = std::string("run \"") + FDEM_CASES_DIR + "/" + rel_case + "\" --out \"" + (dir / "run").string() +
+                            "\" --threads 2 --quiet";
+    const auto r = testing::run_fdem(cmd, dir);
+    INFO(r.out << r.err);
+    REQUIRE(r.code == 0);
+    return testing::read_text(dir / "run" / "summary.json");
+}
+
+}  // namespace
+
+// CASES.md §A2 / §C: a single stone pulled apart carries f_t A = 3.7 MPa x 0.1 m x 0.2 m = 74 kN at its peak. The
+// 25 mm mesh of the wall cases gave +2.2 % on this machine (RESULTS.md); 5 % is the case file's tolerance.
+TEST_CASE("single stone in tension, 25 mm: peak force f_t A within 5 %", "[regression]") {
+    const std::string s = run_case("lourenco2005/stone_tension_25mm.toml", "stone25");
+    const double computed = reference_number(s, "computed");
+    INFO("peak reaction " << computed << " N against f_t A = 74000 N");
+    CHECK(std::abs(std::abs(computed) - 74.0e3) <= 0.05 * 74.0e3);
+}
+
+// Issue 5 acceptance: the [K25]-style 100 kN dry-stone wall, published parameters, peak within 25 % of the measured
+// 44.73 kN (Lourenco et al. 2005). About 5 minutes on 2 cores.
+TEST_CASE("dry-stone wall, N = 100 kN, [K25] style: peak within 25 % of the experiment", "[regression]") {
+    const std::string s = run_case("lourenco2005/k25_N100.toml", "k25_N100");
+    const double err = reference_number(s, "relative_error");
+    INFO("peak " << reference_number(s, "computed") << " N against 44730 N measured: error " << 100 * err << " %");
+    CHECK(std::abs(err) <= 0.25);
+}
