@@ -121,7 +121,8 @@ void require_at_height(const fdem::Simulation& sim, const std::string& group, do
 // Largest energy balance error sim.energies().balance_error() over the sampled steps, as the engine reports it
 // (history.csv, summary). Runs that start from rest under a load or gravity ramp are sampled from `from_time`
 // (10 ms) on: before that every energy is below 1e-8 J (1e-3 of what it becomes) and the relative error of their
-// O(dt) bookkeeping offsets reached 3 % (measured: 2.9 % at t = 1.6 ms, < 0.1 % from 40 ms on).
+// O(dt) bookkeeping offsets reaches several % (measured on the incline: up to 5.6 % in the first 5 ms, 0.14 % at
+// most from 10 ms on).
 struct BalanceWatch {
     double engine = 0;
     long n = 0;
