@@ -1,5 +1,5 @@
 // Brazilian disc of brazilian_disc.toml: radius R, load arcs of +-a about the vertical, mesh size lc (m).
-R = 0.05; a = 6 * Pi / 180; lc = 0.005;
+R = 0.05; a = 6 * Pi / 180; lc = 0.0075;
 Point(1) = {0, 0, 0, lc};
 Point(2) = {R*Sin(a), R*Cos(a), 0, lc}; Point(3) = {-R*Sin(a), R*Cos(a), 0, lc};
 Point(4) = {-R*Sin(a), -R*Cos(a), 0, lc}; Point(5) = {R*Sin(a), -R*Cos(a), 0, lc};

@@ -1,0 +1,339 @@
+// tests/fracture/test_engine_fracture.cpp: fracture through the real engine (issue 7): case text -> Gmsh .geo ->
+// topology (split nodes, cohesive elements) -> Interactions (joints + contact) -> Simulation, as `fdem run` does.
+//
+// DATA LAYOUT
+//   Case files and .geo scripts live in tests/fracture/cases/ (read at test time through __FILE__, so the tests run
+//   the very files a user can run with `fdem run`). Every test copies them into build/tests/tmp/<name>/ (the .geo
+//   possibly edited, e.g. the bar's nx, ny) and builds the Simulation with fdem::build_scene: testing::make_simulation
+//   skips the topology, so it would have no cohesive elements.
+//   Broken elements are read from sim.interactions().joints(): state(e) == broken, element(e).n = {a0, a1, b0, b1}
+//   (model node numbering); their reference geometry comes from sim.model().X (2 per node, m).
+//   Forces are for the whole thickness (N), energies in J, as in the engine.
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "contact/contact_system.hpp"
+#include "core/engine_helpers.hpp"
+#include "fdem/scene.hpp"
+#include "fdem/triangle.hpp"
+#include "fracture/cohesive_system.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+using fdem::fracture::JointState;
+
+fs::path cases_dir() { return fs::path(__FILE__).parent_path() / "cases"; }
+
+std::string replace_once(std::string text, const std::string& from, const std::string& to) {
+    const auto p = text.find(from);
+    REQUIRE(p != std::string::npos);
+    return text.replace(p, from.size(), to);
+}
+
+// Writes `files` (name -> text) and the case next to each other in tmp/<name>/ and builds the Simulation with its
+// topology. One thread: a few hundred triangles run fastest on one (the engine is bit-identical for any count).
+fdem::Simulation make_fracture_sim(const std::string& name, const std::string& case_text,
+                                   const std::map<std::string, std::string>& files,
+                                   const std::vector<std::string>& overrides = {}) {
+    const auto dir = testing::tmp_dir(name);
+    for (const auto& [file, text] : files) testing::write_text(dir / file, text);
+    const std::string path = testing::write_text(dir / "case.toml", case_text);
+    fdem::CaseSpec spec = fdem::load_case(path, overrides);
+    fdem::Model model = fdem::build_scene(spec);
+    fdem::RunOptions opt;
+    opt.quiet = true;
+    opt.threads = 1;
+    return fdem::Simulation(spec, std::move(model), opt);
+}
+
+// One broken cohesive element in the reference configuration.
+struct Crack {
+    int element;
+    double x0, y0, x1, y1;  // reference end points a0, a1 (m)
+    double xm() const { return 0.5 * (x0 + x1); }
+    double ym() const { return 0.5 * (y0 + y1); }
+    double length() const { return std::hypot(x1 - x0, y1 - y0); }
+};
+
+std::vector<Crack> broken_elements(const fdem::Simulation& sim) {
+    std::vector<Crack> out;
+    const auto* j = sim.interactions().joints();
+    REQUIRE(j != nullptr);
+    const auto& X = sim.model().X;
+    for (int e = 0; e < j->size(); ++e)
+        if (j->state(e) == JointState::broken) {
+            const auto& el = j->element(e);
+            out.push_back({e, X[2 * el.n[0]], X[2 * el.n[0] + 1], X[2 * el.n[1]], X[2 * el.n[1] + 1]});
+        }
+    return out;
+}
+
+long long broken_count(const fdem::Simulation& sim) {
+    const auto* c = sim.interactions().counts();
+    return c ? c->total() : 0;
+}
+
+// Energies with the contact energy of the current state (the engine evaluates it on reported steps only): one more
+// step with the energy switched on.
+fdem::Energies energies_now(fdem::Simulation& sim) {
+    sim.energy_every_step(true);
+    sim.step();
+    sim.energy_every_step(false);
+    return sim.energies();
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------------------------
+// 1. Bar in tension, every edge crackable (CASES.md C): the transfinite mesh has straight vertical lines of edges,
+//    so the exact answer is one straight mode I crack across the bar, peak force f_t A and dissipation G_I A.
+// ---------------------------------------------------------------------------------------------------------------
+TEST_CASE("engine bar in tension with every edge crackable: one straight crack, peak f_t A, dissipation G_I A",
+          "[engine][convergence]") {
+    const std::string geo0 = testing::read_text(cases_dir() / "bar_structured.geo");
+    const std::string toml = testing::read_text(cases_dir() / "bar_structured.toml");
+    REQUIRE(!geo0.empty());
+    REQUIRE(!toml.empty());
+    const double ft = 3.7e6, GI = 110.0;  // Pa, J/m^2 (the case's stone)
+    const double L = 0.2, H = 0.1, t = 0.2;  // m
+    const double A = H * t;                 // m^2, cross-section
+    for (int nx : {4, 8, 16, 20}) {
+        const int ny = nx / 2;
+        const double h = L / nx;  // m
+        const std::string geo = replace_once(geo0, "nx = 16; ny = 8;", "nx = " + std::to_string(nx) + "; ny = " + std::to_string(ny) + ";");
+        auto sim = make_fracture_sim("engine_bar_" + std::to_string(nx), toml, {{"bar_structured.geo", geo}});
+        // Monitors of the case, in order: ux (right end), R (right support), R_left.
+        sim.begin_stage(0);
+        double peak = 0, peak_time = 0, peak_left = 0;
+        double t_sep = -1;
+        while (!sim.stage_finished()) {
+            sim.step();
+            const double R = sim.monitor_value(1);
+            if (R > peak) {
+                peak = R, peak_time = sim.time(), peak_left = sim.monitor_value(2);
+            }
+            if (t_sep < 0 && broken_count(sim) >= ny) t_sep = sim.time();
+            // 1 ms (5 axial transits of the bar) after the separation, to see whether anything else breaks.
+            if (t_sep > 0 && sim.time() > t_sep + 1e-3) break;
+        }
+        const fdem::Energies e = energies_now(sim);
+        const auto cracks = broken_elements(sim);
+        double xmin = 1e9, xmax = -1e9, len = 0, ymin = 1e9, ymax = -1e9;
+        for (const auto& c : cracks) {
+            xmin = std::min({xmin, c.x0, c.x1}), xmax = std::max({xmax, c.x0, c.x1});
+            ymin = std::min({ymin, c.y0, c.y1}), ymax = std::max({ymax, c.y0, c.y1});
+            len += c.length();
+        }
+        std::printf("bar nx=%d h=%.4g m: dt=%.4g s, %ld steps, broken %zu at x=%.5g..%.5g m, crack length %.5g m, "
+                    "peak R/(f_t A)=%.5f at t=%.4g s (R_left/R=%.5f), D_frac/(G_I A)=%.5f, balance error %.3g, "
+                    "separated at %.4g s\n",
+                    nx, h, sim.dt(), sim.steps(), cracks.size(), xmin, xmax, len, peak / (ft * A), peak_time,
+                    -peak_left / peak, e.fracture / (GI * A), e.balance_error(), t_sep);
+        INFO("nx = " << nx);
+        REQUIRE(t_sep > 0);
+        // A single crack: exactly the ny edges of one vertical line, spanning the whole section.
+        CHECK(cracks.size() == static_cast<std::size_t>(ny));
+        CHECK(xmax - xmin < 1e-9);
+        CHECK(len == Approx(H).epsilon(1e-9));
+        CHECK(ymin == Approx(0.0).margin(1e-9));
+        CHECK(ymax == Approx(H).epsilon(1e-9));
+        CHECK(peak / (ft * A) == Approx(1.0).epsilon(0.03));
+        CHECK(e.fracture / (GI * A) == Approx(1.0).epsilon(0.05));
+        // Quasi-static: the pull reaches the peak in ~10 ms, 25 periods of the bar's first axial mode (4 L / c =
+        // 0.39 ms, c = sqrt(E / rho) = 2040 m/s), after a 1 ms smooth velocity ramp; the dynamic stress of the
+        // velocity itself, rho c v = 49 kPa, is 1.3 % of f_t before damping. Check: both supports carry the same
+        // force at the peak (their difference is the bar's inertia force).
+        CHECK(std::abs(peak_left + peak) / peak < 0.015);
+        // Pure mode I, no compression, no contact: the books close to the integrator's O(dt^2) (measured < 2e-6).
+        CHECK(e.balance_error() < 1e-4);
+    }
+}
+
+
+namespace {
+
+// Energy audit: the engine's balance W_ext = K + E_el + E_joint + E_contact + D_damp + D_visc + D_frac + D_fric is
+// exact for K, W_ext and D_damp by construction (they are accumulated as dt f . vbar with the same vbar that changes
+// K), so any residual comes from a force class whose work differs from the change of its own energy plus its
+// dissipation. The audit evaluates each class on copies of the engine's systems at x^n before every step and
+// accumulates W_class = sum dt f_class(x^n) . vbar^n, vbar^n = (v^{n-1/2} + v^{n+1/2}) / 2. Class mismatches (J, 0 for
+// a class whose forces are consistent with its energy):
+//   triangles: -W_tri - (E_el(end) - E_el(0)),  joints: -W_joint - (E_joint(end) - E_joint(0)) - D_frac,
+//   contact:   -W_contact - (E_contact(end) - E_contact(0)) - D_fric,
+// and W_ext - (K + E_el + ... + D_fric) = sum of the three (the test checks that too).
+struct EnergyAudit {
+    double W_tri = 0, W_joint = 0, W_contact = 0;  // J, work done BY each class on the nodes
+    double E_el0 = 0, E_joint0 = 0, E_contact0 = 0, D_frac0 = 0, D_fric0 = 0;
+    std::vector<double> v_old, f_tri, f_joint, f_contact;
+
+    void start(fdem::Simulation& sim) {
+        const fdem::Energies e = energies_now(sim);
+        E_el0 = e.elastic, E_joint0 = e.joint, E_contact0 = e.contact, D_frac0 = e.fracture, D_fric0 = e.friction;
+    }
+    // One engine step with the audit around it.
+    void step(fdem::Simulation& sim) {
+        const fdem::Model& md = sim.model();
+        const int nn = md.n_nodes();
+        f_tri.assign(2 * nn, 0.0), f_joint.assign(2 * nn, 0.0), f_contact.assign(2 * nn, 0.0);
+        double f6[6], p;
+        for (int e = 0; e < md.n_triangles(); ++e) {
+            fdem::triangle_forces(md.tris[e], md.mat[md.tris[e].mat], md.x.data(), md.v.data(), f6, p);
+            for (int k = 0; k < 3; ++k) f_tri[2 * md.tris[e].n[k]] += f6[2 * k], f_tri[2 * md.tris[e].n[k] + 1] += f6[2 * k + 1];
+        }
+        if (const auto* j = sim.interactions().joints()) {
+            fdem::fracture::CohesiveSystem copy = *j;
+            copy.add_forces(md.x.data(), f_joint.data());
+        }
+        if (const auto* c = sim.interactions().contact()) {
+            fdem::contact::ContactSystem copy = *c;
+            copy.step(md.x.data(), md.v.data(), sim.dt(), f_contact.data());
+        }
+        v_old = md.v;
+        sim.step();
+        const double dt = sim.dt();
+        for (int d = 0; d < 2 * nn; ++d) {
+            const double vbar = 0.5 * (v_old[d] + md.v[d]);
+            W_tri += dt * f_tri[d] * vbar, W_joint += dt * f_joint[d] * vbar, W_contact += dt * f_contact[d] * vbar;
+        }
+    }
+    struct Report {
+        double tri, joint, contact, total;  // J
+    };
+    // Mismatches from start() to the state e (take e from energies_now after the last audited step).
+    Report mismatch(const fdem::Energies& e) const {
+        Report r;
+        r.tri = -W_tri - (e.elastic - E_el0);
+        r.joint = -W_joint - (e.joint - E_joint0) - (e.fracture - D_frac0);
+        r.contact = -W_contact - (e.contact - E_contact0) - (e.friction - D_fric0);
+        r.total = e.external - (e.kinetic + e.elastic + e.joint + e.contact + e.damping + e.viscous + e.fracture + e.friction);
+        return r;
+    }
+};
+
+struct DiscResult {
+    double peak = 0, peak_time = 0, peak_bottom = 0;  // N, s, N
+    double first_abs_y = 1e9;                         // m, |y| of the first broken element(s)
+    double balance_before = 0;                        // balance error when the first element broke
+    std::vector<Crack> cracks;
+    fdem::Energies e;
+    EnergyAudit::Report m{};
+    int triangles = 0, joints = 0;
+    long steps = 0;
+    double dt = 0;
+};
+
+// The Brazilian disc case (cases/brazilian_disc.*) with overrides, audited every step, run until the load has dropped
+// below half its peak and 1 ms (20 transits of the disc) longer.
+DiscResult run_disc(const std::string& name, const std::vector<std::string>& overrides) {
+    const std::string geo = testing::read_text(cases_dir() / "brazilian_disc.geo");
+    const std::string toml = testing::read_text(cases_dir() / "brazilian_disc.toml");
+    REQUIRE(!geo.empty());
+    auto sim = make_fracture_sim(name, toml, {{"brazilian_disc.geo", geo}}, overrides);
+    DiscResult r;
+    // Monitors: uy (top arc), P (top reaction, negative in compression), P_bottom.
+    sim.begin_stage(0);
+    EnergyAudit audit;
+    audit.start(sim);
+    double t_drop = -1;
+    while (!sim.stage_finished()) {
+        const bool none_yet = broken_count(sim) == 0;
+        audit.step(sim);
+        const double P = -sim.monitor_value(1);
+        if (P > r.peak) r.peak = P, r.peak_time = sim.time(), r.peak_bottom = sim.monitor_value(2);
+        if (none_yet && broken_count(sim) > 0) {
+            for (const auto& k : broken_elements(sim)) r.first_abs_y = std::min(r.first_abs_y, std::abs(k.ym()));
+            r.balance_before = sim.energies().balance_error();
+        }
+        if (t_drop < 0 && P < 0.5 * r.peak) t_drop = sim.time();
+        if (t_drop > 0 && sim.time() > t_drop + 1e-3) break;
+    }
+    REQUIRE(t_drop > 0);
+    // Contact energy evaluated at the final state, with the audit covering that last step too.
+    sim.energy_every_step(true);
+    audit.step(sim);
+    r.e = sim.energies();
+    r.m = audit.mismatch(r.e);
+    r.cracks = broken_elements(sim);
+    r.triangles = sim.model().n_triangles();
+    r.joints = sim.interactions().joints()->size();
+    r.steps = sim.steps();
+    r.dt = sim.dt();
+    return r;
+}
+
+void print_disc(const char* label, const DiscResult& r) {
+    const double D = 0.1, t = 0.05;
+    double xdev = 0, ymin = 1e9, ymax = -1e9;
+    for (const auto& c : r.cracks) {
+        xdev = std::max({xdev, std::abs(c.x0), std::abs(c.x1)});
+        ymin = std::min({ymin, c.y0, c.y1}), ymax = std::max({ymax, c.y0, c.y1});
+    }
+    std::printf("disc %s: %d triangles, %d cohesive, dt=%.4g s, %ld steps; peak P=%.5g N at t=%.4g s (2P/(pi D t)=%.4g Pa, "
+                "P_bottom/P=%.4f); %zu broken, first at |y|=%.4g m, max |x|=%.4g m, y in [%.4g, %.4g] m; D_frac=%.4g J, "
+                "D_fric=%.4g J, D_damp=%.4g J, W_ext=%.4g J; balance error %.3g at the first break, %.3g at the end; "
+                "class mismatches (J): triangles %.3g, joints %.3g, contact %.3g (sum of all %.3g)\n",
+                label, r.triangles, r.joints, r.dt, r.steps, r.peak, r.peak_time, 2 * r.peak / (M_PI * D * t),
+                r.peak_bottom / r.peak, r.cracks.size(), r.first_abs_y, xdev, ymin, ymax, r.e.fracture, r.e.friction,
+                r.e.damping, r.e.external, r.balance_before, r.e.balance_error(), r.m.tri, r.m.joint, r.m.contact,
+                r.m.total);
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------------------------
+// 2. Brazilian disc (CASES.md C), every edge crackable, squeezed through 12-degree arcs: the tensile stress across
+//    the loaded diameter is nearly uniform (2 P / (pi D t)) over its central part and the stress near the arcs is
+//    compressive, so the crack starts near the centre and runs along the loaded diameter.
+// ---------------------------------------------------------------------------------------------------------------
+TEST_CASE("engine Brazilian disc with every edge crackable splits along the loaded diameter", "[engine][regression]") {
+    const DiscResult r = run_disc("engine_disc", {});
+    print_disc("phi=35", r);
+    const double D = 0.1, lc = 0.0075;  // m: diameter, mesh size of the .geo
+    double xdev = 0, ymin = 1e9, ymax = -1e9;
+    for (const auto& c : r.cracks) {
+        xdev = std::max({xdev, std::abs(c.x0), std::abs(c.x1)});
+        ymin = std::min({ymin, c.y0, c.y1}), ymax = std::max({ymax, c.y0, c.y1});
+    }
+    // Unstructured mesh: the crack follows edges, which lie up to about one element size off the diameter.
+    CHECK(xdev < 1.5 * lc);
+    // It spans most of the diameter (the wedges under the arcs stay whole): D / lc = 13 elements; at least 10 broken
+    // and their extent along the diameter at least 80 % of D.
+    CHECK(r.cracks.size() >= 10);
+    CHECK(ymax - ymin > 0.8 * D);
+    // It starts in the central part of the diameter, not at the arcs.
+    CHECK(r.first_abs_y < D / 4);
+
+    // 4. Energy balance after cracking. The audit splits the residual by force class: triangles O(dt^2) and contact
+    //    (a few hundred crack-face pairs) are small; the residual is the joints', i.e. the bookkeeping of the cohesive
+    //    law (the Mohr-Coulomb shear strength c + max(0, -sigma) tan(phi) makes the stored shear energy depend on the
+    //    normal stress, which does no shear work: fracture/law.hpp says so). The test below shows it vanishes with
+    //    phi = 0. Bounds: triangles and contact 1e-4 and 5e-4 of W_ext (measured 1.3e-5, 1e-4), the total 4 %
+    //    (measured 2.5 %: the number to beat when the law's books are fixed).
+    // The class mismatches add up to the engine's residual (up to the engine's joint energy being that of the last
+    // force evaluation, one step behind the triangles'; measured 6e-6 of W_ext).
+    CHECK(std::abs(r.m.total - (r.m.tri + r.m.joint + r.m.contact)) < 1e-4 * r.e.external);
+    CHECK(std::abs(r.m.tri) < 1e-4 * r.e.external);
+    CHECK(std::abs(r.m.contact) < 5e-4 * r.e.external);
+    CHECK(r.e.balance_error() < 0.04);
+}
+
+TEST_CASE("engine Brazilian disc with a frictionless cohesive law: the energy books close after cracking",
+          "[engine][regression]") {
+    // Same disc, phi = 0 in the cohesive law (f_s = c whatever the normal stress: the law is then a potential up to
+    // its damage). If the 2.5 % of the test above were contact, damping or engine bookkeeping it would remain here.
+    const DiscResult r = run_disc("engine_disc_phi0", {"materials.stone.fracture.friction=0"});
+    print_disc("phi=0", r);
+    REQUIRE(r.cracks.size() >= 10);  // it did crack (the balance is checked after cracking)
+    CHECK(std::abs(r.m.tri) < 1e-4 * r.e.external);
+    CHECK(std::abs(r.m.contact) < 5e-4 * r.e.external);
+    CHECK(r.e.balance_error() < 0.003);  // measured 0.12 %
+}
