@@ -10,6 +10,15 @@
 //   <name>_bottom / <name>_top are checked against their node coordinates before they are used.
 //   Body quantities are taken over the nodes of the region's physical surface (model numbering): centre of mass
 //   and mean velocity weighted by the lumped nodal mass (kg).
+//
+// CLOSED FORMS (CASES.md "analytical checks"; contact laws FORMULATION §5, [K25] Eqs. 2-5, [MA00]; integrator §3;
+// local damping §4 [C79]):
+//   rest:      static overlap d = rho g h / k_n (uniform pressure rho g h on a k_n joint); no drift once settled.
+//   slide:     Coulomb friction mu N decelerates a block launched at v0: s = v0^2 / (2 mu g), all of 1/2 M v0^2 dissipated.
+//   incline:   sticks iff tan(theta) <= mu; sliding x(t) = x0 + v0 t + g (sin theta - mu cos theta) t^2 / 2.
+//   tilt:      overturns at tan(alpha) = b / h when mu > b / h, otherwise slides at tan(alpha) = mu.
+//   collision: no external force: sum m v constant; frictionless and undamped: K + E + E_contact constant.
+//   pressed:   uniform pressure q through a joint of stiffness k_n: closure q / k_n.
 #include <catch2/catch.hpp>
 
 #include <algorithm>
