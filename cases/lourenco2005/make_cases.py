@@ -20,7 +20,7 @@ W_BEAM = RHO * G * L * BEAM_H * T       # N
 # Numerical settings shared by every wall of a variant (FORMULATION §3-5). The time step is fixed because the engine
 # (fdem/simulation.cpp) chose it from the triangles alone although the joint springs set a stable limit of 1.99e-6 s
 # on this mesh (reported to the engine owner); 1.5e-6 s = 0.76 of that limit.
-# Loading rate 0.01 m/s for both variants: a single dry block pushed over its base at 0.1 m/s shows a mean force 35 %
+# Loading rate 0.01 m/s for both variants: a single dry block pushed over its base at 0.1 m/s shows a mean force 38 %
 # above mu N with +-50 % oscillations, at 0.01 m/s 4.7 % above (RESULTS.md), and the [K25] walls at 0.1 m/s carry
 # 1.7-2.1 times the measured loads. At 0.01 m/s one [K25] wall is ~600,000 steps (about 40 min on 2 cores).
 K25 = dict(mesh=0.025, penalty=1.0e10, rate=0.01, until=0.008, damping=0.8, dt=1.5e-6)
