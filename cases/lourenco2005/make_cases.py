@@ -17,9 +17,9 @@ BASE_H = 0.1        # m, base slab depth (assumed)
 W_WALL = RHO * G * L * H * T            # N
 W_BEAM = RHO * G * L * BEAM_H * T       # N
 
-# Numerical settings shared by every wall of a variant (FORMULATION §3-5). The time step is fixed because the engine
-# (fdem/simulation.cpp) chose it from the triangles alone although the joint springs set a stable limit of 1.99e-6 s
-# on this mesh (reported to the engine owner); 1.5e-6 s = 0.76 of that limit.
+# Numerical settings shared by every wall of a variant (FORMULATION §3-5). The [K25] time step is fixed so that all
+# four walls use the same one: 1.5e-6 s = 0.76 of the joint-spring limit 1.985e-6 s of this mesh (before engine commit
+# 0b03ca9 the engine took 0.8 x the triangle limit, 1.5e-5 s, and the wall blew up at step 9).
 # Loading rate 0.01 m/s for both variants: a single dry block pushed over its base at 0.1 m/s shows a mean force 38 %
 # above mu N with +-50 % oscillations, at 0.01 m/s 4.7 % above (RESULTS.md), and the [K25] walls at 0.1 m/s carry
 # 1.7-2.1 times the measured loads. At 0.01 m/s one [K25] wall is ~600,000 steps (about 40 min on 2 cores).
@@ -183,7 +183,7 @@ def k25_case(r):
 #   friction 31.8 deg, contact penalty p_n = {s['penalty']:g} Pa (assumed; same for the crack faces, the joint penalty
 #   p_j of the blocks: the smallest value > 5.7e9 Pa that the fracture-energy check of the 25 mm mesh allows, x 1.75).
 # Mesh: {s['mesh'] * 1000:g} mm in the blocks (the [K25] size, from the single-stone study), 100 mm in the beam and base.
-# Time step fixed at {s['dt']:g} s (0.76 of the stable limit set by the joint springs)."""
+# Time step fixed at {s['dt']:g} s (0.76 of the stable limit 1.985e-6 s set by the joint springs)."""
     text = header(f"Dry-joint sandstone wall, N = {r['N_kN']} kN, [K25]-style FDEM (block cracking, wall modulus)", r, variant, s, fname)
     text += f"""[case]
 name = "lourenco2005_k25_N{r['N_kN']}"
