@@ -111,7 +111,7 @@ TEST_CASE("engine bar in tension with every edge crackable: one straight crack, 
         const int ny = nx / 2;
         const double h = L / nx;  // m
         const std::string geo = replace_once(geo0, "nx = 16; ny = 8;", "nx = " + std::to_string(nx) + "; ny = " + std::to_string(ny) + ";");
-        auto sim = make_fracture_sim("engine_bar_" + std::to_string(nx), toml, {{"bar_structured.geo", geo}});
+        auto sim = make_fracture_sim("fracture_engine_bar_" + std::to_string(nx), toml, {{"bar_structured.geo", geo}});
         // Monitors of the case, in order: ux (right end), R (right support), R_left.
         sim.begin_stage(0);
         double peak = 0, peak_time = 0, peak_left = 0;
@@ -301,7 +301,7 @@ void print_disc(const char* label, const DiscResult& r) {
 //    compressive, so the crack starts near the centre and runs along the loaded diameter.
 // ---------------------------------------------------------------------------------------------------------------
 TEST_CASE("engine Brazilian disc with every edge crackable splits along the loaded diameter", "[engine][regression]") {
-    const DiscResult r = run_disc("engine_disc", {});
+    const DiscResult r = run_disc("fracture_engine_disc", {});
     print_disc("phi=35", r);
     const double D = 0.1, lc = 0.0075;  // m: diameter, mesh size of the .geo
     double xdev = 0, ymin = 1e9, ymax = -1e9;
@@ -336,7 +336,7 @@ TEST_CASE("engine Brazilian disc with a frictionless cohesive law: the energy bo
           "[engine][regression]") {
     // Same disc, phi = 0 in the cohesive law (f_s = c whatever the normal stress: the law is then a potential up to
     // its damage). If the 2.5 % of the test above were contact, damping or engine bookkeeping it would remain here.
-    const DiscResult r = run_disc("engine_disc_phi0", {"materials.stone.fracture.friction=0"});
+    const DiscResult r = run_disc("fracture_engine_disc_phi0", {"materials.stone.fracture.friction=0"});
     print_disc("phi=0", r);
     REQUIRE(r.cracks.size() >= 10);  // it did crack (the balance is checked after cracking)
     CHECK(std::abs(r.m.tri) < 1e-4 * r.e.external);
@@ -355,7 +355,7 @@ TEST_CASE("engine mode II: bonded interface under compression peaks at c + sigma
     const std::string geo = testing::read_text(cases_dir() / "mode2_shear.geo");
     const std::string toml = testing::read_text(cases_dir() / "mode2_shear.toml");
     REQUIRE(!geo.empty());
-    auto sim = make_fracture_sim("engine_mode2", toml, {{"mode2_shear.geo", geo}});
+    auto sim = make_fracture_sim("fracture_engine_mode2", toml, {{"mode2_shear.geo", geo}});
     const double L = 0.1, t = 0.1, A = L * t;                // m, m, m^2 (joint area)
     const double sigma = 1.0e6, c = 0.4e6, k_n = 1.0e11;     // Pa, Pa, Pa/m
     const double GII = 50.0;                                  // J/m^2
@@ -453,13 +453,13 @@ TEST_CASE("engine fdem run with fracture writes broken_* history columns and one
     const std::string toml = testing::read_text(cases_dir() / "bar_structured.toml");
     const std::vector<std::string> overrides = {"stages.0.duration=0.012"};  // the bar separates at 0.0102 s
     // In-process reference.
-    auto sim = make_fracture_sim("engine_cli_ref", toml, {{"bar_structured.geo", geo}}, overrides);
+    auto sim = make_fracture_sim("fracture_engine_cli_ref", toml, {{"bar_structured.geo", geo}}, overrides);
     sim.run();
     std::vector<int> expected;
     for (const auto& c : broken_elements(sim)) expected.push_back(c.element);
     REQUIRE(expected.size() == 2);
 
-    const auto dir = testing::tmp_dir("engine_cli");
+    const auto dir = testing::tmp_dir("fracture_engine_cli");
     testing::write_text(dir / "bar_structured.geo", geo);
     testing::write_text(dir / "case.toml", toml);
     const auto out = dir / "run";
