@@ -376,12 +376,30 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f)
     }
     energy_normal_ = en;
     energy_tangential_ = et;
+    energy_current_ = want_energy;
     dissipation_ += ed;
     stats_.active_pairs = active;
     stats_.pair_evaluations += np;
     const double t2 = omp_get_wtime();
     stats_.time_forces += t2 - t0;
     stats_.time_scatter += t2 - t1;
+}
+
+double ContactSystem::normal_energy_at(const double* x) const {
+    double en = 0.0;
+    const int np = static_cast<int>(pair_a_.size());
+    for (int p = 0; p < np; ++p) {
+        double xa[6], xb[6];
+        gather(x, tri_ + 3 * pair_a_[p], xa);
+        gather(x, tri_ + 3 * pair_b_[p], xb);
+        const ResolvedLaw& L = laws_[pair_law_[p]];
+        PairParams prm;
+        prm.thickness = thickness_;
+        prm.distance_potential = L.normal_is_stiffness;
+        prm.c = L.normal_is_stiffness ? 0.5 * L.normal : L.normal;
+        en += pair_energy(xa, xb, prm);
+    }
+    return en;
 }
 
 }  // namespace fdem::contact

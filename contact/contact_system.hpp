@@ -80,6 +80,10 @@ public:
 
     // J, at the last step (the normal part only if that step computed energies, else 0)
     double elastic_energy() const { return energy_normal_ + energy_tangential_; }
+    // Whether the last step evaluated the normal energy (set_compute_energy was on); if not, normal_energy_at
+    // gives it for positions x (m) and the current pairs, without touching any state (serial; for reports).
+    bool normal_energy_current() const { return energy_current_; }
+    double normal_energy_at(const double* x) const;
     double normal_energy() const { return energy_normal_; }                        // J
     double tangential_energy() const { return energy_tangential_; }                // J
     double friction_dissipation() const { return dissipation_; }                   // J, cumulative
@@ -127,6 +131,7 @@ private:
     std::vector<double> box_;      // 4 per triangle: xmin, xmax, ymin, ymax (m), capable ones, this step
 
     double energy_normal_ = 0.0, energy_tangential_ = 0.0, dissipation_ = 0.0;
+    bool energy_current_ = true;
     ContactStats stats_;
 };
 

@@ -189,7 +189,12 @@ int Interactions::after_step(double time, double control_displacement, const dou
 }
 
 double Interactions::joint_energy() const { return joints_ ? joints_->elastic_energy() : 0.0; }
-double Interactions::contact_energy() const { return contact_ ? contact_->elastic_energy() : 0.0; }
+double Interactions::contact_energy(const double* x_n) const {
+    if (!contact_) return 0.0;
+    if (contact_->normal_energy_current()) return contact_->elastic_energy();
+    // The last step skipped the normal energy (only reported steps evaluate it): evaluate it now at x^n.
+    return contact_->normal_energy_at(x_n) + contact_->tangential_energy();
+}
 double Interactions::fracture_dissipation() const { return joints_ ? joints_->dissipated_energy() : 0.0; }
 double Interactions::friction_dissipation() const { return contact_ ? contact_->friction_dissipation() : 0.0; }
 

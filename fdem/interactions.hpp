@@ -36,7 +36,7 @@ public:
     int after_step(double time, double control_displacement, const double* x);
 
     double joint_energy() const;        // J
-    double contact_energy() const;      // J
+    double contact_energy(const double* x_n) const;  // J, at x_n (the positions of the last force evaluation)
     double fracture_dissipation() const;  // J
     double friction_dissipation() const;  // J
     const fracture::BreakCounts* counts() const { return joints_ ? &joints_->counts() : nullptr; }

@@ -138,7 +138,10 @@ private:
     // per-step scratch
     std::vector<double> tf_;  // 6 per triangle
     std::vector<double> f_mod_;  // module forces (contact, joints), 2 per node
-    std::vector<double> block_a_, block_b_, block_c_, block_d_;
+    std::vector<double> block_a_, block_b_, block_c_, block_d_, block_e_, block_f_, block_g_;
+    double kinetic_n_ = 0;   // J, K^n = 1/2 m v^{n-1/2} . v^{n+1/2} of the last step
+    double work_half_ = 0;   // J, dt/2 (f_ext + R)^n . v^{n+1/2}: the half step W_ext_ runs ahead of t^n
+    double damp_half_ = 0;   // J, the same for local damping
     std::vector<int> block_bad_;
     double unbalanced_ratio_ = 1;
     bool energy_every_step_ = false;  // tests that read energies after every step

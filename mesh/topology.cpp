@@ -450,8 +450,17 @@ Topology build_topology(const Mesh& m, const TopologyOptions& opt) {
         h.name = g.name;
         h.dim = g.dim;
         h.triangles = g.triangles;
-        for (int k : g.nodes)
-            for (int c = copies_start[k]; c < copies_start[k + 1]; ++c) h.nodes.push_back(c);
+        if (g.dim == 2 && !g.triangles.empty()) {
+            // A surface group keeps only the node copies of its own triangles: a support on the upper block must
+            // not drag the lower block's copies of the nodes they shared before splitting.
+            for (int t : g.triangles)
+                for (int k = 0; k < 3; ++k) h.nodes.push_back(out.tri[3 * t + k]);
+            std::sort(h.nodes.begin(), h.nodes.end());
+            h.nodes.erase(std::unique(h.nodes.begin(), h.nodes.end()), h.nodes.end());
+        } else {
+            for (int k : g.nodes)
+                for (int c = copies_start[k]; c < copies_start[k + 1]; ++c) h.nodes.push_back(c);
+        }
         for (const auto& ed : g.edges) {
             const int e = find_edge(ed[0], ed[1]);
             if (e < 0) continue;  // not an edge of any triangle (a curve outside the meshed regions)

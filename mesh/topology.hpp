@@ -23,7 +23,8 @@
 //   contact_capable       sorted triangle ids that have a node on a free-boundary or dry edge (or, with
 //                         contact_by_node = false, an edge of those classes). Triangles of cohesive elements
 //                         join the contact set when their element breaks; that is the engine's job.
-//   Groups of the split mesh: a node group holds every copy of its nodes; a dim-1 group holds, for each of its
+//   Groups of the split mesh: a point or curve group holds every copy of its nodes, a surface group only the
+//   copies its own triangles use (so a support on one block does not drag its neighbour's interface nodes); a dim-1 group holds, for each of its
 //   edges, the edge as seen from each adjacent triangle (both copies on an interface, once where nodes are shared),
 //   in the group's orientation; triangle groups are unchanged.
 //

@@ -11,6 +11,7 @@
 
 #include "fdem/case.hpp"
 #include "fdem/model.hpp"
+#include "fdem/scene.hpp"
 #include "fdem/simulation.hpp"
 
 namespace testing {
@@ -52,13 +53,14 @@ inline CliResult run_fdem(const std::string& args, const std::filesystem::path& 
     return r;
 }
 
-// Loads a case from text, meshes it and returns a Simulation that writes no files.
+// Loads a case from text, builds its scene (mesh, topology, joints, contact) and returns a Simulation that
+// writes no files.
 inline fdem::Simulation make_simulation(const std::string& case_text, const std::string& name,
                                         const std::vector<std::string>& overrides = {}) {
     const auto dir = tmp_dir(name);
     const std::string path = write_text(dir / "case.toml", case_text);
     fdem::CaseSpec spec = fdem::load_case(path, overrides);
-    fdem::Model model = fdem::build_model(spec, fdem::make_mesh(spec));
+    fdem::Model model = fdem::build_scene(spec);
     fdem::RunOptions opt;
     opt.quiet = true;
     return fdem::Simulation(spec, std::move(model), opt);

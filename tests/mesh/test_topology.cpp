@@ -82,14 +82,21 @@ int check_invariants(const Mesh& in, const Topology& topo, bool crack_tips = fal
         REQUIRE(ce.body_b == m.tri_body[ce.tri_b]);
         ++checks;
     }
-    // Node groups hold every copy.
+    // Point and curve groups hold every copy of their nodes; surface groups exactly the nodes of their triangles.
     for (std::size_t g = 0; g < in.groups.size(); ++g) {
         std::set<int> want(in.groups[g].nodes.begin(), in.groups[g].nodes.end()), got;
         for (int k : m.groups[g].nodes) got.insert(topo.node_origin[k]);
         REQUIRE(got == want);
-        long copies = 0;
-        for (int k = 0; k < m.n_nodes(); ++k) copies += want.count(topo.node_origin[k]);
-        REQUIRE(static_cast<long>(m.groups[g].nodes.size()) == copies);
+        if (in.groups[g].dim == 2 && !in.groups[g].triangles.empty()) {
+            std::set<int> own;
+            for (int t : m.groups[g].triangles)
+                for (int i = 0; i < 3; ++i) own.insert(m.tri[3 * t + i]);
+            REQUIRE(std::set<int>(m.groups[g].nodes.begin(), m.groups[g].nodes.end()) == own);
+        } else {
+            long copies = 0;
+            for (int k = 0; k < m.n_nodes(); ++k) copies += want.count(topo.node_origin[k]);
+            REQUIRE(static_cast<long>(m.groups[g].nodes.size()) == copies);
+        }
         ++checks;
     }
     return checks;
