@@ -15,11 +15,13 @@
 #include <vector>
 
 #include "fdem/case.hpp"
+#include "fdem/omp_env.hpp"
 #include "fdem/model.hpp"
 #include "fdem/simulation.hpp"
 #include "mesh/gmsh_source.hpp"
 
 int main(int argc, char** argv) {
+    fdem::ensure_passive_wait(argv);
     long triangles = 120000, steps = 200, repeats = 5;
     std::string csv = "bench.csv", threads_list = "1,2";
     for (int i = 1; i + 1 < argc; i += 2) {

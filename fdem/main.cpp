@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "fdem/case.hpp"
+#include "fdem/omp_env.hpp"
 #include "fdem/errors.hpp"
 #include "fdem/model.hpp"
 #include "fdem/scene.hpp"
@@ -79,20 +80,8 @@ Args parse_args(int argc, char** argv) {
 
 }  // namespace
 
-// libgomp's default is to spin at barriers; when the cores are shared (a batch of runs, CI running tests in
-// parallel) a spinning thread holds a core the other threads need and a step can take a whole scheduler slice:
-// measured 25x slower on 2 busy cores. libgomp reads its settings when it loads, so the policy is set by
-// running this program again with OMP_WAIT_POLICY=passive unless the user chose a policy.
-void ensure_passive_wait(char** argv) {
-    if (std::getenv("OMP_WAIT_POLICY") || std::getenv("GOMP_SPINCOUNT") || std::getenv("FDEM_NO_REEXEC")) return;
-    setenv("OMP_WAIT_POLICY", "passive", 1);
-    setenv("FDEM_NO_REEXEC", "1", 1);
-    execv("/proc/self/exe", argv);
-    // exec failed: carry on with the default policy.
-}
-
 int main(int argc, char** argv) {
-    ensure_passive_wait(argv);
+    fdem::ensure_passive_wait(argv);
     try {
         if (argc >= 2 && (!std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h") || !std::strcmp(argv[1], "help"))) {
             std::cout << kUsage;
