@@ -309,9 +309,9 @@ void Simulation::begin_stage(int s) {
                                      sci(until_start_) + " and the prescribed velocity moves it away from " +
                                      sci(st.until_value));
     }
-    const double hi = st.history_interval ? *st.history_interval : spec_.history_interval;
+    const double hi = history_interval();
     next_history_ = hi > 0 ? time_ : 0;
-    const double si = st.snapshot_interval ? *st.snapshot_interval : spec_.snapshot_interval;
+    const double si = snapshot_interval();
     next_snapshot_ = si > 0 ? time_ + si : 1e300;
     log("stage " + std::to_string(s + 1) + "/" + std::to_string(spec_.stages.size()) + " '" + st.name + "' starts at t = " +
         sci(time_) + " s (local damping " + sci(alpha_) + ")");
@@ -326,12 +326,10 @@ void Simulation::apply_time_dependent(double t) {
     // Gravity: ramp, then the tilt rotation (counter-clockwise, deg).
     {
         const double w = gravity_ramp_ > 0 ? std::min(1.0, (t - stage_t0_) / gravity_ramp_) : 1.0;
-        double g0 = gravity_start_[0] + w * (gravity_target_[0] - gravity_start_[0]);
-        double g1 = gravity_start_[1] + w * (gravity_target_[1] - gravity_start_[1]);
-        const double a = tilt_deg_ * kPi / 180;
         gravity_ = {gravity_start_[0] + w * (gravity_target_[0] - gravity_start_[0]),
                     gravity_start_[1] + w * (gravity_target_[1] - gravity_start_[1])};
-        applied_gravity_ = {std::cos(a) * g0 - std::sin(a) * g1, std::sin(a) * g0 + std::cos(a) * g1};
+        const double a = tilt_deg_ * kPi / 180;
+        applied_gravity_ = {std::cos(a) * gravity_[0] - std::sin(a) * gravity_[1], std::sin(a) * gravity_[0] + std::cos(a) * gravity_[1]};
     }
     // Loads.
     for (int d : loaded_dofs_) f_ext_[d] = 0;
@@ -418,14 +416,7 @@ void Simulation::step() {
 
     // Joint and contact forces, added to f_mod_ in a fixed order by their modules. The contact energy is only
     // evaluated on the steps whose energies are reported or checked.
-    {
-        const StageSpec& st = spec_.stages[stage_];
-        const double hi = st.history_interval ? *st.history_interval : spec_.history_interval;
-        const bool row_next = opt_.out_dir.empty() ? false
-                              : hi > 0                ? time_ + dt + 1e-9 * dt >= next_history_
-                                                      : ((steps_ + 1) % history_every_steps_) == 0;
-        inter_.want_energy(row_next || (steps_ + 1) % 1000 == 0 || energy_every_step_);
-    }
+    inter_.want_energy(history_due(time_ + dt, steps_ + 1) || (steps_ + 1) % 1000 == 0 || energy_every_step_);
     inter_.add_forces(x, v, dt, f_mod_.data());
 
     // 3. Node loop.
@@ -517,19 +508,19 @@ void Simulation::step() {
 
     // Outputs.
     if (!opt_.out_dir.empty()) {
-        const double hi = spec_.stages[stage_].history_interval ? *spec_.stages[stage_].history_interval : spec_.history_interval;
-        if (hi > 0 ? time_ + 1e-9 * dt >= next_history_ : (steps_ % history_every_steps_) == 0) {
+        if (history_due(time_, steps_)) {
+            const double hi = history_interval();
             write_history_row();
             if (hi > 0) next_history_ += hi * std::max(1.0, std::floor((time_ - next_history_) / hi) + 1);
         }
         if (time_ + 1e-9 * dt >= next_snapshot_) {
             write_snapshot();
-            const double si = spec_.stages[stage_].snapshot_interval ? *spec_.stages[stage_].snapshot_interval : spec_.snapshot_interval;
+            const double si = snapshot_interval();
             next_snapshot_ += si * std::max(1.0, std::floor((time_ - next_snapshot_) / si) + 1);
         }
         if ((steps_ & 255) == 0) {
             const double now = wall_clock();
-            if (now - last_flush_ > 5) flush_files(true);
+            if (now - last_flush_ > 5) flush_files();
         }
     }
     if (opt_.progress && (steps_ & 255) == 0) progress_line(false);
@@ -702,7 +693,7 @@ void Simulation::write_snapshot() {
     write_file_atomic((std::filesystem::path(opt_.out_dir) / "run.pvd").string(), pvd_document(snapshots_));
 }
 
-void Simulation::flush_files(bool /*force*/) {
+void Simulation::flush_files() {
     if (opt_.out_dir.empty()) return;
     last_flush_ = wall_clock();
     const std::filesystem::path dir(opt_.out_dir);
@@ -730,7 +721,7 @@ void Simulation::progress_line(bool final) {
     const double rate = static_cast<double>(steps_) / std::max(el, 1e-9);
     char b[256];
     std::string eta = "?";
-    if (frac > 0.001) eta = human_time((now - wall_start_) * 0 + (1 - frac) * (ts / std::max(frac, 1e-9)) / dt_ / std::max(rate, 1.0));
+    if (frac > 0.001) eta = human_time((1 - frac) * (ts / std::max(frac, 1e-9)) / dt_ / std::max(rate, 1.0));
     std::snprintf(b, sizeof b, "\r[stage %d/%zu %s] %5.1f%%  t = %.4g s  %.3g steps/s  left %s   ", stage_ + 1,
                   spec_.stages.size(), st.name.c_str(), 100 * std::clamp(frac, 0.0, 1.0), time_, rate, eta.c_str());
     std::cerr << b << (final ? "\n" : "") << std::flush;
@@ -743,15 +734,31 @@ void Simulation::fail(const std::string& what) {
     wall_time_ = wall_clock() - wall_start_;
     log("error: run failed: " + msg);
     if (!opt_.out_dir.empty()) {
-        flush_files(true);
+        flush_files();
         write_summary("failed", msg);
     }
     throw RunError(msg);
 }
 
+double Simulation::history_interval() const {
+    const StageSpec& st = spec_.stages[stage_];
+    return st.history_interval ? *st.history_interval : spec_.history_interval;
+}
+
+double Simulation::snapshot_interval() const {
+    const StageSpec& st = spec_.stages[stage_];
+    return st.snapshot_interval ? *st.snapshot_interval : spec_.snapshot_interval;
+}
+
+// Whether a history row is written after the step that ends at time t as step number `step` (one rule for the
+// write itself and for asking the contact module to evaluate its energy on that step).
+bool Simulation::history_due(double t, long step) const {
+    if (opt_.out_dir.empty()) return false;
+    const double hi = history_interval();
+    return hi > 0 ? t + 1e-9 * dt_ >= next_history_ : (step % history_every_steps_) == 0;
+}
+
 void Simulation::run() {
-    const Energies e0 = energies();
-    (void)e0;
     log("fdem " FDEM_VERSION ": case '" + spec_.name + "' (" + spec_.file + ")");
     log("mesh: " + std::to_string(model_.n_triangles()) + " triangles, " + std::to_string(model_.n_nodes()) + " nodes");
     log("time step: " + sci(dt_) + " s = " + (spec_.dt_override ? std::string("fixed by numerics.dt") : sci(spec_.safety) + " x stable limit") +
@@ -781,7 +788,7 @@ void Simulation::run() {
         if (!opt_.out_dir.empty()) {
             if (history_.empty() || history_.compare(history_.size() - 1, 1, "\n") == 0) write_history_row();
             write_snapshot();
-            flush_files(true);
+            flush_files();
         }
     }
     wall_time_ = wall_clock() - wall_start_;
@@ -799,7 +806,7 @@ void Simulation::run() {
         sci(e.contact) + " J, external work " + sci(e.external) + " J, damping " + sci(e.damping) + " J, viscous " + sci(e.viscous) +
         " J, fracture " + sci(e.fracture) + " J, friction " + sci(e.friction) + " J, balance error " + sci(100 * e.balance_error(), 3) + " %");
     if (!opt_.out_dir.empty()) {
-        flush_files(true);
+        flush_files();
         write_summary("completed", "");
     }
 }

@@ -99,7 +99,10 @@ private:
     void fail(const std::string& what);
     void check_energy(const Energies& e);
     void write_history_row();
-    void flush_files(bool force);
+    void flush_files();
+    double history_interval() const;   // s, of the current stage (0: every history_every_steps_ steps)
+    double snapshot_interval() const;  // s, of the current stage (0: only at stage ends)
+    bool history_due(double t, long step) const;
     void write_snapshot();
     void write_summary(const std::string& status, const std::string& message);
     void log(const std::string& line);
