@@ -5,13 +5,27 @@ its start), initial stiffness (least-squares line through the origin up to 40 % 
 against the experiment and against the published FDEM (from the family's reference.csv, else the case's
 [reference]), triangles, steps, wall time, and the numerical settings read from the case file with the --set
 overrides applied (mesh size, loading rate, local damping, penalties and stiffnesses, time step).
-Quasi-static check (FORMULATION §4): one case is run again with its loading rate halved; the relative change of the
-peak load is reported (the acceptance limit is 2 %).
+
+Is the peak a peak: the load at the last history row of the same curve and drop_after_peak = (peak - load at
+end) / peak; past_peak = "yes" when the drop is at least PAST_PEAK_DROP (5 %), else the curve is still rising or
+flat and the "peak" is only the largest load reached so far.
+
+Quasi-static check (FORMULATION §4): the cases named by --rate-case (repeatable; `all` = every case; default the
+first case) are run again with their loading rate halved, each as its own run; per checked case the report gives
+both peaks, their relative change, the verdict (quasi-static when |change| < QS_LIMIT = 2 %) and the status of the
+half-rate run, then "N of M checked cases quasi-static; largest change X %"; quasi_static.csv holds the same table.
+Both peaks of a pair are maxima over the same displacement range: when the two runs reach different control
+displacements (an unfinished run, a stage that ends by time), both are taken up to the smaller one and the row
+says so.
+
+Trend: when reference.csv has an axial load column (--axial-column, default N_kN), the cases sorted by it are
+checked for a peak load rising monotonically and a displacement at peak falling monotonically with that load.
 
 Reference file (optional) FAMILY/reference.csv: one row per experiment with a column `cases` listing the case file
 stems it applies to (space separated), `experiment_kN`, and the published predictions in `*_kN` columns; the column
 compared as "published FDEM" is --published-column (default fdem_k25_kN).
-Runs go through the batch machinery, so the command is resumable: completed runs are not run again.
+Runs go through the batch machinery, so the command is resumable: completed runs are not run again. Run folders:
+OUT/STEM/runs/run for a case, OUT/STEM/runs/<batch run name of {rate key: half rate}> for its half-rate rerun.
 """
 from __future__ import annotations
 
@@ -29,6 +43,8 @@ from .batch import Batch, collect, default_jobs, fdem_binary, parse_assignment, 
 from .common import ToolError, load_curve, load_run, write_csv
 
 QS_LIMIT = 0.02  # the peak may change by less than this when the rate is halved
+PAST_PEAK_DROP = 0.05  # the load at the end must be this far below the peak (fraction of it) to call it a peak
+SAME_END_RTOL = 0.005  # two runs whose control displacements reached differ by less than this (relative) end alike
 
 
 # ----------------------------------------------------------------------------------------------
@@ -146,7 +162,9 @@ def _float(v):
 
 def curve_metrics(run_dir: str) -> dict:
     """Peak |load| (N), displacement at peak (m, from the start of the stage) and initial stiffness (N/m) of the
-    load-displacement curve in the run's last stage (the loading after precompression)."""
+    load-displacement curve in the run's last stage (the loading after precompression); the |load| at the last
+    history row (N), the drop after the peak (fraction of the peak) and the largest control displacement reached
+    (m). `x`, `y` (|x - x0| in m, |load| in N) are kept for comparing two runs over the same range."""
     run = load_run(run_dir, allow_unfinished=True)
     last = None
     if run.history is not None and run.history.has("stage") and len(run.history):
@@ -167,7 +185,42 @@ def curve_metrics(run_dir: str) -> dict:
             break
     xs, ys = np.abs(x[: j + 1]), np.abs(y[: j + 1])
     k0 = float(np.dot(xs, ys) / np.dot(xs, xs)) if np.dot(xs, xs) > 0 else float("nan")
-    return {"peak_load_N": peak, "disp_at_peak_m": d_peak, "initial_stiffness_N_m": k0}
+    end = float(abs(y[-1]))
+    return {"peak_load_N": peak, "disp_at_peak_m": d_peak, "initial_stiffness_N_m": k0,
+            "load_at_end_N": end, "drop_after_peak": (peak - end) / peak if peak > 0 else None,
+            "reach_m": float(np.max(np.abs(x))), "x": np.abs(x), "y": np.abs(y)}
+
+
+def past_peak(drop) -> str | None:
+    if drop is None:
+        return None
+    return "yes" if drop >= PAST_PEAK_DROP else "no (still rising / flat)"
+
+
+def peak_up_to(m: dict, d: float) -> float:
+    """Largest |load| (N) of a run's curve up to the first row where the control displacement reaches d (m)."""
+    x, y = m["x"], m["y"]
+    hit = np.nonzero(x >= d * (1 - 1e-12))[0]
+    n = int(hit[0]) + 1 if len(hit) else len(x)
+    return float(np.max(y[:n]))
+
+
+def compare_rates(m_full: dict, m_half: dict) -> dict:
+    """The two peaks of a half-rate pair over the same displacement range (N), and a note when the runs reach
+    different control displacements (then both peaks are taken up to the smaller one)."""
+    full, half = m_full.get("peak_load_N"), m_half.get("peak_load_N")
+    out = {"peak_full_N": full, "peak_half_N": half, "reach_full_m": m_full.get("reach_m"),
+           "reach_half_m": m_half.get("reach_m"), "compared_up_to_m": None, "note": ""}
+    if full is None or half is None:
+        return out
+    a, b = m_full["reach_m"], m_half["reach_m"]
+    d = min(a, b)
+    out["compared_up_to_m"] = d
+    if abs(a - b) > SAME_END_RTOL * max(a, b):
+        out["peak_full_N"], out["peak_half_N"] = peak_up_to(m_full, d), peak_up_to(m_half, d)
+        out["note"] = (f"runs end at different displacements ({1e3 * a:.4g} mm at the full rate, {1e3 * b:.4g} mm "
+                       f"at half the rate): both peaks taken up to {1e3 * d:.4g} mm")
+    return out
 
 
 def rel(a, b):
@@ -202,6 +255,76 @@ def pct(v):
     return "-" if v is None else f"{100 * v:+.1f} %"
 
 
+def _stem(path: str) -> str:
+    return os.path.splitext(os.path.basename(path))[0]
+
+
+def rate_cases(cases: list, requested: list | None, family: str) -> list:
+    """The case files to rerun at half the rate, in family order: --rate-case values (repeatable), `all` for every
+    case, none given: the first case."""
+    if not requested:
+        return [cases[0]]
+    if "all" in requested:
+        return list(cases)
+    stems = [_stem(c) for c in cases]
+    for r in requested:
+        if r not in stems:
+            raise ToolError(f"--rate-case {r}: no such case in {family} (cases: {', '.join(stems)}, or all)")
+    return [c for c in cases if _stem(c) in requested]
+
+
+def rate_setting(tree: dict, case: str, given_key: str | None) -> tuple:
+    """(dotted key, value) of the loading rate of one case: --rate-key if given, else the detected one."""
+    if not given_key:
+        key, rate = rate_key(tree)
+        if key is None:
+            raise ToolError(f"{case}: no prescribed velocity in its stages; give --rate-key or --no-rate-check")
+        return key, rate
+    try:
+        cur = tree
+        for p in given_key.split("."):
+            cur = cur[int(p)] if isinstance(cur, list) else cur[p]
+        return given_key, float(cur)
+    except (KeyError, IndexError, ValueError, TypeError):
+        raise ToolError(f"--rate-key {given_key}: no such number in {case}") from None
+
+
+def axial_trend(rows: list, refs: list, column: str) -> str | None:
+    """One line on how peak load and displacement at peak change with the axial load of reference.csv's `column`
+    (None when the file has no such column or no case has a value in it)."""
+    if not refs or column not in refs[0]:
+        return None
+    name, unit = (column[:-3], "kN") if column.endswith("_kN") else (column, "")
+    pts = []
+    for r in rows:
+        n = _float(reference_for(refs, r["case"]).get(column))
+        if n is not None and r["peak_load_kN"] is not None:
+            pts.append((n, r["case"], r["peak_load_kN"], r["disp_at_peak_mm"], r["status"]))
+    if not pts:
+        return None
+    pts.sort()
+    head = f"Trend with {name} (reference.csv column `{column}`): "
+    if len(pts) < 2:
+        return head + "fewer than two cases with a peak, not evaluated."
+    ns = [p[0] for p in pts]
+    if len(set(ns)) != len(ns):
+        dup = sorted({f"{v:g}" for v in ns if ns.count(v) > 1})
+        return head + (f"not evaluated: several cases share {name} = {', '.join(dup)} {unit} (run one variant per "
+                       f"{name}, e.g. with --glob).")
+    peaks = [p[2] for p in pts]
+    dpk = [p[3] for p in pts]
+    rising = all(b > a for a, b in zip(peaks, peaks[1:]))
+    falling = all(b < a for a, b in zip(dpk, dpk[1:]))
+    yn = lambda v: "yes" if v else "no"  # noqa: E731
+    line = (head + f"capacity rising with {name}: {yn(rising)}; displacement at peak falling with {name}: "
+            f"{yn(falling)} (values, sorted by {name}: {name} = {', '.join(f'{v:g}' for v in ns)} {unit}; "
+            f"peak {', '.join(fmt(v) for v in peaks)} kN; displacement at peak {', '.join(fmt(v) for v in dpk)} mm).")
+    unfinished = [f"{p[1]} ({p[4]})" for p in pts if p[4] != "completed"]
+    if unfinished:
+        line += " Not completed, values so far: " + ", ".join(unfinished) + "."
+    return line
+
+
 def run_family(args) -> int:
     family = os.path.normpath(args.family)
     cases = family_cases(family, args.glob)
@@ -210,38 +333,24 @@ def run_family(args) -> int:
     fdem = fdem_binary(args.fdem)
     refs = read_reference(family)
     trees = {c: read_case(c, fixed) for c in cases}
+    log = lambda m: print(m, flush=True)  # noqa: E731
 
-    # the tasks: every case once, plus the quasi-static rerun at half the rate
+    # the tasks: every case once, plus one rerun at half the rate per checked case. The half-rate run lives in the
+    # case's batch folder under the run name of its one override, so earlier runs are found again.
     tasks = []
     for c in cases:
-        stem = os.path.splitext(os.path.basename(c))[0]
-        tasks.append((stem, Batch(c, os.path.join(out, stem), fdem, threads=args.threads, fixed=fixed,
-                                  log=lambda m: print(m, flush=True)), {}))
-    qs = None
+        stem = _stem(c)
+        tasks.append((stem, Batch(c, os.path.join(out, stem), fdem, threads=args.threads, fixed=fixed, log=log), {}))
+    checks = []
     if not args.no_rate_check:
-        qs_case = next((c for c in cases if os.path.splitext(os.path.basename(c))[0] == args.rate_case), None) \
-            if args.rate_case else cases[0]
-        if qs_case is None:
-            raise ToolError(f"--rate-case {args.rate_case}: no such case in {family}")
-        key, rate = (args.rate_key, None) if args.rate_key else rate_key(trees[qs_case])
-        if args.rate_key:
-            tree = trees[qs_case]
-            try:
-                cur = tree
-                for p in key.split("."):
-                    cur = cur[int(p)] if isinstance(cur, list) else cur[p]
-                rate = float(cur)
-            except (KeyError, IndexError, ValueError, TypeError):
-                raise ToolError(f"--rate-key {key}: no such number in {qs_case}") from None
-        if key is None:
-            raise ToolError(f"{qs_case}: no prescribed velocity in its stages; give --rate-key or --no-rate-check")
-        stem = os.path.splitext(os.path.basename(qs_case))[0]
-        qs = {"case": stem, "key": key, "rate": rate, "half": rate / 2}
-        tasks.append((stem + "__half_rate", Batch(qs_case, os.path.join(out, stem), fdem, threads=args.threads,
-                                                   fixed=fixed, log=lambda m: print(m, flush=True)),
-                      {key: repr(rate / 2)}))
+        for c in rate_cases(cases, args.rate_case, family):
+            key, rate = rate_setting(trees[c], c, args.rate_key)
+            stem = _stem(c)
+            checks.append({"case": stem, "key": key, "rate": rate, "half": rate / 2})
+            tasks.append((stem + "__half_rate", Batch(c, os.path.join(out, stem), fdem, threads=args.threads,
+                                                      fixed=fixed, log=log), {key: repr(rate / 2)}))
 
-    print(f"validate: {len(cases)} cases of {family}{' + 1 half-rate rerun' if qs else ''}, "
+    print(f"validate: {len(cases)} cases of {family} + {len(checks)} half-rate rerun(s), "
           f"{args.jobs} at a time, {args.threads} thread(s) each, in {out}", flush=True)
     for _, b, _ in tasks:
         os.makedirs(b.out, exist_ok=True)
@@ -257,7 +366,6 @@ def run_family(args) -> int:
         raise
     ex.shutdown(wait=True)
 
-    rows = []
     by_task = {}
     for (label, b, p), rec in zip(tasks, recs):
         m = {}
@@ -267,8 +375,25 @@ def run_family(args) -> int:
             except ToolError as e:
                 m = {"note": str(e)}
         by_task[label] = (rec, m)
+
+    kn = lambda v: v / 1e3 if v is not None else None  # noqa: E731
+    mm = lambda v: v * 1e3 if v is not None else None  # noqa: E731
+    qs_rows = []
+    for q in checks:
+        rec_full, m_full = by_task[q["case"]]
+        rec_half, m_half = by_task[q["case"] + "__half_rate"]
+        cmp = compare_rates(m_full, m_half)
+        change = rel(cmp["peak_half_N"], cmp["peak_full_N"])
+        qs_rows.append(dict(q, status_full=rec_full["status"], status_half=rec_half["status"],
+                            peak_full_kN=kn(cmp["peak_full_N"]), peak_half_kN=kn(cmp["peak_half_N"]), change=change,
+                            quasi_static=None if change is None else abs(change) < QS_LIMIT,
+                            reach_full_mm=mm(cmp["reach_full_m"]), reach_half_mm=mm(cmp["reach_half_m"]),
+                            compared_up_to_mm=mm(cmp["compared_up_to_m"]), note=cmp["note"]))
+    qs_by_case = {q["case"]: q for q in qs_rows}
+
+    rows = []
     for c in cases:
-        stem = os.path.splitext(os.path.basename(c))[0]
+        stem = _stem(c)
         rec, m = by_task[stem]
         ref = reference_for(refs, stem)
         exp_N = _float(ref.get("experiment_kN"))
@@ -276,36 +401,40 @@ def run_family(args) -> int:
         pub = _float(ref.get(args.published_column))
         pub_N = pub * 1e3 if pub is not None else None
         peak = m.get("peak_load_N")
+        q = qs_by_case.get(stem, {})
         row = {"case": stem, "status": rec["status"],
-               "peak_load_kN": peak / 1e3 if peak is not None else None,
-               "disp_at_peak_mm": m["disp_at_peak_m"] * 1e3 if "disp_at_peak_m" in m else None,
+               "peak_load_kN": kn(peak),
+               "disp_at_peak_mm": mm(m.get("disp_at_peak_m")),
                "initial_stiffness_kN_mm": m["initial_stiffness_N_m"] / 1e6 if "initial_stiffness_N_m" in m else None,
+               "load_at_end_kN": kn(m.get("load_at_end_N")), "drop_after_peak": m.get("drop_after_peak"),
+               "past_peak": past_peak(m.get("drop_after_peak")),
                "experiment_kN": exp_N / 1e3 if exp_N else None, "error_vs_experiment": rel(peak, exp_N),
                "published_fdem_kN": pub_N / 1e3 if pub_N else None, "error_vs_published_fdem": rel(peak, pub_N),
+               "peak_half_rate_kN": q.get("peak_half_kN"), "rate_change": q.get("change"),
                "triangles": rec.get("n_triangles"), "steps": rec.get("steps"), "wall_time_s": rec.get("wall_time_s"),
                "dt_s": rec.get("dt")}
         row.update(numerical_settings(trees[c]))
         rows.append(row)
 
-    qs_row = None
-    if qs:
-        full = by_task[qs["case"]][1].get("peak_load_N")
-        half = by_task[qs["case"] + "__half_rate"][1].get("peak_load_N")
-        change = rel(half, full)
-        qs_row = dict(qs, peak_full_kN=full / 1e3 if full else None, peak_half_kN=half / 1e3 if half else None,
-                      change=change, quasi_static=None if change is None else abs(change) < QS_LIMIT,
-                      status_half=by_task[qs["case"] + "__half_rate"][0]["status"])
-
     header = list(rows[0].keys())
     write_csv(os.path.join(out, "report.csv"), header, [["" if r[k] is None else r[k] for k in header] for r in rows])
-    md = report_markdown(family, rows, qs_row, fixed, args, time.monotonic() - t0)
+    qs_header = ["case", "rate_key", "rate", "half_rate", "status_full", "status_half", "peak_full_rate_kN",
+                 "peak_half_rate_kN", "rate_change", "quasi_static", "reach_full_rate_mm", "reach_half_rate_mm",
+                 "compared_up_to_mm", "note"]
+    yn = {True: "yes", False: "no", None: ""}
+    write_csv(os.path.join(out, "quasi_static.csv"), qs_header,
+              [["" if v is None else v for v in
+                (q["case"], q["key"], q["rate"], q["half"], q["status_full"], q["status_half"], q["peak_full_kN"],
+                 q["peak_half_kN"], q["change"], yn[q["quasi_static"]], q["reach_full_mm"], q["reach_half_mm"],
+                 q["compared_up_to_mm"], q["note"])] for q in qs_rows])
+    trend = axial_trend(rows, refs, args.axial_column)
+    md = report_markdown(family, rows, qs_rows, trend, fixed, args, time.monotonic() - t0)
     with open(os.path.join(out, "report.md"), "w", encoding="utf-8") as f:
         f.write(md)
     print(md)
-    print(f"wrote {os.path.join(out, 'report.md')}, {os.path.join(out, 'report.csv')}")
-    bad = [r for r in rows if r["status"] != "completed"]
-    if qs_row and qs_row["status_half"] != "completed":
-        bad.append(qs_row)
+    print(f"wrote {os.path.join(out, 'report.md')}, {os.path.join(out, 'report.csv')}, "
+          f"{os.path.join(out, 'quasi_static.csv')}")
+    bad = [r for r in rows if r["status"] != "completed"] + [q for q in qs_rows if q["status_half"] != "completed"]
     if bad:
         print(f"fdem-tools validate: {len(bad)} run(s) did not complete (see the logs/ of each case); "
               "run the same command again to retry them", file=sys.stderr)
@@ -313,24 +442,36 @@ def run_family(args) -> int:
     return 0
 
 
-def report_markdown(family, rows, qs_row, fixed, args, elapsed) -> str:
+def report_markdown(family, rows, qs_rows, trend, fixed, args, elapsed) -> str:
     L = [f"# Validation report: {family}", ""]
     L.append(f"Cases: {len(rows)} (pattern `{args.glob}`); overrides: "
              + (", ".join(f"`{k}={v}`" for k, v in fixed) if fixed else "none")
              + f"; {args.threads} thread(s) per run; published FDEM column `{args.published_column}`.")
     L.append("")
-    L.append("| case | status | peak (kN) | disp. at peak (mm) | K0 (kN/mm) | experiment (kN) | error | published FDEM (kN) "
-             "| error vs FDEM | triangles | steps | wall time (s) |")
-    L.append("|---|---|---|---|---|---|---|---|---|---|---|---|")
+    L.append("| case | status | peak (kN) | disp. at peak (mm) | K0 (kN/mm) | load at end (kN) | drop after peak "
+             "| past peak | experiment (kN) | error | published FDEM (kN) | error vs FDEM | triangles | steps "
+             "| wall time (s) |")
+    L.append("|---" * 15 + "|")
     for r in rows:
+        drop = "-" if r["drop_after_peak"] is None else f"{100 * r['drop_after_peak']:.1f} %"
         L.append(f"| {r['case']} | {r['status']} | {fmt(r['peak_load_kN'])} | {fmt(r['disp_at_peak_mm'])} | "
-                 f"{fmt(r['initial_stiffness_kN_mm'])} | {fmt(r['experiment_kN'])} | {pct(r['error_vs_experiment'])} | "
+                 f"{fmt(r['initial_stiffness_kN_mm'])} | {fmt(r['load_at_end_kN'])} | {drop} | "
+                 f"{fmt(r['past_peak'])} | {fmt(r['experiment_kN'])} | {pct(r['error_vs_experiment'])} | "
                  f"{fmt(r['published_fdem_kN'])} | {pct(r['error_vs_published_fdem'])} | {fmt(r['triangles'])} | "
                  f"{fmt(r['steps'])} | {fmt(r['wall_time_s'], 3)} |")
+    L += ["", f"Peak = largest |load| of the case's curve in its last stage; load at end = its last history row; "
+              f"past peak = yes when the load at the end is at least {100 * PAST_PEAK_DROP:g} % below the peak "
+              "(PAST_PEAK_DROP), otherwise the curve is still rising or flat and the peak is only the largest load "
+              "reached so far."]
+    not_past = [r["case"] for r in rows if r["past_peak"] is not None and r["past_peak"] != "yes"]
+    if not_past:
+        L += ["", f"Not past the peak: {', '.join(not_past)}."]
     errs = [abs(r["error_vs_experiment"]) for r in rows if r["error_vs_experiment"] is not None]
     if errs:
         L += ["", f"Mean absolute error against the experiments: {100 * sum(errs) / len(errs):.1f} % over {len(errs)} "
                   f"case(s); largest {100 * max(errs):.1f} %."]
+    if trend:
+        L += ["", trend]
     L += ["", "## Numerical settings", ""]
     keys = [k for k in rows[0] if k in ("mesh_size_m", "mesh_size_beam_m", "mesh_size_base_m", "loading_rate_m_s",
                                          "local_damping", "penalties", "dt_setting")]
@@ -342,15 +483,23 @@ def report_markdown(family, rows, qs_row, fixed, args, elapsed) -> str:
     L += ["", "Mesh size, rate, damping and time-step setting are " + ("the same for every case." if same else
                                                                      "NOT the same for every case (see the table).")]
     L += ["", "## Quasi-static check", ""]
-    if qs_row is None:
+    if args.no_rate_check:
         L.append("Not run (--no-rate-check).")
     else:
-        L.append(f"Case `{qs_row['case']}` run again with `{qs_row['key']}` = {qs_row['half']:g} (half of "
-                 f"{qs_row['rate']:g}): peak {fmt(qs_row['peak_full_kN'])} kN at the full rate, "
-                 f"{fmt(qs_row['peak_half_kN'])} kN at half the rate ({qs_row['status_half']}); change "
-                 f"{pct(qs_row['change'])}; limit {100 * QS_LIMIT:g} %: "
-                 + ("-" if qs_row["quasi_static"] is None else ("quasi-static" if qs_row["quasi_static"] else
-                                                                 "NOT quasi-static")) + ".")
+        L.append(f"Each checked case is run again with its loading rate halved; quasi-static when the peak changes "
+                 f"by less than {100 * QS_LIMIT:g} % (both peaks over the same displacement range).")
+        L += ["", "| case | rate key | rate (m/s) | half rate (m/s) | peak full rate (kN) | peak half rate (kN) "
+                  "| change | verdict | half-rate run | note |", "|---" * 10 + "|"]
+        for q in qs_rows:
+            verdict = "-" if q["quasi_static"] is None else ("quasi-static" if q["quasi_static"] else
+                                                             "NOT quasi-static")
+            L.append(f"| {q['case']} | `{q['key']}` | {q['rate']:g} | {q['half']:g} | {fmt(q['peak_full_kN'])} | "
+                     f"{fmt(q['peak_half_kN'])} | {pct(q['change'])} | {verdict} | {q['status_half']} | "
+                     f"{q['note'] or '-'} |")
+        ok = sum(q["quasi_static"] is True for q in qs_rows)
+        changes = [q["change"] for q in qs_rows if q["change"] is not None]
+        largest = "-" if not changes else f"{100 * max(changes, key=abs):+.1f} %"
+        L += ["", f"{ok} of {len(qs_rows)} checked cases quasi-static; largest change {largest}."]
     L += ["", f"Elapsed: {elapsed:.1f} s.", ""]
     return "\n".join(L)
 
@@ -365,9 +514,12 @@ def add_parser(sub):
     p = sub.add_parser("validate", help="run a family of validation cases and write report.md + report.csv",
                        description="Runs every case file of FAMILY_DIR (resumable, through the batch machinery), "
                                    "then writes report.md and report.csv: peak load, displacement at peak, initial "
-                                   "stiffness, errors against the experiment and the published FDEM, size, steps, "
-                                   "wall time and numerical settings per case, and a quasi-static check (one case "
-                                   "rerun at half the loading rate).")
+                                   "stiffness, load at the end and drop after the peak (past_peak: yes when the "
+                                   f"load at the end is >= {100 * PAST_PEAK_DROP:g} %% below the peak), errors "
+                                   "against the experiment and the published FDEM, size, steps, wall time and "
+                                   "numerical settings per case; a quasi-static check (the --rate-case cases rerun "
+                                   "at half the loading rate; quasi_static.csv) and, when reference.csv has the "
+                                   "--axial-column, the trend of peak and displacement at peak with the axial load.")
     p.add_argument("family", metavar="FAMILY_DIR", help="folder of case files (e.g. cases/lourenco2005)")
     p.add_argument("--glob", default="*.toml", help="case files to run (default *.toml)")
     p.add_argument("--set", action="append", metavar="KEY=VALUE", help="a setting for every run (repeatable)")
@@ -376,7 +528,13 @@ def add_parser(sub):
     p.add_argument("--threads", type=int, default=1, help="OpenMP threads per run (default 1)")
     p.add_argument("--fdem", help="fdem executable (default: $FDEM_BIN, else build/fdem/fdem)")
     p.add_argument("--published-column", default="fdem_k25_kN", help="reference.csv column of the published FDEM")
-    p.add_argument("--rate-case", help="case stem for the half-rate rerun (default: the first case)")
-    p.add_argument("--rate-key", help="dotted key of the loading rate (default: the last stage's prescribed velocity)")
-    p.add_argument("--no-rate-check", action="store_true", help="skip the half-rate rerun")
+    p.add_argument("--axial-column", default="N_kN",
+                   help="reference.csv column of the axial load, for the trend line (default N_kN; skipped when "
+                        "the file has no such column)")
+    p.add_argument("--rate-case", action="append", metavar="STEM",
+                   help="case stem to rerun at half its loading rate (repeatable; 'all' = every case; default: the "
+                        f"first case); quasi-static when the peak changes by less than {100 * QS_LIMIT:g} %%")
+    p.add_argument("--rate-key", help="dotted key of the loading rate, used for every checked case (default: each "
+                                      "case's last-stage prescribed velocity)")
+    p.add_argument("--no-rate-check", action="store_true", help="skip the half-rate reruns")
     p.set_defaults(func=cmd_validate)
