@@ -10,6 +10,15 @@ Unit outline: the edges of the triangulation that bound a unit, i.e. edges with 
 boundary) or whose two triangles differ in the cell array `unit` (if the snapshot has one), else `region`, else
 `material`. Edges are matched by their reference coordinates, so duplicated nodes on either side of a joint count
 as one edge; an opened joint shows as a gap in the grey deformed mesh drawn underneath.
+
+Dry joints (mortarless, no cohesive element) leave rows of class `interface-dry` instead: mode `open` when the
+normal opening at one end of the joint segment first exceeded `output.joint_open` (m), mode `slip` when the mean
+tangential slip of its ends first exceeded `output.joint_slip` (m); D_I and D_II are then the largest end opening
+and the |slip| divided by those thresholds (-), `element` the joint segment's own index (not a cohesive element's). A segment can have one row of each mode, and a joint
+that closes again keeps its row: they are records of events, not of the present state. Their segment is found
+exactly as a broken element's (nearest edge midpoint to the recorded current midpoint), and they are drawn under
+the cohesive cracks in their own style (openings thick orange, slips thin green: purple is already mixed mode),
+counted apart from the broken elements, never added to them.
 """
 from __future__ import annotations
 
@@ -29,7 +38,15 @@ CLASS_NAMES = {"unit": "in units", "interface": "at interfaces"}
 CRACK_COLUMNS = {"time": ("time", "time_s"), "control_displacement": ("control_displacement", "control_displacement_m"),
                  "x": ("x", "x_m"), "y": ("y", "y_m"), "class": ("class",), "mode": ("mode",)}
 CLASS_ALIASES = {"unit": "unit", "unit-interior": "unit", "unit_interior": "unit", "interior": "unit",
-                 "interface": "interface"}
+                 "interface": "interface", "interface-dry": "dry", "interface_dry": "dry"}
+# Dry-joint events (class interface-dry), by mode. Drawn under the cohesive cracks (zorder 3), above the outline
+# (zorder 2): the thick opening first so that a slip of the same segment stays visible on top of it.
+DRY_STYLE = {"open": {"color": "#ff7f0e", "lw": 4.0, "alpha": 0.7, "marker": "D", "ms": 5, "zorder": 2.4,
+                      "name": "dry joint opened", "threshold": "open_threshold_m"},
+             "slip": {"color": "#2ca02c", "lw": 1.1, "alpha": 1.0, "marker": "x", "ms": 6, "zorder": 2.6,
+                      "name": "dry joint slipped", "threshold": "slip_threshold_m"}}
+EXPECTED_CLASSES = "unit-interior (or unit), interface, interface-dry"
+EXPECTED_MODES = "I, II or mixed for broken elements, open or slip for interface-dry"
 
 
 def read_cracks(run_dir: str):
@@ -49,12 +66,20 @@ def read_cracks(run_dir: str):
                 "mode": np.zeros(0, object), "control_displacement": np.zeros(0)}
     cls = np.array([CLASS_ALIASES.get(str(v), str(v)) for v in t.col("class")], dtype=object)
     mode = np.array([str(v) for v in t.col("mode")], dtype=object)
-    bad = set(cls) - set(CLASS_STYLE)
+    bad = set(cls) - set(CLASS_STYLE) - {"dry"}
     if bad:
-        raise ToolError(f"{path}: unknown class {sorted(bad)} (expected unit or interface)")
-    bad = set(mode) - set(MODE_COLOURS)
+        raise ToolError(f"{path}: unknown class {sorted(bad)} (expected {EXPECTED_CLASSES})")
+    bad = set(mode) - set(MODE_COLOURS) - set(DRY_STYLE)
     if bad:
-        raise ToolError(f"{path}: unknown mode {sorted(bad)} (expected I, II or mixed)")
+        raise ToolError(f"{path}: unknown mode {sorted(bad)} (expected {EXPECTED_MODES})")
+    dry = cls == "dry"
+    # a known mode on the wrong kind of row would otherwise be silently left out of the image and the counts
+    wrong = np.nonzero(dry & ~np.isin(mode, list(DRY_STYLE)) | ~dry & ~np.isin(mode, list(MODE_COLOURS)))[0]
+    if len(wrong):
+        i = int(wrong[0])
+        raw = str(t.col("class")[i])
+        raise ToolError(f"{path}: data row {i + 1}: mode '{mode[i]}' does not go with class '{raw}' "
+                        f"(expected {EXPECTED_MODES}); {len(wrong)} such row(s)")
     cd = t.numeric(names["control_displacement"]) if names["control_displacement"] else np.full(n, np.nan)
     return {"time": t.numeric(names["time"]), "x": t.numeric(names["x"]), "y": t.numeric(names["y"]), "class": cls,
             "mode": mode, "control_displacement": cd}
@@ -215,10 +240,26 @@ def draw(run_dir: str, prefix: str, time: float | None = None, displacement: flo
                 else:
                     ax.plot(pts[s, 0], pts[s, 1], CLASS_STYLE[c]["marker"], color=MODE_COLOURS[m], ms=4, ls="none",
                             label=lab, zorder=3)
+        # added after the cracks so that the legend lists them last; zorder puts them underneath
+        for m, st in DRY_STYLE.items():
+            s = (cls == "dry") & (mode == m)
+            n = int(s.sum())
+            counts[f"dry_{m}"] = n
+            if not n:
+                continue
+            lab = f"{st['name']}{_threshold_text(run, st['threshold'])} ({n})"
+            if segs is not None:
+                ax.add_collection(LineCollection(segs[s], colors=st["color"], linewidths=st["lw"], alpha=st["alpha"],
+                                                 capstyle="butt", zorder=st["zorder"], label=lab))
+            else:
+                ax.plot(pts[s, 0], pts[s, 1], st["marker"], color=st["color"], ms=st["ms"], ls="none", label=lab,
+                        zorder=st["zorder"])
     else:
         for c in CLASS_STYLE:
             for m in MODE_COLOURS:
                 counts[f"{c}_{m}"] = 0
+        for m in DRY_STYLE:
+            counts[f"dry_{m}"] = 0
     if geo is None and keep.any():
         ax.autoscale_view()
     ax.set_aspect("equal")
@@ -226,21 +267,35 @@ def draw(run_dir: str, prefix: str, time: float | None = None, displacement: flo
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
     ax.grid(False)
-    title = f"{run.name}: broken elements at t = {time:.4g} s"
+    has_dry = bool((cr["class"] == "dry").any()) or isinstance(run.summary.get("joint_record"), dict)
+    what = "broken elements and dry-joint events" if has_dry else "broken elements"
+    title = f"{run.name}: {what} at t = {time:.4g} s"
     if displacement is not None:
         title += f" (control displacement {displacement * 1e3:.3g} mm)"
     if scale != 1.0 and geo is not None:
         title += f", displacements x{scale:g}"
     ax.set_title(title, fontsize=9)
-    n_total = sum(counts.values())
-    if n_total:
-        ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, title=f"{n_total} broken elements",
+    n_broken = sum(v for k, v in counts.items() if not k.startswith("dry_"))
+    n_open, n_slip = counts["dry_open"], counts["dry_slip"]
+    heading = ([f"{n_broken} broken elements"] if n_broken else []) + \
+              ([f"dry joints opened: {n_open}, slipped: {n_slip}"] if n_open + n_slip else [])
+    if heading:
+        ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, title="\n".join(heading),
                   title_fontsize=8)
     else:
-        ax.text(0.5, 0.02, "no broken elements at this time", transform=ax.transAxes, ha="center", fontsize=9)
+        ax.text(0.5, 0.02, f"no {what.replace(' and ', ' or ')} at this time", transform=ax.transAxes, ha="center", fontsize=9)
     files = save(fig, prefix)
     return files, {"time": time, "snapshot": snap[1] if snap else None, "counts": counts,
                    "matched_reference_midpoints": matched if keep.any() else None}
+
+
+def _threshold_text(run, key: str) -> str:
+    """' > 0.1 mm' from summary.json's joint_record, or '' when the run does not state its threshold."""
+    rec = run.summary.get("joint_record")
+    v = rec.get(key) if isinstance(rec, dict) else None
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or not np.isfinite(v) or v <= 0:
+        return ""
+    return f" > {v * 1e3:.3g} mm"
 
 
 def cmd_cracks(args):
@@ -257,7 +312,11 @@ def add_parser(sub):
     p = sub.add_parser("cracks", help="crack-pattern image at a chosen time",
                        description="Crack-pattern image: deformed unit outlines and broken cohesive elements coloured "
                                    "by mode (tension, shear, mixed); unit-interior cracks solid, interface cracks "
-                                   "dashed. Uses cracks.csv and the .vtu snapshot at or before the chosen time.")
+                                   "dashed. Dry-joint events (class interface-dry) are drawn underneath: openings "
+                                   "beyond output.joint_open thick orange, slips beyond output.joint_slip thin green, "
+                                   "counted apart. Uses cracks.csv and the .vtu snapshot at or before the chosen time. "
+                                   "Prints the counts: unit_I ... interface_mixed (broken elements), dry_open, "
+                                   "dry_slip (dry-joint segments).")
     p.add_argument("run", metavar="RUN", help="fdem run folder")
     g = p.add_mutually_exclusive_group()
     g.add_argument("--time", type=float, help="time in s (default: the last snapshot)")

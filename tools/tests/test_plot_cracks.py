@@ -139,3 +139,118 @@ def unit_nodes(X, tri, unit):
     for t, b in zip(tri, unit):
         u[t] = b
     return u
+
+
+# ---- dry-joint rows (class interface-dry, modes open / slip) ---------------------------------------------------
+
+FRACTURE_HEADER = "time_s,control_displacement_m,x_m,y_m,class,unit_a,unit_b,mode,D_I,D_II,element,tri_a,tri_b," \
+                  "length_m,x_ref_m,y_ref_m\n"
+# The joint of two_blocks() lies at y = 0.1 m with segments of 0.05 m; the upper block of make_run() moves in x by
+# 2 mm per second, so a joint's current midpoint (mean of both sides) is about 1 mm per second right of reference.
+DRY_ROWS = [  # time, control displacement, x, y, class, unit_a, unit_b, mode, D_I, D_II, segment, tri_a, tri_b, L, x_ref, y_ref
+    (0.2, 2e-3, 0.0252, 0.1, "interface-dry", 0, 1, "open", 1.3, 0.2, 0, 14, 16, 0.05, 0.025, 0.1),
+    (0.4, 4e-3, 0.1754, 0.1, "interface-dry", 0, 1, "open", 1.1, 0.4, 3, 20, 22, 0.05, 0.175, 0.1),
+    (0.45, 4.5e-3, 0.1754, 0.1, "interface-dry", 0, 1, "slip", 0.9, 1.2, 3, 20, 22, 0.05, 0.175, 0.1),
+    (0.8, 8e-3, 0.1258, 0.1, "interface-dry", 0, 1, "slip", 0.1, 2.5, 2, 18, 20, 0.05, 0.125, 0.1),
+]
+COHESIVE_ROWS = [  # the cracks of make_run(), written as the fracture module does
+    (0.3, 3e-3, 0.075, 0.1, "interface", 0, 1, "I", 1, 0, 5, 1, 9, 0.05, 0.075, 0.1),
+    (0.5, 5e-3, 0.125, 0.1, "interface", 0, 1, "II", 0, 1, 6, 3, 11, 0.05, 0.125, 0.1),
+    (0.6, 6e-3, 0.075, 0.05, "unit-interior", 0, 0, "mixed", 0.7, 1, 2, 3, 4, 0.05, 0.075, 0.05),
+    (0.7, 7e-3, 0.1, 0.025, "unit-interior", 0, 0, "I", 1, 0, 3, 5, 6, 0.05, 0.1, 0.025),
+    (0.95, 9.5e-3, 0.1, 0.175, "unit-interior", 1, 1, "II", 0, 1, 4, 21, 22, 0.05, 0.1, 0.175),
+]
+
+
+def write_fracture_csv(run, rows, joint_record=True):
+    with open(os.path.join(run, "cracks.csv"), "w") as f:
+        f.write(FRACTURE_HEADER + "".join(",".join(map(str, r)) + "\n" for r in rows))
+    if joint_record:
+        import json as _json
+        p = os.path.join(run, "summary.json")
+        with open(p) as f:
+            s = _json.load(f)
+        s["joint_record"] = {"open_threshold_m": 1e-4, "slip_threshold_m": 2e-4, "segments": 4}
+        with open(p, "w") as f:
+            _json.dump(s, f)
+
+
+def counts_from_stdout(out):
+    line = out.splitlines()[0]
+    return {k: int(v) for k, v in (item.split() for item in line.split(": ", 1)[1].split(", "))}
+
+
+def test_dry_joint_rows_drawn_and_counted_apart(tmp_path, cli):
+    run = make_run(str(tmp_path / "run"))
+    write_fracture_csv(run, COHESIVE_ROWS + DRY_ROWS)
+    rc, out, err = cli("cracks", run, "--time", "0.65")
+    assert rc == 0, err
+    c = counts_from_stdout(out)
+    assert c == {"unit_I": 0, "unit_II": 0, "unit_mixed": 1, "interface_I": 1, "interface_II": 1,
+                 "interface_mixed": 0, "dry_open": 2, "dry_slip": 1}
+    for ext in ("png", "svg"):
+        assert os.path.getsize(os.path.join(run, "post", f"cracks.{ext}")) > 2000
+    svg = open(os.path.join(run, "post", "cracks.svg")).read()
+    assert "3 broken elements" in svg and "dry joints opened: 2, slipped: 1" in svg
+    assert "dry joint opened &gt; 0.1 mm (2)" in svg and "dry joint slipped &gt; 0.2 mm (1)" in svg
+    assert "#ff7f0e" in svg and "#2ca02c" in svg and "dry-joint events" in svg
+    # every row at the end; each dry event on the joint segment it names (both sides share the reference midpoint)
+    files, info = cracks.draw(run, str(tmp_path / "c"))
+    assert info["counts"]["dry_open"] == 2 and info["counts"]["dry_slip"] == 2
+    assert sum(v for k, v in info["counts"].items() if not k.startswith("dry_")) == 5
+    m = info["matched_reference_midpoints"]
+    assert np.allclose(m[5:], [[r[14], r[15]] for r in DRY_ROWS])
+    assert np.allclose(m[:5], [[r[14], r[15]] for r in COHESIVE_ROWS])
+
+
+def test_dry_joint_rows_only_and_without_snapshots(tmp_path, cli):
+    """A dry-stone wall: no broken elements at all, only joint events; without snapshots they are markers."""
+    run = make_run(str(tmp_path / "run"), snapshots=False)
+    write_fracture_csv(run, DRY_ROWS, joint_record=False)
+    cr = cracks.read_cracks(run)
+    assert list(cr["class"]) == ["dry"] * 4 and list(cr["mode"]) == ["open", "open", "slip", "slip"]
+    rc, out, err = cli("cracks", run, "--time", "0.5")
+    assert rc == 0, err
+    c = counts_from_stdout(out)
+    assert c["dry_open"] == 2 and c["dry_slip"] == 1 and sum(c.values()) == 3
+    assert "none (markers" in out
+    svg = open(os.path.join(run, "post", "cracks.svg")).read()
+    assert "dry joints opened: 2, slipped: 1" in svg and "broken elements</text>" not in svg  # no "0 broken"
+    assert "dry joint opened (2)" in svg  # no joint_record in summary.json: no threshold in the label
+    rc, out, err = cli("cracks", run, "--time", "0.1")  # before the first event
+    assert rc == 0 and sum(counts_from_stdout(out).values()) == 0
+
+
+def test_cohesive_only_file_unchanged_by_dry_support(tmp_path, cli):
+    """The broken elements of a file are counted and matched the same with or without dry rows next to them, and
+    a file of broken elements only reports no dry-joint events."""
+    run = make_run(str(tmp_path / "run"))
+    rc, out, err = cli("cracks", run)
+    assert rc == 0, err
+    assert out.splitlines()[0].endswith(", dry_open 0, dry_slip 0")
+    _, before = cracks.draw(run, str(tmp_path / "a"))
+    with open(os.path.join(run, "cracks.csv"), "a") as f:  # the contract spelling: first eight columns only
+        for r in DRY_ROWS:
+            f.write(",".join(map(str, r[:8])) + "\n")
+    _, after = cracks.draw(run, str(tmp_path / "b"))
+    coh = [k for k in before["counts"] if not k.startswith("dry_")]
+    assert [before["counts"][k] for k in coh] == [after["counts"][k] for k in coh]
+    assert np.array_equal(before["matched_reference_midpoints"], after["matched_reference_midpoints"][:5])
+    assert (after["counts"]["dry_open"], after["counts"]["dry_slip"]) == (2, 2)
+
+
+@pytest.mark.parametrize("row, message", [
+    ("interface-dry,0,1,close", ["unknown mode ['close']", "open or slip for interface-dry"]),
+    ("interface-dry,0,1,I", ["mode 'I' does not go with class 'interface-dry'", "data row 2"]),
+    ("unit-interior,0,0,slip", ["mode 'slip' does not go with class 'unit-interior'"]),
+    ("interface-wet,0,1,open", ["unknown class ['interface-wet']", "interface-dry"]),
+])
+def test_dry_joint_bad_rows_fail_clearly(tmp_path, cli, row, message):
+    run = make_run(str(tmp_path / "run"))
+    write_fracture_csv(run, DRY_ROWS[:1])
+    with open(os.path.join(run, "cracks.csv"), "a") as f:
+        f.write(f"0.5,0.005,0.075,0.1,{row},1,1,7,1,2,0.05,0.075,0.1\n")
+    rc, out, err = cli("cracks", run)
+    assert rc == 1 and len(err.strip().splitlines()) == 1, err
+    for m in message:
+        assert m in err, err
