@@ -14,8 +14,9 @@ as one edge; an opened joint shows as a gap in the grey deformed mesh drawn unde
 Dry joints (mortarless, no cohesive element) leave rows of class `interface-dry` instead: mode `open` when the
 normal opening at one end of the joint segment first exceeded `output.joint_open` (m), mode `slip` when the mean
 tangential slip of its ends first exceeded `output.joint_slip` (m); D_I and D_II are then the largest end opening
-and the |slip| divided by those thresholds (-), `element` the joint segment's own index (not a cohesive element's). A segment can have one row of each mode, and a joint
-that closes again keeps its row: they are records of events, not of the present state. Their segment is found
+and the |slip| divided by those thresholds (-), `element` the joint segment's own index (not a cohesive element's).
+A segment can have one row of each mode, and a joint that closes again keeps its row: they are records of events,
+not of the present state. Their segment is found
 exactly as a broken element's (nearest edge midpoint to the recorded current midpoint), and they are drawn under
 the cohesive cracks in their own style (openings thick orange, slips thin green: purple is already mixed mode),
 counted apart from the broken elements, never added to them.
@@ -283,7 +284,8 @@ def draw(run_dir: str, prefix: str, time: float | None = None, displacement: flo
         ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, title="\n".join(heading),
                   title_fontsize=8)
     else:
-        ax.text(0.5, 0.02, f"no {what.replace(' and ', ' or ')} at this time", transform=ax.transAxes, ha="center", fontsize=9)
+        ax.text(0.5, 0.02, f"no {what.replace(' and ', ' or ')} at this time", transform=ax.transAxes, ha="center",
+                fontsize=9)
     files = save(fig, prefix)
     return files, {"time": time, "snapshot": snap[1] if snap else None, "counts": counts,
                    "matched_reference_midpoints": matched if keep.any() else None}

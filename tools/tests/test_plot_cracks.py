@@ -147,7 +147,7 @@ FRACTURE_HEADER = "time_s,control_displacement_m,x_m,y_m,class,unit_a,unit_b,mod
                   "length_m,x_ref_m,y_ref_m\n"
 # The joint of two_blocks() lies at y = 0.1 m with segments of 0.05 m; the upper block of make_run() moves in x by
 # 2 mm per second, so a joint's current midpoint (mean of both sides) is about 1 mm per second right of reference.
-DRY_ROWS = [  # time, control displacement, x, y, class, unit_a, unit_b, mode, D_I, D_II, segment, tri_a, tri_b, L, x_ref, y_ref
+DRY_ROWS = [  # the columns of FRACTURE_HEADER; element = the joint segment's index
     (0.2, 2e-3, 0.0252, 0.1, "interface-dry", 0, 1, "open", 1.3, 0.2, 0, 14, 16, 0.05, 0.025, 0.1),
     (0.4, 4e-3, 0.1754, 0.1, "interface-dry", 0, 1, "open", 1.1, 0.4, 3, 20, 22, 0.05, 0.175, 0.1),
     (0.45, 4.5e-3, 0.1754, 0.1, "interface-dry", 0, 1, "slip", 0.9, 1.2, 3, 20, 22, 0.05, 0.175, 0.1),
