@@ -74,8 +74,17 @@ def test_family_report_and_half_rate_check(tmp_path, cli):
     assert float(rows["c0"]["error_vs_published_fdem"]) == pytest.approx(13.2 / 12 - 1, rel=1e-9)
     assert rows["c1"]["error_vs_experiment"] == ""  # no reference row, no [reference]
     md = (out / "report.md").read_text()
-    # half the rate: 10 (1.1)(1.1) against 10 (1.1)(1.2): -8.3 %, not quasi-static
-    assert "change -8.3 %" in md and "NOT quasi-static" in md
+    # half the rate (default: the first case only): 10 (1.1)(1.1) against 10 (1.1)(1.2): -8.3 %, not quasi-static
+    assert "| c0 | `rate` | 0.2 | 0.1 | 13.2 | 12.1 | -8.3 % | NOT quasi-static | completed | - |" in md
+    assert "0 of 1 checked cases quasi-static; largest change -8.3 %." in md
+    assert float(rows["c0"]["peak_half_rate_kN"]) == pytest.approx(12.1, rel=1e-12)
+    assert float(rows["c0"]["rate_change"]) == pytest.approx(12.1 / 13.2 - 1, rel=1e-12)
+    assert rows["c1"]["peak_half_rate_kN"] == "" and rows["c1"]["rate_change"] == ""  # not checked
+    qs = read_csv(out / "quasi_static.csv")
+    assert [q["case"] for q in qs] == ["c0"] and qs[0]["quasi_static"] == "no" and qs[0]["status_half"] == "completed"
+    # the fake curve is flat after its peak: not past the peak
+    assert rows["c0"]["past_peak"] == "no (still rising / flat)" and float(rows["c0"]["drop_after_peak"]) == 0.0
+    assert "Trend with" not in md  # reference.csv has no N_kN column
     assert "Mean absolute error against the experiments: 20.0 % over 1 case(s)" in md
     assert "NOT the same for every case" in md  # the mesh sizes differ
     calls = log.read_text().splitlines()
