@@ -369,7 +369,8 @@ def run_family(args) -> int:
     by_task = {}
     for (label, b, p), rec in zip(tasks, recs):
         m = {}
-        if rec["status"] in ("completed", "failed", "running") and os.path.isfile(os.path.join(rec["run_dir"], "history.csv")):
+        if rec["status"] in ("completed", "failed", "running") and \
+                os.path.isfile(os.path.join(rec["run_dir"], "history.csv")):
             try:
                 m = curve_metrics(rec["run_dir"])
             except ToolError as e:
