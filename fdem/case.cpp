@@ -592,7 +592,6 @@ CaseSpec load_case(const std::string& path, const std::vector<std::string>& over
                 in.region_a = *(*a)[0].value<std::string>(), in.region_b = *(*a)[1].value<std::string>();
         }
         in.kind = r.string("kind", true, "how the regions meet", {"tied", "bonded", "dry"}).value_or("tied");
-        auto positive = [](double v) { return v > 0; };
         if (in.kind == "dry") {
             in.friction = r.number("friction", true, "a friction angle in [0, 90) deg", [](double v) { return v >= 0 && v < 90; }).value_or(0);
             in.normal_penalty = r.number("normal_penalty", false, "a normal penalty p_n > 0 in Pa", positive).value_or(std::nan(""));
@@ -657,6 +656,10 @@ CaseSpec load_case(const std::string& path, const std::vector<std::string>& over
         Reader r(ctx, *t, "output");
         spec.history_interval = r.number("history_interval", false, "an interval > 0 in s", positive).value_or(0);
         spec.snapshot_interval = r.number("snapshot_interval", false, "an interval > 0 in s", positive).value_or(0);
+        spec.joint_open = r.number("joint_open", false, "the opening of a dry joint that is recorded, > 0 in m", positive)
+                              .value_or(spec.joint_open);
+        spec.joint_slip = r.number("joint_slip", false, "the slip of a dry joint that is recorded, > 0 in m", positive)
+                              .value_or(spec.joint_slip);
         if (const toml::table* c = r.table("curve", false, "a table { x = MONITOR, y = MONITOR }")) {
             Reader cr(ctx, *c, "output.curve");
             spec.curve_x = cr.string("x", true, "the monitor of the control displacement").value_or("");

@@ -169,6 +169,10 @@ struct CaseSpec {
     std::optional<double> dt_override;  // s, a fixed time step (tests of the stability limit), bypasses the safety factor
     double history_interval = 0;   // s; 0 = every 100 steps
     double snapshot_interval = 0;  // s; 0 = only at the end of each stage
+    // Joint record of dry joints (cracks.csv): a dry joint segment is recorded the first time its opening at an end
+    // exceeds joint_open, and the first time the mean slip of its ends exceeds joint_slip.
+    double joint_open = 1e-4;  // m
+    double joint_slip = 1e-4;  // m
     std::string curve_x, curve_y;  // monitors forming the load-displacement curve (optional)
     ReferenceSpec reference;
     std::vector<std::pair<std::string, std::string>> overrides;  // --set key=value as given

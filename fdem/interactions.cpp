@@ -5,6 +5,7 @@
 // two triangles of one body (the faces of a crack inside a unit) the crack law of their region's material.
 #include "fdem/interactions.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -40,6 +41,15 @@ const InterfaceSpec* find_interface(const CaseSpec& spec, const std::string& a, 
 
 Interactions::Interactions(const CaseSpec& spec, const Model& model) {
     if (!model.has_topology) return;
+    dry_ = model.dry_joints;
+    dry_open_.assign(dry_.size(), 0), dry_slip_.assign(dry_.size(), 0);
+    for (const auto& d : dry_) {
+        const double* X = model.X.data();
+        dry_len_.push_back(std::hypot(X[2 * d.n[1]] - X[2 * d.n[0]], X[2 * d.n[1] + 1] - X[2 * d.n[0] + 1]));
+        dry_ref_mid_.push_back(0.5 * (X[2 * d.n[0]] + X[2 * d.n[1]]));
+        dry_ref_mid_.push_back(0.5 * (X[2 * d.n[0] + 1] + X[2 * d.n[1] + 1]));
+    }
+    set_dry_record(spec.joint_open, spec.joint_slip);
     const auto& regions = model.mesh.regions;
     const int nr = static_cast<int>(regions.size());
     auto material_of = [&](int region) -> const Material& {
@@ -186,6 +196,50 @@ int Interactions::after_step(double time, double control_displacement, const dou
     }
     cracks_csv_ += os.str();
     return static_cast<int>(broken.size());
+}
+
+void Interactions::joint_motion(const int* n, const double* x, double& opening, double& slip) {
+    // n = {a0, a1, b0, b1}; a0 -> a1 runs counter-clockwise around side A, so n = (s_y, -s_x) points into B.
+    double sx = x[2 * n[1]] - x[2 * n[0]], sy = x[2 * n[1] + 1] - x[2 * n[0] + 1];
+    const double len = std::hypot(sx, sy);
+    if (len <= 0) {
+        opening = slip = 0;
+        return;
+    }
+    sx /= len, sy /= len;
+    const double d0x = x[2 * n[2]] - x[2 * n[0]], d0y = x[2 * n[2] + 1] - x[2 * n[0] + 1];
+    const double d1x = x[2 * n[3]] - x[2 * n[1]], d1y = x[2 * n[3] + 1] - x[2 * n[1] + 1];
+    opening = std::max(d0x * sy - d0y * sx, d1x * sy - d1y * sx);
+    slip = 0.5 * ((d0x + d1x) * sx + (d0y + d1y) * sy);
+}
+
+int Interactions::record_dry_joints(double time, double control_displacement, const double* x) {
+    int rows = 0;
+    std::ostringstream os;
+    os.precision(10);
+    for (int e = 0; e < static_cast<int>(dry_.size()); ++e) {
+        if (dry_open_[e] && dry_slip_[e]) continue;
+        const auto& d = dry_[e];
+        double opening, slip;
+        joint_motion(d.n.data(), x, opening, slip);
+        const double r_open = opening / open_thr_, r_slip = std::abs(slip) / slip_thr_;
+        for (int mode = 0; mode < 2; ++mode) {
+            char& seen = mode == 0 ? dry_open_[e] : dry_slip_[e];
+            if (seen || (mode == 0 ? r_open : r_slip) <= 1) continue;
+            seen = 1;
+            ++(mode == 0 ? n_open_ : n_slip_);
+            ++rows;
+            double mx = 0, my = 0;
+            for (int k = 0; k < 4; ++k) mx += 0.25 * x[2 * d.n[k]], my += 0.25 * x[2 * d.n[k] + 1];
+            // The columns of fracture::write_cracks_csv_header.
+            os << time << ',' << control_displacement << ',' << mx << ',' << my << ",interface-dry," << d.body_a << ','
+               << d.body_b << ',' << (mode == 0 ? "open" : "slip") << ',' << r_open << ',' << r_slip << ',' << e << ','
+               << d.tri_a << ',' << d.tri_b << ',' << dry_len_[e] << ',' << dry_ref_mid_[2 * e] << ','
+               << dry_ref_mid_[2 * e + 1] << '\n';
+        }
+    }
+    if (rows) cracks_csv_ += os.str();
+    return rows;
 }
 
 double Interactions::joint_energy() const { return joints_ ? joints_->elastic_energy() : 0.0; }

@@ -41,6 +41,27 @@ public:
     double friction_dissipation() const;  // J
     const fracture::BreakCounts* counts() const { return joints_ ? &joints_->counts() : nullptr; }
     const std::string& cracks_csv() const { return cracks_csv_; }
+
+    // Dry joint record. Dry joints have no cohesive element, so a rocking or sliding mechanism would leave nothing
+    // in cracks.csv; each dry joint segment is followed instead: the relative displacement of its two sides at each
+    // end, d = x_B - x_A (the sides coincide in the reference configuration), split along the side-A edge tangent s
+    // and the normal n pointing from A into B. A segment gets one cracks.csv row (class interface-dry, mode open)
+    // the first time max(d0.n, d1.n) > open_threshold, and one (mode slip) the first time |(d0.s + d1.s)/2| >
+    // slip_threshold; D_I, D_II hold those two ratios at detection. Thresholds in m.
+    void set_dry_record(double open_threshold, double slip_threshold) { open_thr_ = open_threshold, slip_thr_ = slip_threshold; }
+    bool has_dry_joints() const { return !dry_.empty(); }
+    int dry_joint_count() const { return static_cast<int>(dry_.size()); }
+    // Checks every segment at positions x; appends the first openings and slips to the crack record. Returns the
+    // number of new rows.
+    int record_dry_joints(double time, double control_displacement, const double* x);
+    // Current opening and slip of a dry segment or a cohesive element's edge (same definition), m.
+    static void joint_motion(const int* n, const double* x, double& opening, double& slip);
+    const std::vector<mesh::CohesiveElement>& dry_joints() const { return dry_; }
+    bool dry_recorded(int e) const { return dry_open_[e] || dry_slip_[e]; }
+    long long dry_open_count() const { return n_open_; }
+    long long dry_slip_count() const { return n_slip_; }
+    double open_threshold() const { return open_thr_; }
+    double slip_threshold() const { return slip_thr_; }
     const contact::ContactSystem* contact() const { return contact_.get(); }
     const fracture::CohesiveSystem* joints() const { return joints_.get(); }
 
@@ -48,6 +69,11 @@ private:
     std::unique_ptr<contact::ContactSystem> contact_;
     std::unique_ptr<fracture::CohesiveSystem> joints_;
     std::string cracks_csv_;
+    std::vector<mesh::CohesiveElement> dry_;
+    std::vector<char> dry_open_, dry_slip_;
+    std::vector<double> dry_len_, dry_ref_mid_;  // m: reference length and midpoint (2 per segment)
+    double open_thr_ = 1e-4, slip_thr_ = 1e-4;   // m
+    long long n_open_ = 0, n_slip_ = 0;
 };
 
 }  // namespace fdem

@@ -162,13 +162,15 @@ Model build_model(const CaseSpec& spec, mesh::Mesh mesh) {
 }
 
 Model build_model(const CaseSpec& spec, mesh::Mesh mesh, std::vector<mesh::CohesiveElement> cohesive,
-                  std::vector<int> contact_capable) {
+                  std::vector<int> contact_capable, std::vector<mesh::CohesiveElement> dry_joints) {
     Model md = build_model(spec, std::move(mesh));
-    for (auto& c : cohesive) {
-        for (int& n : c.n) n = md.node_new_of_old[n];
-        if (c.tri_a >= 0) c.tri_a = md.tri_new_of_old[c.tri_a];
-        if (c.tri_b >= 0) c.tri_b = md.tri_new_of_old[c.tri_b];
-    }
+    for (auto* list : {&cohesive, &dry_joints})
+        for (auto& c : *list) {
+            for (int& n : c.n) n = md.node_new_of_old[n];
+            if (c.tri_a >= 0) c.tri_a = md.tri_new_of_old[c.tri_a];
+            if (c.tri_b >= 0) c.tri_b = md.tri_new_of_old[c.tri_b];
+        }
+    md.dry_joints = std::move(dry_joints);
     for (int& t : contact_capable) t = md.tri_new_of_old[t];
     std::sort(contact_capable.begin(), contact_capable.end());
     md.cohesive = std::move(cohesive);

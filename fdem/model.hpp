@@ -34,6 +34,7 @@ struct Model {
     std::vector<int> inc_ptr, inc_idx;   // node -> 3 * triangle + local
     // From the topology (empty for a plain continuum), in the model's numbering.
     std::vector<mesh::CohesiveElement> cohesive;
+    std::vector<mesh::CohesiveElement> dry_joints;  // one per dry edge (kind dry): followed for the joint record
     std::vector<int> contact_capable;  // sorted
     bool has_topology = false;
     // build_model renumbers nodes and triangles for memory locality; these map the input mesh's ids to the model's.
@@ -53,9 +54,10 @@ std::pair<std::vector<int>, std::vector<int>> reorder_for_locality(mesh::Mesh& m
 // material constants (plane stress or strain), viscous coefficients. Throws InputError for a region without
 // material and mesh::MeshError for a triangle with non-positive reference area.
 Model build_model(const CaseSpec& spec, mesh::Mesh mesh);
-// The same with a topology's cohesive elements and contact-capable triangles (renumbered with the mesh).
+// The same with a topology's cohesive elements, dry joint segments and contact-capable triangles (renumbered with
+// the mesh).
 Model build_model(const CaseSpec& spec, mesh::Mesh mesh, std::vector<mesh::CohesiveElement> cohesive,
-                  std::vector<int> contact_capable);
+                  std::vector<int> contact_capable, std::vector<mesh::CohesiveElement> dry_joints = {});
 
 // Stable time step of the triangles alone (FORMULATION §3): min over triangles of h_e / c_p, reduced for
 // viscous damping by (sqrt(1 + xi^2) - xi). Returns the limit (s) and the triangle that sets it.

@@ -57,7 +57,8 @@ mesh::Topology build_topology_only(const CaseSpec& spec) {
 Model build_scene(const CaseSpec& spec) {
     if (!needs_topology(spec)) return build_model(spec, make_mesh(spec));
     mesh::Topology topo = build_topology_only(spec);
-    return build_model(spec, std::move(topo.mesh), std::move(topo.cohesive), std::move(topo.contact_capable));
+    return build_model(spec, std::move(topo.mesh), std::move(topo.cohesive), std::move(topo.contact_capable),
+                       std::move(topo.dry_joints));
 }
 
 }  // namespace fdem

@@ -510,6 +510,8 @@ void Simulation::step() {
     if (!opt_.out_dir.empty()) {
         if (history_due(time_, steps_)) {
             const double hi = history_interval();
+            if (inter_.has_dry_joints())
+                inter_.record_dry_joints(time_, control_monitor_ >= 0 ? monitor_value(control_monitor_) : 0.0, model_.x.data());
             write_history_row();
             if (hi > 0) next_history_ += hi * std::max(1.0, std::floor((time_ - next_history_) / hi) + 1);
         }
@@ -669,25 +671,35 @@ void Simulation::write_snapshot() {
         body.i32[e] = model_.mesh.tri_body.empty() ? 0 : model_.mesh.tri_body[e];
         for (int k = 0; k < 3; ++k) tri[3 * e + k] = model_.tris[e].n[k];
     }
-    // Cohesive elements as line cells on their side-A edge, after the triangles: cell_kind 0 triangle, 1 joint;
-    // joint_damage (max over its points) and joint_state (0 intact, 1 damaged, 2 broken), -1 on triangles.
+    // Cohesive elements and dry joint segments as line cells on their side-A edge, after the triangles: cell_kind
+    // 0 triangle, 1 cohesive element, 2 dry joint; joint_damage (max over its points; -1 on triangles and dry joints),
+    // joint_state (cohesive: 0 intact, 1 damaged, 2 broken; dry: 0 not recorded, 1 in the joint record; -1 on
+    // triangles), joint_opening and joint_slip (m, the definitions of Interactions::joint_motion; NaN on triangles).
     std::vector<int> lines;
     VtuArray kind{"cell_kind", 1, {}, {}, true}, damage{"joint_damage", 1, {}, {}, false}, state{"joint_state", 1, {}, {}, true};
+    VtuArray opening{"joint_opening", 1, {}, {}, false}, slip{"joint_slip", 1, {}, {}, false};
     kind.i32.assign(nt, 0), damage.f64.assign(nt, -1.0), state.i32.assign(nt, -1);
-    if (const fracture::CohesiveSystem* j = inter_.joints()) {
-        for (int e = 0; e < j->size(); ++e) {
-            lines.push_back(j->element(e).n[0]), lines.push_back(j->element(e).n[1]);
-            kind.i32.push_back(1);
-            damage.f64.push_back(j->damage(e));
-            state.i32.push_back(static_cast<int>(j->state(e)));
-            for (int c = 0; c < 3; ++c) stress.f64.push_back(std::nan(""));
-            mat.i32.push_back(-1), region.i32.push_back(-1), body.i32.push_back(-1);
-        }
-    }
+    opening.f64.assign(nt, std::nan("")), slip.f64.assign(nt, std::nan(""));
+    auto add_line = [&](const int* n, int cell_kind, double dmg, int st) {
+        lines.push_back(n[0]), lines.push_back(n[1]);
+        kind.i32.push_back(cell_kind);
+        damage.f64.push_back(dmg);
+        state.i32.push_back(st);
+        double o, sl;
+        Interactions::joint_motion(n, model_.x.data(), o, sl);
+        opening.f64.push_back(o), slip.f64.push_back(sl);
+        for (int c = 0; c < 3; ++c) stress.f64.push_back(std::nan(""));
+        mat.i32.push_back(-1), region.i32.push_back(-1), body.i32.push_back(-1);
+    };
+    if (const fracture::CohesiveSystem* j = inter_.joints())
+        for (int e = 0; e < j->size(); ++e) add_line(j->element(e).n, 1, j->damage(e), static_cast<int>(j->state(e)));
+    for (int e = 0; e < inter_.dry_joint_count(); ++e)
+        add_line(inter_.dry_joints()[e].n.data(), 2, -1.0, inter_.dry_recorded(e) ? 1 : 0);
     char name[64];
     std::snprintf(name, sizeof name, "snapshots/step_%09ld.vtu", steps_);
     std::vector<VtuArray> cells{stress, mat, region, body};
-    if (!lines.empty()) cells.push_back(kind), cells.push_back(damage), cells.push_back(state);
+    if (!lines.empty())
+        for (const auto* a : {&kind, &damage, &state, &opening, &slip}) cells.push_back(*a);
     write_file_atomic((std::filesystem::path(opt_.out_dir) / name).string(), vtu_document(model_.X, tri, lines, {disp, vel}, cells));
     snapshots_.emplace_back(time_, name);
     write_file_atomic((std::filesystem::path(opt_.out_dir) / "run.pvd").string(), pvd_document(snapshots_));
@@ -698,7 +710,7 @@ void Simulation::flush_files() {
     last_flush_ = wall_clock();
     const std::filesystem::path dir(opt_.out_dir);
     write_file_atomic((dir / "history.csv").string(), history_);
-    if (inter_.has_joints()) {
+    if (inter_.has_joints() || inter_.has_dry_joints()) {
         std::ostringstream header;
         fracture::write_cracks_csv_header(header);
         write_file_atomic((dir / "cracks.csv").string(), header.str() + inter_.cracks_csv());
@@ -767,6 +779,9 @@ void Simulation::run() {
         log("no interface or fracture rules: the " + std::to_string(model_.mesh.n_bodies()) + " bodies of the mesh are tied into one continuum");
     if (inter_.has_joints())
         log("cohesive elements: " + std::to_string(inter_.joints()->size()));
+    if (inter_.has_dry_joints())
+        log("dry joint record: " + std::to_string(inter_.dry_joint_count()) + " segments, recorded in cracks.csv when an end opens by more than " +
+            sci(inter_.open_threshold()) + " m or the segment slips by more than " + sci(inter_.slip_threshold()) + " m");
     if (inter_.has_contact())
         log("contact: " + std::to_string(model_.contact_capable.size()) + " contact-capable triangles, buffer " + sci(inter_.contact()->buffer()) + " m");
     log("threads: " + std::to_string(omp_get_max_threads()));
@@ -786,6 +801,8 @@ void Simulation::run() {
         log("stage " + std::to_string(s + 1) + " '" + r.name + "' ended by " + how + " at t = " + sci(r.time) + " s after " +
             std::to_string(r.steps) + " steps");
         if (!opt_.out_dir.empty()) {
+            if (inter_.has_dry_joints())
+                inter_.record_dry_joints(time_, control_monitor_ >= 0 ? monitor_value(control_monitor_) : 0.0, model_.x.data());
             if (history_.empty() || history_.compare(history_.size() - 1, 1, "\n") == 0) write_history_row();
             write_snapshot();
             flush_files();
@@ -793,6 +810,9 @@ void Simulation::run() {
     }
     wall_time_ = wall_clock() - wall_start_;
     const double tps = static_cast<double>(steps_) * model_.n_triangles() / std::max(wall_time_, 1e-9);
+    if (inter_.has_dry_joints())
+        log("dry joint record: " + std::to_string(inter_.dry_open_count()) + " segments opened, " + std::to_string(inter_.dry_slip_count()) +
+            " slipped (of " + std::to_string(inter_.dry_joint_count()) + ")");
     log("done: " + std::to_string(steps_) + " steps in " + human_time(wall_time_) + " (" + sci(tps, 3) + " triangle-steps/s)");
     if (const contact::ContactSystem* c = inter_.contact()) {
         const auto& st = c->stats();
@@ -854,6 +874,15 @@ void Simulation::write_summary(const std::string& status, const std::string& mes
         mons[spec_.monitors[i].name] = m;
     }
     j["monitors"] = mons;
+    if (inter_.has_dry_joints()) {
+        Json jr = Json::object();
+        jr["open_threshold_m"] = inter_.open_threshold();
+        jr["slip_threshold_m"] = inter_.slip_threshold();
+        jr["segments"] = inter_.dry_joint_count();
+        jr["opened"] = inter_.dry_open_count();
+        jr["slipped"] = inter_.dry_slip_count();
+        j["joint_record"] = jr;
+    }
     Json stages = Json::array();
     for (const auto& r : stage_results_) {
         Json s = Json::object();

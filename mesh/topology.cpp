@@ -386,10 +386,10 @@ Topology build_topology(const Mesh& m, const TopologyOptions& opt) {
     out.tri_body = m.tri_body.empty() ? m.tri_region : m.tri_body;
     out.regions = m.regions;
 
-    // Cohesive elements in edge order.
+    // Cohesive elements and dry joint segments in edge order.
     for (int e = 0; e < topo.n_edges(); ++e) {
         const EdgeClass cls = topo.edge_class[e];
-        if (cls != EdgeClass::crackable && cls != EdgeClass::bonded) continue;
+        if (cls != EdgeClass::crackable && cls != EdgeClass::bonded && cls != EdgeClass::dry) continue;
         CohesiveElement ce;
         const int p = topo.edge_nodes[2 * e], q = topo.edge_nodes[2 * e + 1];
         ce.tri_a = topo.edge_tri[2 * e];
@@ -402,7 +402,7 @@ Topology build_topology(const Mesh& m, const TopologyOptions& opt) {
         ce.region_b = m.tri_region[ce.tri_b];
         ce.kind = cls;
         ce.edge = e;
-        topo.cohesive.push_back(ce);
+        (cls == EdgeClass::dry ? topo.dry_joints : topo.cohesive).push_back(ce);
     }
 
     // Contact-capable triangles.

@@ -20,6 +20,8 @@
 //   edge_tri              2 * n_edges ints: side A = the lower triangle id, side B = the other (-1 on a free boundary).
 //   edge_class            n_edges classes.
 //   cohesive              one per crackable or bonded edge, in edge order (see CohesiveElement).
+//   dry_joints            one per dry edge, in edge order, the same record with kind = dry: no forces, only the
+//                         node copies of both sides, so that the engine can follow the joint's opening and slip.
 //   contact_capable       sorted triangle ids that have a node on a free-boundary or dry edge (or, with
 //                         contact_by_node = false, an edge of those classes). Triangles of cohesive elements
 //                         join the contact set when their element breaks; that is the engine's job.
@@ -81,7 +83,7 @@ struct CohesiveElement {
     int tri_a = -1, tri_b = -1;
     int body_a = -1, body_b = -1;
     int region_a = -1, region_b = -1;
-    EdgeClass kind = EdgeClass::crackable;  // crackable or bonded
+    EdgeClass kind = EdgeClass::crackable;  // crackable or bonded (dry for Topology::dry_joints)
     int edge = -1;                          // index into the Topology edge arrays
 };
 
@@ -89,6 +91,7 @@ struct Topology {
     Mesh mesh;
     std::vector<int> node_origin;
     std::vector<CohesiveElement> cohesive;
+    std::vector<CohesiveElement> dry_joints;
     std::vector<int> contact_capable;
     std::vector<int> edge_nodes;
     std::vector<int> edge_tri;
