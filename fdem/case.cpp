@@ -242,9 +242,15 @@ void apply_override(toml::table& root, const std::string& spec, Ctx& ctx) {
 const std::vector<std::string> kComponents{"x", "y"};
 int component_index(const std::string& c) { return c == "y" ? 1 : 0; }
 
-void read_dof_set(Reader& r, const std::string& key, DofMode mode, SupportSpec& s) {
+void read_dof_set(Ctx& ctx, Reader& r, const std::string& key, DofMode mode, SupportSpec& s) {
     if (auto v = r.string(key, false, "\"x\", \"y\" or \"xy\"", {"x", "y", "xy"}))
-        for (char c : *v) s.mode[c == 'y' ? 1 : 0] = mode;
+        for (char c : *v) {
+            const int comp = c == 'y' ? 1 : 0;
+            if (s.mode[comp] != DofMode::inherit)
+                ctx.error(r.key_path(key), r.line(), "component " + kComponents[comp] + " already has a support in this block");
+            else
+                s.mode[comp] = mode;
+        }
 }
 
 SupportSpec read_support(Ctx& ctx, const toml::table& t, const std::string& path) {
@@ -252,8 +258,9 @@ SupportSpec read_support(Ctx& ctx, const toml::table& t, const std::string& path
     SupportSpec s;
     s.line = r.line();
     s.group = r.string("group", true, "the name of a group (Gmsh physical group)").value_or("");
-    read_dof_set(r, "fix", DofMode::fixed, s);
-    read_dof_set(r, "free", DofMode::free, s);
+    read_dof_set(ctx, r, "fix", DofMode::fixed, s);
+    read_dof_set(ctx, r, "free", DofMode::free, s);
+    read_dof_set(ctx, r, "rigid", DofMode::rigid, s);
     for (int c = 0; c < 2; ++c) {
         const std::string key = c == 0 ? "vx" : "vy";
         if (auto v = r.number(key, false, "a velocity in m/s")) {
@@ -321,7 +328,7 @@ SupportSpec read_support(Ctx& ctx, const toml::table& t, const std::string& path
         }
     }
     if (s.mode[0] == DofMode::inherit && s.mode[1] == DofMode::inherit)
-        ctx.error(path, s.line, "a support needs fix, free, vx, vy, protocol or cyclic");
+        ctx.error(path, s.line, "a support needs fix, free, rigid, vx, vy, protocol or cyclic");
     r.finish();
     return s;
 }

@@ -224,12 +224,18 @@ void Simulation::begin_stage(int s) {
                 stage_ramp_end_ = std::max(stage_ramp_end_, time_ + sp.ramp);
             }
             if (a.mode == DofMode::protocol) a.pt = sp.protocol_t, a.pu = sp.protocol_u;
+            if (a.mode == DofMode::rigid) {
+                // Starts from the group's momentum: the mass-weighted mean velocity.
+                double p = 0, m = 0;
+                for (int k : a.nodes) p += model_.mass[k] * model_.v[2 * k + c], m += model_.mass[k];
+                a.v_common = m > 0 ? p / m : 0.0;
+            }
             const int id = static_cast<int>(supports_.size());
             for (int k : a.nodes) {
                 const int d = 2 * k + c;
                 dof_owner_[d] = a.mode == DofMode::free ? -1 : id;
                 dof_kind_[d] = a.mode == DofMode::free ? 0 : a.mode == DofMode::fixed ? 1 : 2;
-                dof_vel_[d] = 0;
+                dof_vel_[d] = a.mode == DofMode::rigid ? a.v_common : 0;
                 reaction_[d] = 0;
             }
             supports_.push_back(std::move(a));
@@ -360,7 +366,7 @@ void Simulation::apply_time_dependent(double t) {
     const double th = t + 0.5 * dt_;
     for (std::size_t id = 0; id < supports_.size(); ++id) {
         const ActiveSupport& s = supports_[id];
-        if (s.mode == DofMode::fixed) continue;
+        if (s.mode == DofMode::fixed || s.mode == DofMode::rigid) continue;  // rigid: set in step() from the forces
         double v = 0;
         if (s.mode == DofMode::velocity) {
             const double tau = th - s.t0;
@@ -418,6 +424,35 @@ void Simulation::step() {
     // evaluated on the steps whose energies are reported or checked.
     inter_.want_energy(history_due(time_ + dt, steps_ + 1) || (steps_ + 1) % 1000 == 0 || energy_every_step_);
     inter_.add_forces(x, v, dt, f_mod_.data());
+
+    // Rigid groups first: one velocity per group and component from the resultant of its nodes' forces,
+    // v^{n+1/2} = v^{n-1/2} + dt (F + F_d) / M with F = sum of the nodal forces, M = sum of the nodal masses and the
+    // [C79] local damping F_d = -alpha |F| sign(v) on the resultant. The node loop then treats those DOFs as
+    // prescribed: their reactions redistribute the forces inside the group and sum to F_d, which the loop books as
+    // work; rigid_damp_ moves that share from work to damping after the loop. Serial, in support and node order.
+    double rigid_damp = 0, rigid_damp_half = 0;  // J: dt F_d v_bar and dt/2 F_d v^{n+1/2}
+    for (std::size_t id = 0; id < supports_.size(); ++id) {
+        ActiveSupport& s = supports_[id];
+        if (s.mode != DofMode::rigid) continue;
+        const int c = s.comp;
+        double F = 0, M = 0;
+        for (int k : s.nodes) {
+            const int d = 2 * k + c;
+            if (dof_owner_[d] != static_cast<int>(id)) continue;
+            double f = f_mod_[d] + f_ext_[d] + model_.grav_mass[k] * applied_gravity_[c];
+            for (int j = model_.inc_ptr[k]; j < model_.inc_ptr[k + 1]; ++j) f += tf[2 * static_cast<std::size_t>(model_.inc_idx[j]) + c];
+            F += f, M += model_.mass[k];
+        }
+        if (!(M > 0)) continue;
+        const double vold = s.v_common;
+        const double Fd = vold > 0 ? -alpha_ * std::abs(F) : vold < 0 ? alpha_ * std::abs(F) : 0.0;
+        const double vnew = vold + dt * (F + Fd) / M;
+        rigid_damp += dt * Fd * 0.5 * (vold + vnew);
+        rigid_damp_half += 0.5 * dt * Fd * vnew;
+        s.v_common = vnew;
+        for (int k : s.nodes)
+            if (dof_owner_[2 * k + c] == static_cast<int>(id)) dof_vel_[2 * k + c] = vnew;
+    }
 
     // 3. Node loop.
     const int nnb = (nn + kBlock - 1) / kBlock;
@@ -494,6 +529,8 @@ void Simulation::step() {
                  sci(model_.X[2 * k + 1], 6) + ") m");
         }
     }
+    dW -= rigid_damp, dD -= rigid_damp;
+    work_half_ -= rigid_damp_half, damp_half_ -= rigid_damp_half;
     W_ext_ += dW;
     D_damp_ += dD;
     D_visc_ += dt * visc_power;

@@ -89,6 +89,7 @@ private:
         int comp = 0;
         DofMode mode = DofMode::fixed;
         double v_start = 0, v_target = 0, ramp = 0, t0 = 0;
+        double v_common = 0;         // rigid: the group's common velocity (m/s) at the last half step
         std::vector<double> pt, pu;  // protocol
         std::string group;
     };
