@@ -23,8 +23,10 @@ W_BEAM = RHO * G * L * BEAM_H * T       # N
 # Loading rate 0.01 m/s for both variants: a single dry block pushed over its base at 0.1 m/s shows a mean force 38 %
 # above mu N with +-50 % oscillations, at 0.01 m/s 4.7 % above (RESULTS.md), and the [K25] walls at 0.1 m/s carry
 # 1.7-2.1 times the measured loads. At 0.01 m/s one [K25] wall is ~600,000 steps (about 40 min on 2 cores).
-K25 = dict(mesh=0.025, penalty=1.0e10, rate=0.01, until=0.008, damping=0.1, mass_scale=100)
-DEC = dict(mesh=0.05, rate=0.01, until=0.008, damping=0.8)
+K25 = dict(mesh=0.025, penalty=1.0e10, rate=0.01, until=0.020, damping=0.1, mass_scale=100,
+           # precompression: ramps and bound long enough for the mass-scaled wall (vertical period ~0.1 s) to come to rest
+           pre_ramp=0.05, pre_max=0.4, snapshots=0.05)
+DEC = dict(mesh=0.05, rate=0.01, until=0.008, damping=0.8, pre_ramp=0.01, pre_max=0.02, snapshots=0.01)
 
 
 def rows():
@@ -113,7 +115,7 @@ component = "y"
 {numerics}
 [output]
 history_interval = 0.0005  # s
-snapshot_interval = 0.01   # s
+snapshot_interval = {snapshots}   # s
 curve = {{ x = "u_beam", y = "H" }}
 
 [reference]
@@ -126,10 +128,10 @@ source = "Lourenco et al. 2005, average of the tests at N = {N} kN"
 [[stages]]
 name = "precompression"  # gravity and N - self-weight on the beam, ramped, then damped to rest
 equilibrium = 1e-3
-max_duration = 0.02      # s
+max_duration = {pre_max}      # s
 local_damping = 0.8
 gravity = [0.0, -9.81]   # m/s^2
-gravity_ramp = 0.01      # s
+gravity_ramp = {pre_ramp}      # s
   [[stages.supports]]
   group = "base_bottom"
   fix = "xy"
@@ -139,7 +141,7 @@ gravity_ramp = 0.01      # s
   [[stages.loads]]
   group = "beam_top"
   force = [0.0, {F_top}]  # N = -(N - wall and beam self-weight {W:.1f} N)
-  ramp = 0.01            # s
+  ramp = {pre_ramp}            # s
 
 [[stages]]
 name = "shear"           # horizontal displacement at constant rate, N held
@@ -225,7 +227,7 @@ mass_scale = {s['mass_scale']}          # inertial mass multiplier, see the head
 """
     W = W_WALL + W_BEAM
     text += COMMON_TAIL.format(interfaces=interfaces, numerics=numerics, exp_N=float(r["experiment_kN"]) * 1e3,
-                               N=r["N_kN"], F_top=f"{-(N - W):.1f}", W=W, until=s["until"], damping=s["damping"],
+                               N=r["N_kN"], F_top=f"{-(N - W):.1f}", W=W, until=s["until"], damping=s["damping"], pre_ramp=s["pre_ramp"], pre_max=s["pre_max"], snapshots=s["snapshots"],
                                rate=s["rate"])
     return fname, text
 
@@ -270,7 +272,7 @@ shear_stiffness = {ks:.4g}    # Pa/m
 """
     W = W_WALL + W_BEAM
     text += COMMON_TAIL.format(interfaces=interfaces, numerics="", exp_N=float(r["experiment_kN"]) * 1e3,
-                               N=r["N_kN"], F_top=f"{-(N - W):.1f}", W=W, until=s["until"], damping=s["damping"],
+                               N=r["N_kN"], F_top=f"{-(N - W):.1f}", W=W, until=s["until"], damping=s["damping"], pre_ramp=s["pre_ramp"], pre_max=s["pre_max"], snapshots=s["snapshots"],
                                rate=s["rate"])
     return fname, text
 
