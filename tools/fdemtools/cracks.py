@@ -82,8 +82,12 @@ def read_cracks(run_dir: str):
         raise ToolError(f"{path}: data row {i + 1}: mode '{mode[i]}' does not go with class '{raw}' "
                         f"(expected {EXPECTED_MODES}); {len(wrong)} such row(s)")
     cd = t.numeric(names["control_displacement"]) if names["control_displacement"] else np.full(n, np.nan)
-    return {"time": t.numeric(names["time"]), "x": t.numeric(names["x"]), "y": t.numeric(names["y"]), "class": cls,
-            "mode": mode, "control_displacement": cd}
+    out = {"time": t.numeric(names["time"]), "x": t.numeric(names["x"]), "y": t.numeric(names["y"]), "class": cls,
+           "mode": mode, "control_displacement": cd}
+    # the engine also writes the reference midpoint: an exact key to the element's mesh edge
+    if t.has("x_ref_m") and t.has("y_ref_m"):
+        out["x_ref"], out["y_ref"] = t.numeric("x_ref_m"), t.numeric("y_ref_m")
+    return out
 
 
 def snapshots(run_dir: str) -> list:
@@ -222,8 +226,15 @@ def draw(run_dir: str, prefix: str, time: float | None = None, displacement: flo
         cls, mode = cr["class"][keep], cr["mode"][keep]
         segs = None
         matched = None
-        if geo is not None:
+        if geo is not None and "x_ref" in cr and np.isfinite(cr["x_ref"][keep]).all():
+            # Reference midpoints are exact (both copies of a split edge share them); the current midpoint can lie
+            # nearer another edge once the blocks have moved by more than an element.
+            from scipy.spatial import cKDTree
+            ref = np.column_stack((cr["x_ref"][keep], cr["y_ref"][keep]))
+            idx = cKDTree(geo["edge_mid_ref"]).query(ref)[1]
+        elif geo is not None:
             idx = match_edges(run_dir, geo, pts, cr["time"][keep])
+        if geo is not None:
             ends = geo["edges"][idx]
             segs = geo["x"][ends]  # (k, 2, 2) deformed
             matched = geo["edge_mid_ref"][idx]
