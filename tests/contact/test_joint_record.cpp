@@ -27,14 +27,15 @@
 
 namespace {
 
-std::string wall_case(const std::string& extra = "") {
+// A dry wall of two courses of 0.2 x 0.1 m units in stack bond on a base slab; `length` (m) sets the units per course.
+std::string wall_case(const std::string& length, const std::string& extra = "") {
     return R"(
 [case]
 name = "joint_record"
 thickness = 0.1
 [geometry]
 type = "wall"
-length = 0.4
+length = )" + length + R"(
 courses = 2
 unit_length = 0.2
 unit_height = 0.1
@@ -73,7 +74,7 @@ struct Scene {
 
 Scene make_scene(const std::string& name) {
     const auto dir = testing::tmp_dir(name);
-    const std::string path = testing::write_text(dir / "case.toml", wall_case() + R"(
+    const std::string path = testing::write_text(dir / "case.toml", wall_case("0.4") + R"(
 [[stages]]
 name = "s"
 duration = 0.001
@@ -231,40 +232,7 @@ TEST_CASE("joint record through fdem run: pushing the upper unit of a two-unit s
           "joint only, and summary.json counts them",
           "[engine][regression][joint_record]") {
     const auto dir = testing::tmp_dir("joint_record_run");
-    const std::string text = R"(
-[case]
-name = "push"
-thickness = 0.1
-[geometry]
-type = "wall"
-length = 0.2
-courses = 2
-unit_length = 0.2
-unit_height = 0.1
-bond = "stack"
-joint = "dry"
-base = "slab"
-base_height = 0.1
-base_overhang = 0.1
-mesh_size = 0.05
-mesh_size_base = 0.05
-[materials.m]
-E = 1.0e9
-nu = 0.2
-density = 2000.0
-[regions]
-units = "m"
-base = "m"
-[[interfaces]]
-regions = ["units", "units"]
-kind = "dry"
-friction = 30.0
-normal_stiffness = 5e9
-[[interfaces]]
-regions = ["units", "base"]
-kind = "dry"
-friction = 30.0
-normal_stiffness = 5e9
+    const std::string text = wall_case("0.2", R"(
 [groups.pusher]
 box = [-0.001, 0.149, 0.201, 0.201]
 [output]
@@ -284,7 +252,7 @@ local_damping = 0.8
   [[stages.supports]]
   group = "pusher"
   vx = 0.01
-)";
+)");
     const std::string path = testing::write_text(dir / "case.toml", text);
     const auto r = testing::run_fdem("run \"" + path + "\" --quiet --threads 1 --out \"" + (dir / "out").string() + "\"", dir);
     INFO(r.err);
