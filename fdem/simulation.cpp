@@ -539,7 +539,7 @@ void Simulation::step() {
     tilt_deg_ += tilt_rate_ * dt;
     ++steps_;
     if (inter_.has_joints()) {
-        const int broke = inter_.after_step(time_, control_monitor_ >= 0 ? monitor_value(control_monitor_) : 0.0, model_.x.data());
+        const int broke = inter_.after_step(time_, control_displacement(), model_.x.data());
         broken_total_ += broke;
     }
 
@@ -547,8 +547,7 @@ void Simulation::step() {
     if (!opt_.out_dir.empty()) {
         if (history_due(time_, steps_)) {
             const double hi = history_interval();
-            if (inter_.has_dry_joints())
-                inter_.record_dry_joints(time_, control_monitor_ >= 0 ? monitor_value(control_monitor_) : 0.0, model_.x.data());
+            record_dry_joints();
             write_history_row();
             if (hi > 0) next_history_ += hi * std::max(1.0, std::floor((time_ - next_history_) / hi) + 1);
         }
@@ -799,6 +798,13 @@ double Simulation::snapshot_interval() const {
     return st.snapshot_interval ? *st.snapshot_interval : spec_.snapshot_interval;
 }
 
+double Simulation::control_displacement() const { return control_monitor_ >= 0 ? monitor_value(control_monitor_) : 0.0; }
+
+// The dry joint record is checked where a history row is written (and at stage ends).
+void Simulation::record_dry_joints() {
+    if (inter_.has_dry_joints()) inter_.record_dry_joints(time_, control_displacement(), model_.x.data());
+}
+
 // Whether a history row is written after the step that ends at time t as step number `step` (one rule for the
 // write itself and for asking the contact module to evaluate its energy on that step).
 bool Simulation::history_due(double t, long step) const {
@@ -838,8 +844,7 @@ void Simulation::run() {
         log("stage " + std::to_string(s + 1) + " '" + r.name + "' ended by " + how + " at t = " + sci(r.time) + " s after " +
             std::to_string(r.steps) + " steps");
         if (!opt_.out_dir.empty()) {
-            if (inter_.has_dry_joints())
-                inter_.record_dry_joints(time_, control_monitor_ >= 0 ? monitor_value(control_monitor_) : 0.0, model_.x.data());
+            record_dry_joints();
             if (history_.empty() || history_.compare(history_.size() - 1, 1, "\n") == 0) write_history_row();
             write_snapshot();
             flush_files();

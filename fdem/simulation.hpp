@@ -100,6 +100,8 @@ private:
     void fail(const std::string& what);
     void check_energy(const Energies& e);
     void write_history_row();
+    double control_displacement() const;  // m (or the control monitor's unit): the curve's x monitor, 0 without one
+    void record_dry_joints();
     void flush_files();
     double history_interval() const;   // s, of the current stage (0: every history_every_steps_ steps)
     double snapshot_interval() const;  // s, of the current stage (0: only at stage ends)
