@@ -19,6 +19,21 @@ W_FACTOR = 9.81 * 1800.0 * 0.99 * 0.992 * 0.1   # N, self-weight of the wall (de
 CYCLIC_AMPLITUDES = [0.0005, 0.001, 0.0015, 0.002, 0.003, 0.004, 0.005, 0.006]  # m, two cycles each
 
 
+def mortar_joint(regions, comment, ft, gii):
+    """One bonded [[interfaces]] block with the unit-mortar properties (the same for all three mortar joints)."""
+    return f"""[[interfaces]]           # {comment}
+regions = {regions}
+kind = "bonded"
+tensile_strength = {ft:g}    # Pa
+cohesion = {1.4 * ft:g}          # Pa
+friction = 35.0          # deg
+GI = 12.0                # J/m^2
+GII = {gii:g}                # J/m^2
+normal_stiffness = 8.2e10  # Pa/m
+shear_stiffness = 3.6e10   # Pa/m
+"""
+
+
 def case(r, cyclic=False):
     stem = r["cases"].split()[1 if cyclic else 0]
     N = float(r["N_kN"]) * 1e3
@@ -26,6 +41,10 @@ def case(r, cyclic=False):
     ft = float(r["f_t_interface_MPa"]) * 1e6
     gii = float(r["GII_interface_N_per_m"])
     beam_w = 9.81 * 7850.0 * 0.99 * 0.1 * 0.1
+    mortar_joints = "\n".join(mortar_joint(reg, c, ft, gii) for reg, c in (
+        ('["units", "units"]', "unit-mortar joints"),
+        ('["units", "base"]', "bottom bed joint (mortar onto the clamped course)"),
+        ('["units", "beam"]', "top bed joint (mortar onto the clamped course)")))
     f_top = -(N - beam_w)
     if cyclic:
         shear = f"""[[stages]]
@@ -114,39 +133,7 @@ units = "brick"
 beam = "steel"
 base = "steel"
 
-[[interfaces]]           # unit-mortar joints
-regions = ["units", "units"]
-kind = "bonded"
-tensile_strength = {ft:g}    # Pa
-cohesion = {1.4 * ft:g}          # Pa
-friction = 35.0          # deg
-GI = 12.0                # J/m^2
-GII = {gii:g}                # J/m^2
-normal_stiffness = 8.2e10  # Pa/m
-shear_stiffness = 3.6e10   # Pa/m
-
-[[interfaces]]           # bottom bed joint (mortar onto the clamped course)
-regions = ["units", "base"]
-kind = "bonded"
-tensile_strength = {ft:g}    # Pa
-cohesion = {1.4 * ft:g}          # Pa
-friction = 35.0          # deg
-GI = 12.0                # J/m^2
-GII = {gii:g}                # J/m^2
-normal_stiffness = 8.2e10  # Pa/m
-shear_stiffness = 3.6e10   # Pa/m
-
-[[interfaces]]           # top bed joint (mortar onto the clamped course)
-regions = ["units", "beam"]
-kind = "bonded"
-tensile_strength = {ft:g}    # Pa
-cohesion = {1.4 * ft:g}          # Pa
-friction = 35.0          # deg
-GI = 12.0                # J/m^2
-GII = {gii:g}                # J/m^2
-normal_stiffness = 8.2e10  # Pa/m
-shear_stiffness = 3.6e10   # Pa/m
-
+{mortar_joints}
 [[monitors]]
 name = "u_top"           # m
 type = "displacement"
