@@ -96,7 +96,8 @@ struct SupportSpec {
     std::string group;
     std::array<DofMode, 2> mode{DofMode::inherit, DofMode::inherit};
     std::array<double, 2> velocity{0, 0};  // m/s
-    double ramp = 0;                       // s, smooth (1 - cos) ramp-up of a prescribed velocity
+    double ramp = 0;                       // s, smooth (1 - cos) ramp-up of a prescribed velocity; for a protocol
+                                           // or cyclic support: the corner-smoothing time (see Simulation)
     // protocol for one component: times (s, from the stage start) and displacements (m, relative to the stage start)
     std::vector<double> protocol_t, protocol_u;
     int line = 0;

@@ -184,6 +184,27 @@ double Simulation::protocol_displacement(const ActiveSupport& s, double tau) con
     return s.pu[i - 1] + w * (s.pu[i] - s.pu[i - 1]);
 }
 
+double Simulation::protocol_integral(const ActiveSupport& s, double tau) const {
+    // INT_{pt[0]}^{tau} u dt of the piecewise-linear protocol, u held at its end values outside [pt[0], pt[n-1]].
+    if (tau <= s.pt.front()) return (tau - s.pt.front()) * s.pu.front();
+    if (tau >= s.pt.back()) return s.pI.back() + (tau - s.pt.back()) * s.pu.back();
+    const auto it = std::upper_bound(s.pt.begin(), s.pt.end(), tau);
+    const std::size_t i = static_cast<std::size_t>(it - s.pt.begin());
+    return s.pI[i - 1] + 0.5 * (tau - s.pt[i - 1]) * (s.pu[i - 1] + protocol_displacement(s, tau));
+}
+
+double Simulation::protocol_position(const ActiveSupport& s, double tau) const {
+    // Corner smoothing: with ramp T > 0 the driven position is the protocol averaged over the trailing window
+    // [tau - T, tau], u_T(tau) = (I(tau) - I(tau - T)) / T. Its velocity (u(tau) - u(tau - T)) / T is continuous:
+    // it starts from 0 at the stage start and changes linearly over T at every corner (largest acceleration
+    // |dv| / T), instead of jumping in one step (a reversal of v then asks the driven nodes for a force
+    // m 2 v / dt, which the reaction monitor reports and which hits the specimen like an impact). The price: the
+    // motion lags the protocol by T / 2 and each corner is cut by |dv| T / 8 (an amplitude a reached at rate v
+    // and reversed: a - v T / 4).
+    if (!(s.ramp > 0)) return protocol_displacement(s, tau);
+    return (protocol_integral(s, tau) - protocol_integral(s, tau - s.ramp)) / s.ramp;
+}
+
 void Simulation::begin_stage(int s) {
     const StageSpec& st = spec_.stages[s];
     stage_ = s;
@@ -223,7 +244,12 @@ void Simulation::begin_stage(int s) {
                 a.v_target = sp.velocity[c];
                 stage_ramp_end_ = std::max(stage_ramp_end_, time_ + sp.ramp);
             }
-            if (a.mode == DofMode::protocol) a.pt = sp.protocol_t, a.pu = sp.protocol_u;
+            if (a.mode == DofMode::protocol) {
+                a.pt = sp.protocol_t, a.pu = sp.protocol_u;
+                a.pI.assign(a.pt.size(), 0.0);
+                for (std::size_t i = 1; i < a.pt.size(); ++i)
+                    a.pI[i] = a.pI[i - 1] + 0.5 * (a.pt[i] - a.pt[i - 1]) * (a.pu[i] + a.pu[i - 1]);
+            }
             if (a.mode == DofMode::rigid) {
                 // Starts from the group's momentum: the mass-weighted mean velocity.
                 double p = 0, m = 0;
@@ -372,8 +398,9 @@ void Simulation::apply_time_dependent(double t) {
             const double tau = th - s.t0;
             v = s.ramp > 0 && tau < s.ramp ? s.v_start + (s.v_target - s.v_start) * 0.5 * (1 - std::cos(kPi * tau / s.ramp)) : s.v_target;
         } else {
-            // Displacement protocol: the velocity that lands exactly on u(t + dt) from u(t).
-            v = (protocol_displacement(s, t + dt_ - s.t0) - protocol_displacement(s, t - s.t0)) / dt_;
+            // Displacement protocol: the velocity that lands exactly on u(t + dt) from u(t) (corner-smoothed
+            // when the support has a ramp).
+            v = (protocol_position(s, t + dt_ - s.t0) - protocol_position(s, t - s.t0)) / dt_;
         }
         for (int k : s.nodes) {
             const int d = 2 * k + s.comp;

@@ -90,13 +90,16 @@ private:
         DofMode mode = DofMode::fixed;
         double v_start = 0, v_target = 0, ramp = 0, t0 = 0;
         double v_common = 0;         // rigid: the group's common velocity (m/s) at the last half step
-        std::vector<double> pt, pu;  // protocol
+        std::vector<double> pt, pu;  // protocol: times (s, from t0) and displacements (m)
+        std::vector<double> pI;      // protocol: INT_pt[0]^pt[i] u dt at each knot (m s), for the corner smoothing
         std::string group;
     };
 
     void compute_dt();
     void apply_time_dependent(double t);
     double protocol_displacement(const ActiveSupport& s, double tau) const;
+    double protocol_integral(const ActiveSupport& s, double tau) const;
+    double protocol_position(const ActiveSupport& s, double tau) const;
     void fail(const std::string& what);
     void check_energy(const Energies& e);
     void write_history_row();
