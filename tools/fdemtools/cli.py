@@ -146,9 +146,12 @@ def cmd_hysteresis(args):
     rows = []
     for cy in res["cycles"]:
         rows.append([cy["cycle"], int(cy["complete"]), cy["d_plus"] / fx, cy["P_plus"] / fy, cy["d_minus"] / fx,
-                     cy["P_minus"] / fy, cy["k_i"] * fx / fy, cy["k_d"], cy["W_i"], cy["E_i"], cy["E_d"]])
+                     cy["P_minus"] / fy, cy["k_i"] * fx / fy, cy["k_d"], cy["W_i"], cy["E_i"], cy["E_d"],
+                     cy["d_max"] / fx, cy["P_at_d_max"] / fy, cy["d_min"] / fx, cy["P_at_d_min"] / fy,
+                     cy["k_ext"] * fx / fy])
     header = ["cycle", "complete", f"d_plus_{xu}", f"P_plus_{yu}", f"d_minus_{xu}", f"P_minus_{yu}",
-              f"k_i_{yu}_per_{xu}", "k_d", "W_i_J", "E_i_J", "E_d"]
+              f"k_i_{yu}_per_{xu}", "k_d", "W_i_J", "E_i_J", "E_d", f"d_max_{xu}", f"P_at_d_max_{yu}",
+              f"d_min_{xu}", f"P_at_d_min_{yu}", f"k_ext_{yu}_per_{xu}"]
     report = {"source": c.source, "units": {"displacement": xu, "load": yu, "stiffness": f"{yu}/{xu}", "energy": "J"},
               "k_el": res["k_el"] * fx / fy, "k_el_rule": res["k_el_rule"], "E_h_J": res["E_h"],
               "E_h_rule": res["E_h_rule"], "E_total_J": res["E_total"], "n_cycles": res["n_cycles"],
@@ -160,8 +163,8 @@ def cmd_hysteresis(args):
     print(f"{c.label}: {res['n_cycles']} cycles, k_el = {report['k_el']:.5g} {yu}/{xu}, "
           f"E_total = {res['E_total']:.5g} J")
     for r in rows:
-        print("  cycle {:3d}{}: P+ {:9.4g} P- {:9.4g} {}  k_i {:9.4g}  k_d {:6.3f}  E_i {:9.4g} J  E_d {:6.3f}".format(
-            r[0], " " if r[1] else "*", r[3], r[5], yu, r[6], r[7], r[9], r[10]))
+        print("  cycle {:3d}{}: P+ {:9.4g} P- {:9.4g} {}  k_i {:9.4g}  k_d {:6.3f}  k_ext {:9.4g}  E_i {:9.4g} J  "
+              "E_d {:6.3f}".format(r[0], " " if r[1] else "*", r[3], r[5], yu, r[6], r[7], r[15], r[9], r[10]))
     print("wrote " + ", ".join(files))
 
 

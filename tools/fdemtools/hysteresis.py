@@ -6,6 +6,9 @@ around zero keeps noise at zero displacement from creating cycles. A last cycle 
 from the negative side is marked incomplete.
 Per cycle i: P+ = max load, d+ its displacement; P- = min load, d- its displacement;
   secant stiffness k_i = (|P+| + |P-|) / (|d+| + |d-|),  degradation k_d = k_i / k_el  (k_el: given, else k_1);
+  also, at the cycle's displacement extremes: P(d_max), P(d_min) and k_ext = (|P(d_max)| + |P(d_min)|) / (d_max - d_min).
+  For loops with a flat (sliding, perfectly plastic) branch the largest load is reached anywhere along the branch,
+  even on the other side of zero, and k_i loses its meaning; k_ext stays the secant through the loop's tips.
   energy of the cycle  W_i = int_cycle P dd  (for a closed loop, the area it encloses, dissipated);
   cumulative energy    E_i = sum_{j<=i} W_j;  normalised E_d = E_i / E_h  (E_h: given, else the final E_i).
 Discrete form: the record is a polyline, W_i = sum over its segments of (P_k + P_{k+1})/2 (d_{k+1} - d_k), exact for
@@ -69,6 +72,9 @@ def analyse(d, p, k_el: float | None = None, e_h: float | None = None, deadband:
         has_both = cp[ip] > 0 and cp[im] < 0 and cd.max() > 0 and cd.min() < 0
         den = abs(cd[ip]) + abs(cd[im])
         k = (abs(cp[ip]) + abs(cp[im])) / den if has_both and den > 0 else float("nan")
+        jx, jn = int(np.argmax(cd)), int(np.argmin(cd))
+        span = float(cd[jx] - cd[jn])
+        k_ext = (abs(cp[jx]) + abs(cp[jn])) / span if cd[jx] > 0 and cd[jn] < 0 else float("nan")
         cycles.append({
             "cycle": len(cycles) + 1,
             "start": s, "end": e, "complete": bool(complete),
@@ -76,6 +82,7 @@ def analyse(d, p, k_el: float | None = None, e_h: float | None = None, deadband:
             "d_minus": float(cd[im]), "P_minus": float(cp[im]),
             "d_max": float(cd.max()), "d_min": float(cd.min()),
             "k_i": float(k), "W_i": w, "E_i": e_cum,
+            "P_at_d_max": float(cp[jx]), "P_at_d_min": float(cp[jn]), "k_ext": float(k_ext),
         })
     finite_k = [c["k_i"] for c in cycles if np.isfinite(c["k_i"])]
     if not finite_k:

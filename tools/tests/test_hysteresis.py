@@ -42,6 +42,35 @@ def test_known_loops():
         assert c["E_d"] == pytest.approx(ec / e_cum[-1], rel=1e-10)
 
 
+def test_flat_loops_secant_at_the_tips():
+    """Steady elastic-perfectly-plastic loops (stiffness K, yield load F, amplitude D >= 2 F / K), each cycle from
+    d = 0 up to +D on the flat branch P = F, down to -D (P = max(F - K (D - d), -F)), back up to 0
+    (P = min(-F + K (d + D), F)). The largest load F is reached at d = 0, the start of the cycle, so k_i is not the
+    loop's secant; the loads at the tips are +-F and k_ext = F / D exactly."""
+    F = 2e3
+    d_all, p_all = [], []
+    amps = (2e-3, 2e-3, 4e-3, 4e-3)
+    for D in amps:
+        up0 = np.linspace(0, D, 201)
+        down = np.linspace(D, -D, 801)[1:]
+        up1 = np.linspace(-D, 0, 401)[1:]
+        d_all += [up0 if not d_all else up0[1:], down, up1]
+        p_all += [np.full_like(up0 if not p_all else up0[1:], F), np.maximum(F - K * (D - down), -F),
+                  np.minimum(-F + K * (up1 + D), F)]
+    d = np.concatenate(d_all)
+    p = np.concatenate(p_all)
+    r = hysteresis.analyse(d, p)
+    assert r["n_cycles"] == len(amps)
+    for c, D in zip(r["cycles"], amps):
+        assert c["complete"]
+        assert c["d_max"] == pytest.approx(D, rel=1e-12)
+        assert c["P_at_d_max"] == pytest.approx(F, rel=1e-12)
+        assert c["P_at_d_min"] == pytest.approx(-F, rel=1e-12)
+        assert c["k_ext"] == pytest.approx(F / D, rel=1e-12)
+        assert c["P_plus"] == pytest.approx(F, rel=1e-12)
+        assert c["d_plus"] < 0.01 * D  # the largest load sits at the start of the flat branch, not at the tip
+
+
 def test_given_references_and_trailing_half_cycle():
     d, p = loops(AMPS, HS, K)
     # a last excursion to +D without return: an incomplete cycle with no negative peak
