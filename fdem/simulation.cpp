@@ -190,7 +190,9 @@ double Simulation::protocol_integral(const ActiveSupport& s, double tau) const {
     if (tau >= s.pt.back()) return s.pI.back() + (tau - s.pt.back()) * s.pu.back();
     const auto it = std::upper_bound(s.pt.begin(), s.pt.end(), tau);
     const std::size_t i = static_cast<std::size_t>(it - s.pt.begin());
-    return s.pI[i - 1] + 0.5 * (tau - s.pt[i - 1]) * (s.pu[i - 1] + protocol_displacement(s, tau));
+    const double w = (tau - s.pt[i - 1]) / (s.pt[i] - s.pt[i - 1]);
+    const double u = s.pu[i - 1] + w * (s.pu[i] - s.pu[i - 1]);  // protocol_displacement(s, tau), same segment
+    return s.pI[i - 1] + 0.5 * (tau - s.pt[i - 1]) * (s.pu[i - 1] + u);
 }
 
 double Simulation::protocol_position(const ActiveSupport& s, double tau) const {
