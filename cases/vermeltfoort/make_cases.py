@@ -16,8 +16,8 @@ MASS_SCALE = 10    # inertial mass x 10 (density scaling; gravity keeps the phys
 PENALTY = 5.0e10   # Pa, brick joint penalty p_j (assumed; 3 x E)
 BEAM_E = 2.0e10    # Pa, steel beams modelled softer than steel (210 GPa) to keep the time step; still 1.2 x brick
 # The top beam in the shear stage. "held" (the cases without suffix): no rotation and no vertical movement after the
-# precompression, so the vertical force grows as the wall dilates; the reading of the test in Lourenco & Rots (1997)
-# and Lourenco's thesis (1996), whose models reach the measured peaks. "free" (suffix _constN): no rotation, free to
+# precompression, so the vertical force grows as the wall dilates; our reading of the test in Lourenco & Rots (1997)
+# and Lourenco's thesis (1996), whose interface models reach the measured peaks (to be confirmed by the steering). "free" (suffix _constN): no rotation, free to
 # move vertically, N constant, as CASES.md §B states; then rigid rocking bounds H by N L / h (29.6 kN at 0.30 MPa,
 # below the measured 50 kN), see RESULTS.md.
 TOP_SUFFIX = {"held": "", "free": "_constN"}
@@ -27,8 +27,8 @@ TOP_COMMENT = {"held": "driven horizontally, held vertically: no rotation, no up
 TOP_HEADER = {
     "held": """In the shear stage the whole beam is driven horizontally (vx) and held vertically
 #   (fix = "y"): it cannot rotate nor move up or down, so the vertical force grows when the wall dilates (monitor V_base).
-#   This follows Lourenco & Rots (1997) / Lourenco (1996), who modelled these tests with the top boundary kept
-#   horizontal and its vertical movement precluded. CASES.md §B says "free to move vertically" (N constant): that
+#   This follows Lourenco & Rots (1997) / Lourenco (1996), who (as we read them; to be confirmed) modelled these
+#   tests with the top boundary kept horizontal and its vertical movement precluded. CASES.md §B says "free to move vertically" (N constant): that
 #   reading is the _constN variant; with N constant, rigid rocking bounds H by N L / h, which at 0.30 MPa (29.6 kN)
 #   is far below the measured 50 kN (cases/vermeltfoort/RESULTS.md).""",
     "free": """Variant _constN (CASES.md §B as written): in the shear stage the whole beam is driven
