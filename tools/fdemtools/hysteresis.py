@@ -67,20 +67,19 @@ def analyse(d, p, k_el: float | None = None, e_h: float | None = None, deadband:
     for s, e, complete in split_cycles(d, deadband):
         cd, cp = d[s:e + 1], p[s:e + 1]
         ip, im = int(np.argmax(cp)), int(np.argmin(cp))
+        jx, jn = int(np.argmax(cd)), int(np.argmin(cd))  # the cycle's displacement extremes (its tips)
         w = float(np.sum(0.5 * (cp[1:] + cp[:-1]) * np.diff(cd)))
         e_cum += w
-        has_both = cp[ip] > 0 and cp[im] < 0 and cd.max() > 0 and cd.min() < 0
+        has_both = cp[ip] > 0 and cp[im] < 0 and cd[jx] > 0 and cd[jn] < 0
         den = abs(cd[ip]) + abs(cd[im])
         k = (abs(cp[ip]) + abs(cp[im])) / den if has_both and den > 0 else float("nan")
-        jx, jn = int(np.argmax(cd)), int(np.argmin(cd))
-        span = float(cd[jx] - cd[jn])
-        k_ext = (abs(cp[jx]) + abs(cp[jn])) / span if cd[jx] > 0 and cd[jn] < 0 else float("nan")
+        k_ext = (abs(cp[jx]) + abs(cp[jn])) / (cd[jx] - cd[jn]) if cd[jx] > 0 and cd[jn] < 0 else float("nan")
         cycles.append({
             "cycle": len(cycles) + 1,
             "start": s, "end": e, "complete": bool(complete),
             "d_plus": float(cd[ip]), "P_plus": float(cp[ip]),
             "d_minus": float(cd[im]), "P_minus": float(cp[im]),
-            "d_max": float(cd.max()), "d_min": float(cd.min()),
+            "d_max": float(cd[jx]), "d_min": float(cd[jn]),
             "k_i": float(k), "W_i": w, "E_i": e_cum,
             "P_at_d_max": float(cp[jx]), "P_at_d_min": float(cp[jn]), "k_ext": float(k_ext),
         })
