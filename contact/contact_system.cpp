@@ -275,7 +275,7 @@ void ContactSystem::detect(const double* x) {
     pair_law_.resize(np);
     for (int p = 0; p < np; ++p) pair_law_[p] = law_of(pair_a_[p], pair_b_[p]);
     pair_f_.resize(12 * static_cast<size_t>(np));
-    pair_e_.resize(3 * static_cast<size_t>(np));
+    pair_e_.resize(4 * static_cast<size_t>(np));
     pair_on_.resize(np);
     box_.resize(4 * static_cast<size_t>(n_tri_));
     dirty_ = false;
@@ -339,6 +339,11 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f)
                       : 3.0 * L.tangential * (1.0 / smallest_altitude(xa) + 1.0 / smallest_altitude(xb));
         prm.mu = L.mu;
         prm.dt = dt;
+        if (beta_ > 0.0) {
+            prm.beta = beta_;
+            prm.k_n_area = L.normal_is_stiffness ? L.normal
+                                                 : 3.0 * L.normal * (1.0 / smallest_altitude(xa) + 1.0 / smallest_altitude(xb));
+        }
         PairResult r;
         if (pair_contact(xa, xb, va, vb, prm, want_energy, &hist_[6 * static_cast<size_t>(p)], r)) {
             pair_on_[p] = 1;
@@ -347,15 +352,16 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f)
                 pf[s] = r.fa[s];
                 pf[6 + s] = r.fb[s];
             }
-            double* pe = &pair_e_[3 * static_cast<size_t>(p)];
+            double* pe = &pair_e_[4 * static_cast<size_t>(p)];
             pe[0] = r.energy_normal;
             pe[1] = r.energy_tangential;
             pe[2] = r.dissipation;
+            pe[3] = r.damping;
         }
     }
     // Serial scatter and sums in pair order: the same bits for any thread count.
     const double t1 = omp_get_wtime();
-    double en = 0.0, et = 0.0, ed = 0.0;
+    double en = 0.0, et = 0.0, ed = 0.0, ec = 0.0;
     int active = 0;
     for (int p = 0; p < np; ++p) {
         if (!pair_on_[p]) continue;
@@ -369,15 +375,17 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f)
             f[2 * tb[k]] += pf[6 + 2 * k];
             f[2 * tb[k] + 1] += pf[6 + 2 * k + 1];
         }
-        const double* pe = &pair_e_[3 * static_cast<size_t>(p)];
+        const double* pe = &pair_e_[4 * static_cast<size_t>(p)];
         en += pe[0];
         et += pe[1];
         ed += pe[2];
+        ec += pe[3];
     }
     energy_normal_ = en;
     energy_tangential_ = et;
     energy_current_ = want_energy;
     dissipation_ += ed;
+    damping_ += ec;
     stats_.active_pairs = active;
     stats_.pair_evaluations += np;
     const double t2 = omp_get_wtime();

@@ -75,6 +75,13 @@ public:
     // evaluates all pairs and adds the contact forces (N) to f. dt in s.
     void step(const double* x, const double* v, double dt, double* f);
     void set_compute_energy(bool on) { opt_.compute_energy = on; }
+    // Contact dashpots (PairParams::beta, s; 0 = none, the default): c = beta k on every loaded edge, normal and,
+    // while it sticks, tangential. beta = xi dt_c damps the stiffest contact spring (stable step dt_c = 2 / omega)
+    // at a fraction xi of critical and a mode of frequency omega at xi omega dt_c / 2: the contact chatter of the
+    // explicit step is damped, a mechanism moving at a quasi-static rate is not.
+    void set_dashpot(double beta_s) { beta_ = beta_s; }
+    double dashpot() const { return beta_; }
+    double dashpot_dissipation() const { return damping_; }  // J, cumulative
     // Forces a detection at the next step (e.g. after the engine moved nodes by other means).
     void invalidate() { dirty_ = true; }
 
@@ -126,11 +133,12 @@ private:
     CandidatePairs cand_;
     NbsWorkspace ws_;
     std::vector<double> pair_f_;   // 12 per pair
-    std::vector<double> pair_e_;   // 3 per pair: normal energy, tangential energy, dissipation
+    std::vector<double> pair_e_;   // 4 per pair: normal energy, tangential energy, friction dissipation, dashpot work
     std::vector<char> pair_on_;
     std::vector<double> box_;      // 4 per triangle: xmin, xmax, ymin, ymax (m), capable ones, this step
 
-    double energy_normal_ = 0.0, energy_tangential_ = 0.0, dissipation_ = 0.0;
+    double energy_normal_ = 0.0, energy_tangential_ = 0.0, dissipation_ = 0.0, damping_ = 0.0;
+    double beta_ = 0.0;  // s
     bool energy_current_ = true;
     ContactStats stats_;
 };

@@ -103,35 +103,57 @@ void load_edge(const double* xo, const double* vo, double* fo, const double* vq,
     const double total = I[0] + I[1];
     const double fn = ct * total;  // N
     const double k_t = 0.5 * p.k_s * p.thickness * I[5];  // N/m; each of the two faces carries half the contact
-    if (!(p.mu > 0.0) || !(k_t > 0.0)) {
-        hist = 0.0;
-        return;
-    }
+    const bool friction = p.mu > 0.0 && k_t > 0.0;
+    if (!friction) hist = 0.0;
+    if (!friction && !(p.beta > 0.0)) return;
     const double s = I[1] / total;  // centre of pressure along the edge
     double lq[3];
     for (int k = 0; k < 3; ++k) lq[k] = I[2 + k] / total;
     const double vox = (1.0 - s) * vo[2 * e] + s * vo[2 * e1], voy = (1.0 - s) * vo[2 * e + 1] + s * vo[2 * e1 + 1];
     const double vqx = lq[0] * vq[0] + lq[1] * vq[2] + lq[2] * vq[4];
     const double vqy = lq[0] * vq[1] + lq[1] * vq[3] + lq[2] * vq[5];
-    // [K25] Eq. 4: delta_s += v_rel,t dt; Eq. 5: F_t = min(k_t |delta_s|, mu |F_n|), opposing the slip.
-    const double trial = hist + ((vox - vqx) * tx + (voy - vqy) * ty) * p.dt;
-    double ft = -k_t * trial;
+    const double vrx = vox - vqx, vry = voy - vqy;  // owner relative to other, at the centre of pressure
+    const double vt = vrx * tx + vry * ty;
+    // Forces on the owner at the centre of pressure; the other triangle gets the opposite at the same point.
+    // (f: magnitude along the unit vector (ux, uy).)
+    auto apply = [&](double f, double ux, double uy) {
+        fo[2 * e] += (1.0 - s) * f * ux;
+        fo[2 * e + 1] += (1.0 - s) * f * uy;
+        fo[2 * e1] += s * f * ux;
+        fo[2 * e1 + 1] += s * f * uy;
+        for (int k = 0; k < 3; ++k) {
+            fq[2 * k] -= lq[k] * f * ux;
+            fq[2 * k + 1] -= lq[k] * f * uy;
+        }
+    };
+    bool sticks = false;
+    double ft = 0.0;  // along t_O on the owner (N)
     const double cap = p.mu * fn;
-    double kept = trial;
-    if (std::fabs(ft) > cap) {
-        kept = (trial > 0.0 ? 1.0 : -1.0) * cap / k_t;
-        ft = -k_t * kept;
-        r.dissipation += cap * std::fabs(trial - kept);
+    if (friction) {
+        // [K25] Eq. 4: delta_s += v_rel,t dt; Eq. 5: F_t = min(k_t |delta_s|, mu |F_n|), opposing the slip.
+        const double trial = hist + vt * p.dt;
+        ft = -k_t * trial;
+        double kept = trial;
+        sticks = std::fabs(ft) <= cap;
+        if (!sticks) {
+            kept = (trial > 0.0 ? 1.0 : -1.0) * cap / k_t;
+            ft = -k_t * kept;
+            r.dissipation += cap * std::fabs(trial - kept);
+        }
+        hist = kept;
+        r.energy_tangential += 0.5 * k_t * kept * kept;
+        apply(ft, tx, ty);
     }
-    hist = kept;
-    r.energy_tangential += 0.5 * k_t * kept * kept;
-    fo[2 * e] += (1.0 - s) * ft * tx;
-    fo[2 * e + 1] += (1.0 - s) * ft * ty;
-    fo[2 * e1] += s * ft * tx;
-    fo[2 * e1 + 1] += s * ft * ty;
-    for (int k = 0; k < 3; ++k) {
-        fq[2 * k] -= lq[k] * ft * tx;
-        fq[2 * k + 1] -= lq[k] * ft * ty;
+    if (p.beta > 0.0) {
+        // Dashpots (PairParams::beta). The normal one never pulls the faces together: its pull is at most the
+        // elastic push fn. The tangential one acts only while the edge sticks and keeps the sum within the Coulomb
+        // limit, so a sliding edge carries mu fn whatever the rate.
+        const double vn = vrx * nx + vry * ny;  // > 0: the owner's edge moves into the other triangle
+        const double fdn = std::min(-p.beta * 0.5 * p.k_n_area * p.thickness * I[5] * vn, fn);  // along n_O
+        const double fdt = sticks ? std::clamp(-p.beta * k_t * vt, -cap - ft, cap - ft) : 0.0;  // along t_O
+        r.damping -= (fdn * vn + fdt * vt) * p.dt;
+        apply(fdn, nx, ny);
+        if (fdt != 0.0) apply(fdt, tx, ty);
     }
 }
 
@@ -255,7 +277,7 @@ double pair_energy(const double* xa, const double* xb, const PairParams& p) {
 bool pair_contact(const double* xa, const double* xb, const double* va, const double* vb, const PairParams& p,
                   bool want_energy, double* hist, PairResult& r) {
     for (int i = 0; i < 6; ++i) r.fa[i] = r.fb[i] = 0.0;
-    r.energy_normal = r.energy_tangential = r.dissipation = 0.0;
+    r.energy_normal = r.energy_tangential = r.dissipation = r.damping = 0.0;
     r.active_edges = 0;
     double ga[9], gb[9], a_in_b[9], b_in_a[9];
     area_coordinates(xb, gb);

@@ -36,6 +36,12 @@ struct PairParams {
     double k_s = 0.0;        // tangential stiffness per unit contact area (Pa/m)
     double mu = 0.0;         // friction coefficient (-)
     double dt = 0.0;         // time step (s); the sliding increment is v_rel,t dt
+    // Contact dashpots (stiffness-proportional damping of the contact springs; 0 = none): on each loaded edge a
+    // normal dashpot c_n = beta k_n,edge and, while the edge sticks, a tangential one c_t = beta k_t, acting on the
+    // relative velocity at the edge's centre of pressure. k_n,edge = k_n_area t L / 2 and k_t = k_s t L / 2, L the
+    // length of the edge inside the other triangle (each of the two faces carries half the contact).
+    double beta = 0.0;       // s
+    double k_n_area = 0.0;   // normal pressure per overlap (Pa/m), for the dashpot
 };
 
 struct PairResult {
@@ -44,6 +50,7 @@ struct PairResult {
     double energy_normal = 0.0;      // t INT (c phi_A + c phi_B) dA (J); only when asked for
     double energy_tangential = 0.0;  // sum 0.5 k_t delta_s^2 over the edges (J)
     double dissipation = 0.0;        // friction work dissipated in this step (J)
+    double damping = 0.0;            // work of the dashpots in this step (J, >= 0)
     int active_edges = 0;            // edges carrying a normal force
 };
 

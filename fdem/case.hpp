@@ -136,6 +136,9 @@ struct StageSpec {
     double gravity_ramp = 0;
     double tilt_rate = 0;
     std::optional<double> local_damping;  // alpha of FORMULATION §4, 0 <= alpha < 1
+    // Contact dashpots: fraction xi of critical damping at the stiffest contact spring's frequency (0 <= xi <= 0.5);
+    // kept by later stages that do not set it, like local_damping. See ContactSystem::set_dashpot.
+    std::optional<double> contact_damping;
     std::vector<LoadSpec> loads;
     std::vector<SupportSpec> supports;
     std::optional<double> history_interval;   // s

@@ -169,11 +169,18 @@ Interactions::Interactions(const CaseSpec& spec, const Model& model) {
         }
 }
 
-double Interactions::stable_dt(const Model& model) const {
+double Interactions::stable_dt(const Model& model, double xi_contact) const {
     double dt = std::numeric_limits<double>::infinity();
     if (joints_) dt = std::min(dt, joints_->stable_dt(model.mass.data()));
-    if (contact_) dt = std::min(dt, contact_->stable_dt(model.X.data(), model.mass.data()));
+    if (contact_) {
+        const double damped = xi_contact > 0 ? std::sqrt(1 + xi_contact * xi_contact) - xi_contact : 1.0;
+        dt = std::min(dt, contact_stable_dt(model) * damped);
+    }
     return dt;
+}
+
+double Interactions::contact_stable_dt(const Model& model) const {
+    return contact_ ? contact_->stable_dt(model.X.data(), model.mass.data()) : std::numeric_limits<double>::infinity();
 }
 
 void Interactions::add_forces(const double* x, const double* v, double dt, double* f) {

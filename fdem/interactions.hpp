@@ -23,8 +23,16 @@ public:
     bool has_contact() const { return contact_ != nullptr; }
     bool has_joints() const { return joints_ != nullptr; }
 
-    // Stable step bound of joint and contact springs (s); +inf when there are none.
-    double stable_dt(const Model& model) const;
+    // Stable step bound of joint and contact springs (s); +inf when there are none. With contact dashpots at a
+    // fraction xi_contact of critical on the stiffest contact spring, the contact bound is multiplied by the damped
+    // central-difference factor sqrt(1 + xi^2) - xi.
+    double stable_dt(const Model& model, double xi_contact = 0.0) const;
+    // Undamped stable step of the contact springs alone (s), +inf without contact: beta = xi * this.
+    double contact_stable_dt(const Model& model) const;
+    void set_contact_dashpot(double beta_s) {
+        if (contact_) contact_->set_dashpot(beta_s);
+    }
+    double contact_damping_dissipation() const { return contact_ ? contact_->dashpot_dissipation() : 0.0; }  // J
     // Whether the next add_forces must evaluate the contact energy (it costs a polygon clip per active pair).
     void want_energy(bool on) {
         if (contact_) contact_->set_compute_energy(on);

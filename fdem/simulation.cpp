@@ -165,7 +165,13 @@ void Simulation::compute_dt() {
     const StepLimit lim = triangle_step_limit(spec_, model_);
     dt_limit_ = lim.dt;
     dt_element_ = lim.element;
-    dt_springs_ = inter_.stable_dt(model_);
+    // Contact dashpots lower the contact springs' stable step (damped central difference); the largest fraction
+    // any stage asks for sets it for the whole run, so that dt stays the same from stage to stage.
+    double xi_max = 0;
+    for (const StageSpec& st : spec_.stages)
+        if (st.contact_damping) xi_max = std::max(xi_max, *st.contact_damping);
+    dt_contact_ = inter_.contact_stable_dt(model_);
+    dt_springs_ = inter_.stable_dt(model_, xi_max);
     if (dt_springs_ < dt_limit_) dt_limit_ = dt_springs_, dt_element_ = -1;
     dt_ = spec_.dt_override ? *spec_.dt_override : spec_.safety * dt_limit_;
 }
@@ -216,6 +222,10 @@ void Simulation::begin_stage(int s) {
     const int nn = model_.n_nodes();
 
     if (st.local_damping) alpha_ = *st.local_damping;
+    if (st.contact_damping) {
+        xi_contact_ = *st.contact_damping;
+        inter_.set_contact_dashpot(std::isfinite(dt_contact_) ? xi_contact_ * dt_contact_ : 0.0);
+    }
     if (st.gravity) {
         gravity_start_ = gravity_;
         gravity_target_ = *st.gravity;
@@ -348,7 +358,9 @@ void Simulation::begin_stage(int s) {
     const double si = snapshot_interval();
     next_snapshot_ = si > 0 ? time_ + si : 1e300;
     log("stage " + std::to_string(s + 1) + "/" + std::to_string(spec_.stages.size()) + " '" + st.name + "' starts at t = " +
-        sci(time_) + " s (local damping " + sci(alpha_) + ")");
+        sci(time_) + " s (local damping " + sci(alpha_) +
+        (xi_contact_ > 0 ? ", contact damping " + sci(xi_contact_) + " of critical: dashpots c = " + sci(xi_contact_ * dt_contact_) + " s x k" : std::string()) +
+        ")");
     if (s == 0) {  // initial velocities and deformation are energy put in, like external work
         const Energies e0 = energies();
         W_ext_ += e0.kinetic + e0.elastic + e0.joint + e0.contact;
@@ -685,7 +697,7 @@ Energies Simulation::energies() const {
     if (stepped) e.kinetic = kinetic_n_;
     e.external = W_ext_ - (stepped ? work_half_ : 0.0);
     e.damping = D_damp_ - (stepped ? damp_half_ : 0.0);
-    e.viscous = D_visc_;
+    e.viscous = D_visc_ + inter_.contact_damping_dissipation();
     e.joint = inter_.joint_energy();
     e.contact = inter_.contact_energy(xe);
     e.fracture = inter_.fracture_dissipation();
@@ -1001,6 +1013,7 @@ void Simulation::write_summary(const std::string& status, const std::string& mes
         Json o = Json::object();
         o["name"] = s.name;
         if (s.local_damping) o["local_damping"] = *s.local_damping;
+        if (s.contact_damping) o["contact_damping"] = *s.contact_damping;
         if (s.duration) o["duration_s"] = *s.duration;
         if (s.equilibrium) o["equilibrium"] = *s.equilibrium;
         sd.push_back(o);

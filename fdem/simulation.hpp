@@ -30,7 +30,7 @@ struct Energies {
     double elastic = 0;     // J, triangles
     double external = 0;    // J, work of loads, gravity and supports (cumulative), plus the initial kinetic and stored energy
     double damping = 0;     // J, dissipated by local damping (cumulative)
-    double viscous = 0;     // J, dissipated by viscous element damping (cumulative)
+    double viscous = 0;     // J, dissipated by viscous element damping and contact dashpots (cumulative)
     double joint = 0;       // J, elastic energy of the intact cohesive elements
     double contact = 0;     // J, contact (penalty) energy
     double fracture = 0;    // J, dissipated by fracture (cumulative)
@@ -122,6 +122,8 @@ private:
     double dt_ = 0;
     double dt_limit_ = 0;
     double dt_springs_ = 0;  // s, bound of joint and contact springs
+    double dt_contact_ = 0;  // s, undamped bound of the contact springs alone (+inf without contact)
+    double xi_contact_ = 0;  // fraction of critical of the contact dashpots in the current stage
     long broken_total_ = 0;
     int dt_element_ = -1;
     double time_ = 0;

@@ -701,3 +701,66 @@ TEST_CASE("Combinations without a law never touch when the laws say so, and are 
     cs2.step(x.data(), v.data(), 1e-4, f.data());
     CHECK(f[1] + f[3] + f[5] > 0);
 }
+
+TEST_CASE("Contact dashpots: normal c = beta k_n t L, no pull beyond the elastic push, Coulomb cap kept while sliding",
+          "[unit]") {
+    // Flat overlap d through a 1 m face (distance potential): two loaded edges, each with k_n,edge = k_n t L / 2,
+    // so the dashpots of the pair add c = beta k_n t L on the relative normal velocity.
+    const double d = 1e-5, kn = 2e10, ks = 1e10, t = 0.3, beta = 1e-6, dt = 1e-6, mu = 0.6;
+    const double xb[6] = {-1.0, -0.7, 2.0, 0.0, -1.0, 0.0};
+    const double xa[6] = {0.0, -d, 1.0, -d, 0.5, 0.6};
+    PairParams p;
+    p.thickness = t;
+    p.c = 0.5 * kn;
+    p.distance_potential = true;
+    p.k_s = ks;
+    p.mu = mu;
+    p.dt = dt;
+    p.beta = beta;
+    p.k_n_area = kn;
+    const double fn = kn * d * t;  // elastic push (N), within O(d) of the overlap strip
+    auto total = [](const double* f, int c) { return f[c] + f[2 + c] + f[4 + c]; };
+    SECTION("closing at w: push fn + beta k_n t L w, dissipation c w^2 dt, action = reaction") {
+        const double w = 0.01;  // m/s, A moves down into B
+        const double va[6] = {0, -w, 0, -w, 0, -w};
+        double hist[6] = {0, 0, 0, 0, 0, 0};
+        PairResult r;
+        REQUIRE(pair_contact(xa, xb, va, kZero, p, false, hist, r));
+        CHECK(total(r.fa, 1) == Approx(fn + beta * kn * t * 1.0 * w).epsilon(1e-3));
+        CHECK(total(r.fa, 0) == Approx(0.0).margin(1e-9 * fn));
+        CHECK(r.damping == Approx(beta * kn * t * 1.0 * w * w * dt).epsilon(1e-3));
+        for (int c = 0; c < 2; ++c) CHECK(total(r.fa, c) + total(r.fb, c) == Approx(0.0).margin(1e-12 * fn));
+        CHECK(moment(xa, r.fa) + moment(xb, r.fb) == Approx(0.0).margin(1e-9 * fn));
+    }
+    SECTION("opening fast: the dashpot never pulls harder than the elastic push, so the faces are never glued") {
+        const double w = 200.0;  // m/s upward: the dashpot's pull beta k_n t L w is 20 x the push fn; clamped
+        const double va[6] = {0, w, 0, w, 0, w};
+        p.mu = 0.0;  // the corners' slanted edges would add friction along y
+        double hist[6] = {0, 0, 0, 0, 0, 0};
+        PairResult r;
+        REQUIRE(pair_contact(xa, xb, va, kZero, p, false, hist, r));
+        REQUIRE(beta * kn * t * w > 10 * fn);
+        // unclamped, the pull would be beta k_n t L w = 20 fn; what is left is the slanted corner edges' share
+        CHECK(total(r.fa, 1) > -1e-3 * fn);
+        CHECK(r.damping >= 0.0);
+    }
+    SECTION("sliding: the tangential force stays mu fn (no dashpot on a slipping edge); sticking: -k_t s - beta k_t v") {
+        const double v = 0.01;  // m/s along +x
+        const double va[6] = {v, 0, v, 0, v, 0};
+        double hist[6] = {0, 0, 0, 0, 0, 0};
+        PairResult r;
+        REQUIRE(pair_contact(xa, xb, va, kZero, p, false, hist, r));
+        // first step sticks: spring k_s t L v dt plus dashpot beta k_s t L v (k_t per edge = k_s t L / 2, two edges)
+        CHECK(total(r.fa, 0) == Approx(-ks * t * 1.0 * v * (dt + beta)).epsilon(1e-3));
+        // the two 1 m edges reach their caps after mu fn / (k_s t L v dt) = 1200 steps
+        for (int s = 0; s < 3000; ++s) pair_contact(xa, xb, va, kZero, p, false, hist, r);
+        REQUIRE(r.dissipation > 0);
+        CHECK(total(r.fa, 0) == Approx(-mu * fn).epsilon(2e-3));
+        p.beta = 0;
+        PairResult r0;
+        double hist0[6];
+        std::copy(hist, hist + 6, hist0);
+        pair_contact(xa, xb, va, kZero, p, false, hist0, r0);
+        CHECK(total(r.fa, 0) == Approx(total(r0.fa, 0)).epsilon(1e-6));
+    }
+}

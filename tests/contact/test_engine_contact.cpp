@@ -642,3 +642,112 @@ TEST_CASE("engine: a block on a table tilting at 1 deg/s overturns at atan(b/h) 
     CHECK_FALSE(over);
     CHECK(a2 == Approx(std::atan(0.3) / kDeg).margin(1.0));
 }
+
+TEST_CASE("engine: contact dashpots (contact_damping) leave sliding friction alone: a launched block still stops at "
+          "v0^2 / (2 mu g) within 2 %", "[engine][regression]") {
+    const double mu = 0.5, v0 = 1.0;
+    const std::string text = case_head("slide_damped", {"base", "block"}) +
+                             dry_interface("base", "block", std::atan(mu) / kDeg, 5e9) + R"(
+[[stages]]
+name = "slide"
+duration = 2.0
+local_damping = 0.0
+contact_damping = 0.2
+gravity = [0.0, -9.81]
+  [[stages.supports]]
+  group = "base"
+  fix = "xy"
+)";
+    auto sim = make_contact_sim("engine_slide_damped", block_on_base(), text);
+    // The damped contact springs' stable step: the undamped one times sqrt(1 + xi^2) - xi.
+    const double dt_c = sim.interactions().contact_stable_dt(sim.model());
+    CHECK(sim.interactions().stable_dt(sim.model(), 0.2) == Approx(dt_c * (std::sqrt(1.04) - 0.2)).epsilon(1e-12));
+    for (int k : nodes_of(sim, "block")) sim.model().v[2 * k] = v0;
+    const double cx0 = body_mean(sim, "block", sim.model().x, 0);
+    sim.begin_stage(0);
+    BalanceWatch bal;
+    bal.from_time = 0;
+    double t_stop = -1;
+    while (!sim.stage_finished()) {
+        bal.step(sim);
+        if (body_mean(sim, "block", sim.model().v, 0) <= 0.0) {
+            t_stop = sim.time();
+            break;
+        }
+    }
+    REQUIRE(t_stop > 0);
+    bal.final_step(sim);
+    const fdem::Energies e = sim.energies();
+    const double dist = body_mean(sim, "block", sim.model().x, 0) - cx0;
+    const double expected = v0 * v0 / (2 * mu * kG);
+    std::printf("[engine slide, contact damping 0.2] stop distance %.5f m, expected %.5f m (error %.2f %%), friction "
+                "%.5f J + dashpots %.3g J (1/2 M v0^2 = %.5f J), worst balance %.3g %%\n",
+                dist, expected, 100 * (dist - expected) / expected, e.friction, e.viscous, 0.5 * 4.0 * v0 * v0,
+                100 * bal.engine);
+    CHECK(dist == Approx(expected).epsilon(0.02));
+    CHECK(e.friction + e.viscous == Approx(0.5 * 4.0 * v0 * v0).epsilon(0.02));
+    CHECK(e.viscous < 0.01 * e.friction);  // the dashpots barely work: the block slides, it does not bounce
+    CHECK(bal.engine < 0.01);
+}
+
+TEST_CASE("engine: contact dashpots damp a block bouncing on its contact spring at xi omega dt_c / 2 (log decrement "
+          "within 2 %); without them the bounce keeps its amplitude", "[engine][regression]") {
+    // A stiff block (E 100 GPa, 0.2 x 0.1 m, 4 kg) on a fixed base through a joint k_n = 5e9 Pa/m: K = k_n L t =
+    // 1e8 N/m, omega = sqrt(K / M) ~ 5000 rad/s. Dashpots c = beta K with beta = xi dt_c give the damping ratio
+    // zeta = beta omega / 2 and the log decrement 2 pi zeta / sqrt(1 - zeta^2) per period.
+    for (double xi : {0.0, 0.2}) {
+        const std::string text = case_head("bounce", {"base", "block"}, 1.0e11) + dry_interface("base", "block", 30.0, 5e9) +
+                                 R"(
+[[stages]]
+name = "settle"
+duration = 0.05
+local_damping = 0.8
+gravity = [0.0, -9.81]
+  [[stages.supports]]
+  group = "base"
+  fix = "xy"
+[[stages]]
+name = "bounce"
+duration = 0.02
+local_damping = 0.0
+contact_damping = )" + std::to_string(xi) + "\n";
+        auto sim = make_contact_sim("engine_bounce", block_on_base(), text);
+        BalanceWatch bal;
+        run_stage(sim, 0, bal);
+        const double y_eq = body_mean(sim, "block", sim.model().x, 1);
+        const double K = 5e9 * 0.2 * 0.1, M = 4.0, omega = std::sqrt(K / M);
+        const double d_static = M * kG / K;
+        // kick downwards: amplitude v / omega = d_static / 4, so the joint never opens (the dashpot stays linear)
+        for (int k : nodes_of(sim, "block")) sim.model().v[2 * k + 1] -= 0.25 * d_static * omega;
+        sim.begin_stage(1);
+        std::vector<double> t, y;
+        while (!sim.stage_finished()) {
+            sim.step();
+            t.push_back(sim.time());
+            y.push_back(body_mean(sim, "block", sim.model().x, 1) - y_eq);
+        }
+        // successive minima (the block's lowest points), then the mean decrement and period between them
+        std::vector<double> tm, ym;
+        for (std::size_t i = 1; i + 1 < y.size(); ++i)
+            if (y[i] < y[i - 1] && y[i] <= y[i + 1] && y[i] < -0.002 * d_static) tm.push_back(t[i]), ym.push_back(-y[i]);
+        INFO("minima found: " << tm.size());
+        REQUIRE(tm.size() >= 4);
+        const std::size_t n = std::min<std::size_t>(tm.size() - 1, 10);
+        const double period = (tm[n] - tm[0]) / static_cast<double>(n);
+        const double decrement = std::log(ym[0] / ym[n]) / static_cast<double>(n);
+        const double w = 2 * M_PI / period;
+        const double beta = xi * sim.interactions().contact_stable_dt(sim.model());
+        const double zeta = beta * w / 2;
+        const double expected = 2 * M_PI * zeta / std::sqrt(1 - zeta * zeta);
+        std::printf("[engine bounce] xi %.1f: period %.4g s (2 pi / omega = %.4g s), decrement %.4f per period "
+                    "(expected %.4f, zeta %.4f), first amplitude %.3g m (d_static / 4 = %.3g m)\n",
+                    xi, period, 2 * M_PI / omega, decrement, expected, zeta, ym[0], 0.25 * d_static);
+        CHECK(period == Approx(2 * M_PI / omega).epsilon(0.05));
+        if (xi == 0.0) {
+            CHECK(std::fabs(decrement) < 0.01);
+        } else {
+            REQUIRE(expected > 0.05);
+            CHECK(decrement == Approx(expected).epsilon(0.02));
+        }
+    }
+}
