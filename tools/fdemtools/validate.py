@@ -113,6 +113,7 @@ def numerical_settings(tree: dict) -> dict:
     key, rate = rate_key(tree)
     out["loading_rate_m_s"] = rate if rate is not None else ""
     out["local_damping"] = " / ".join(str(s.get("local_damping", 0)) for s in tree.get("stages") or [])
+    out["contact_damping"] = " / ".join(str(s.get("contact_damping", 0)) for s in tree.get("stages") or [])
     pens = []
     for name, m in (tree.get("materials") or {}).items():
         fr = m.get("fracture") if isinstance(m, dict) else None
@@ -413,7 +414,8 @@ def run_family(args) -> int:
                "published_fdem_kN": pub_N / 1e3 if pub_N else None, "error_vs_published_fdem": rel(peak, pub_N),
                "peak_half_rate_kN": q.get("peak_half_kN"), "rate_change": q.get("change"),
                "triangles": rec.get("n_triangles"), "steps": rec.get("steps"), "wall_time_s": rec.get("wall_time_s"),
-               "dt_s": rec.get("dt")}
+               "dt_s": rec.get("dt"),
+               "energy_balance_error": ((rec.get("summary") or {}).get("energy") or {}).get("balance_error")}
         row.update(numerical_settings(trees[c]))
         rows.append(row)
 
@@ -475,11 +477,12 @@ def report_markdown(family, rows, qs_rows, trend, fixed, args, elapsed) -> str:
         L += ["", trend]
     L += ["", "## Numerical settings", ""]
     keys = [k for k in rows[0] if k in ("mesh_size_m", "mesh_size_beam_m", "mesh_size_base_m", "loading_rate_m_s",
-                                         "local_damping", "penalties", "dt_setting")]
-    L.append("| case | " + " | ".join(keys) + " | dt used (s) |")
-    L.append("|---|" + "---|" * (len(keys) + 1))
+                                         "local_damping", "contact_damping", "penalties", "dt_setting")]
+    L.append("| case | " + " | ".join(keys) + " | dt used (s) | energy balance error |")
+    L.append("|---|" + "---|" * (len(keys) + 2))
     for r in rows:
-        L.append(f"| {r['case']} | " + " | ".join(fmt(r.get(k)) for k in keys) + f" | {fmt(r['dt_s'])} |")
+        L.append(f"| {r['case']} | " + " | ".join(fmt(r.get(k)) for k in keys) + f" | {fmt(r['dt_s'])} | "
+                 f"{pct(r['energy_balance_error'])} |")
     same = all(all(r.get(k) == rows[0].get(k) for r in rows) for k in keys if k != "penalties")
     L += ["", "Mesh size, rate, damping and time-step setting are " + ("the same for every case." if same else
                                                                      "NOT the same for every case (see the table).")]

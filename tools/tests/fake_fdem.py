@@ -52,6 +52,7 @@ def main(argv):
                  "n_triangles": int(1 / h ** 2), "n_nodes": int(1 / h ** 2), "dt": 1e-6, "steps": 20,
                  "wall_time_s": 0.01 / h ** 2, "threads": 1,
                  "monitors": {"u": {"min": 0, "max": 1e-3, "final": 1e-3}, "F": {"min": 0, "max": peak, "final": peak}},
+                 "energy": {"balance_error": 0.001 * (1 + h)},
                  "settings": sets})
     with open(os.path.join(out, "summary.json"), "w") as f:
         json.dump(summ, f)

@@ -68,6 +68,8 @@ def test_family_report_and_half_rate_check(tmp_path, cli):
         assert float(r["mesh_size_m"]) == h
         assert float(r["loading_rate_m_s"]) == 0.01
         assert r["local_damping"] == "0.8 / 0.8"
+        assert r["contact_damping"] == "0 / 0"
+        assert float(r["energy_balance_error"]) == pytest.approx(0.0011, rel=1e-12)  # summary.json (fake: h = 0.1)
         assert float(r["wall_time_s"]) == pytest.approx(1.0)
         assert float(r["mesh_size_m"]) == h  # what the report states comes from the case file
     assert float(rows["c0"]["error_vs_experiment"]) == pytest.approx(13.2 / 11 - 1, rel=1e-9)
