@@ -390,7 +390,8 @@ TEST_CASE("k_n calibration: two pressed rectangles give pressure/overlap = k_n a
     }
 }
 
-TEST_CASE("Contact forces have the same bits for 1, 2 and 4 threads on a 10k-triangle packing", "[unit]") {
+TEST_CASE("Contact forces have the same bits for 1, 2 and 4 threads on a 10k-triangle packing, with and without dashpots",
+          "[unit]") {
     // 10,000 random small triangles (separate nodes) in a box, overlapping at random, random velocities.
     const int nt = 10000;
     std::mt19937_64 rng(99);
@@ -414,9 +415,10 @@ TEST_CASE("Contact forces have the same bits for 1, 2 and 4 threads on a 10k-tri
     laws.set_interface(0, 0, ContactLaw::penalty(1e9, 0.5));
     laws.set_interface(0, 1, ContactLaw::stiffness(1e11, 5e10, 30.0));
     laws.set_interface(1, 1, ContactLaw::penalty(3e9, 0.2, 1e9));
-    auto run = [&](int threads) {
+    auto run = [&](int threads, double beta) {
         omp_set_num_threads(threads);
         ContactSystem cs(tri.data(), nt, 3 * nt, 0.1, mat, body, laws);
+        cs.set_dashpot(beta);
         for (int t = 0; t < nt; ++t) cs.set_capable(t, true);
         std::vector<double> x = xy, f;
         uint64_t hash = 1469598103934665603ull;
@@ -430,19 +432,26 @@ TEST_CASE("Contact forces have the same bits for 1, 2 and 4 threads on a 10k-tri
                 hash = (hash ^ bits) * 1099511628211ull;
             }
         }
-        double e = cs.elastic_energy(), dsp = cs.friction_dissipation();
-        uint64_t b1, b2;
+        double e = cs.elastic_energy(), dsp = cs.friction_dissipation(), dd = cs.dashpot_dissipation();
+        uint64_t b1, b2, b3;
         std::memcpy(&b1, &e, 8);
         std::memcpy(&b2, &dsp, 8);
-        hash = ((hash ^ b1) * 1099511628211ull ^ b2) * 1099511628211ull;
+        std::memcpy(&b3, &dd, 8);
+        hash = (((hash ^ b1) * 1099511628211ull ^ b2) * 1099511628211ull ^ b3) * 1099511628211ull;
         return std::make_pair(hash, cs.stats().active_pairs);
     };
     const int saved = omp_get_max_threads();
-    const auto h1 = run(1), h2 = run(2), h4 = run(4);
+    uint64_t first[2];
+    for (int i = 0; i < 2; ++i) {
+        const double beta = i == 0 ? 0.0 : 1e-6;  // s
+        const auto h1 = run(1, beta), h2 = run(2, beta), h4 = run(4, beta);
+        CHECK(h1.second > 1000);  // many pairs carry load
+        CHECK(h1.first == h2.first);
+        CHECK(h1.first == h4.first);
+        first[i] = h1.first;
+    }
+    CHECK(first[0] != first[1]);  // the dashpots did act
     omp_set_num_threads(saved);
-    CHECK(h1.second > 1000);  // many pairs carry load
-    CHECK(h1.first == h2.first);
-    CHECK(h1.first == h4.first);
 }
 
 TEST_CASE("Capable set, excluded pairs and history that survives re-detection", "[unit]") {
