@@ -333,16 +333,19 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f)
         prm.thickness = thickness_;
         prm.distance_potential = L.normal_is_stiffness;
         prm.c = L.normal_is_stiffness ? 0.5 * L.normal : L.normal;
-        // p_t (Pa) becomes a traction slope with the same rule as the normal one: 3 p_t (1/H_a + 1/H_b) (Pa/m).
-        prm.k_s = L.tangential_is_stiffness
-                      ? L.tangential
-                      : 3.0 * L.tangential * (1.0 / smallest_altitude(xa) + 1.0 / smallest_altitude(xb));
+        // A penalty p (Pa) becomes a pressure/overlap slope 3 p (1/H_a + 1/H_b) (Pa/m) ([MA00] phi = 3 min L_k):
+        // p_t for friction, p_n for the dashpots.
+        double inv_h = 0.0;  // 1/H_a + 1/H_b (1/m), computed once when a penalty law needs it
+        auto slope = [&](double penalty) {
+            if (inv_h == 0.0) inv_h = 1.0 / smallest_altitude(xa) + 1.0 / smallest_altitude(xb);
+            return 3.0 * penalty * inv_h;
+        };
+        prm.k_s = L.tangential_is_stiffness ? L.tangential : slope(L.tangential);
         prm.mu = L.mu;
         prm.dt = dt;
         if (beta_ > 0.0) {
             prm.beta = beta_;
-            prm.k_n_area = L.normal_is_stiffness ? L.normal
-                                                 : 3.0 * L.normal * (1.0 / smallest_altitude(xa) + 1.0 / smallest_altitude(xb));
+            prm.k_n_area = L.normal_is_stiffness ? L.normal : slope(L.normal);
         }
         PairResult r;
         if (pair_contact(xa, xb, va, vb, prm, want_energy, &hist_[6 * static_cast<size_t>(p)], r)) {

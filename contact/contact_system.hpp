@@ -80,7 +80,6 @@ public:
     // at a fraction xi of critical and a mode of frequency omega at xi omega dt_c / 2: the contact chatter of the
     // explicit step is damped, a mechanism moving at a quasi-static rate is not.
     void set_dashpot(double beta_s) { beta_ = beta_s; }
-    double dashpot() const { return beta_; }
     double dashpot_dissipation() const { return damping_; }  // J, cumulative
     // Forces a detection at the next step (e.g. after the engine moved nodes by other means).
     void invalidate() { dirty_ = true; }
