@@ -97,7 +97,9 @@ def test_interrupted_batch_is_resumed(tmp_path):
     r = subprocess.run([sys.executable, ENTRY, "batch", str(case), "--grid", "slow=0,30", "--out-dir", str(out),
                         "--fdem", FAKE, "--dry-run"], env=env, capture_output=True, text=True)
     assert r.returncode == 0 and len(r.stdout.splitlines()) == 2
-    rc = subprocess.run(cmd[:-2] + ["--jobs", "1", "--timeout", "0.5"], env=env, capture_output=True, text=True)
+    # timeout 3 s against the fake's 30 s sleep: long enough for the fake to start and log its call on a loaded
+    # machine (0.5 s was not: under two full-load runs the interpreter's start-up alone took longer)
+    rc = subprocess.run(cmd[:-2] + ["--jobs", "1", "--timeout", "3"], env=env, capture_output=True, text=True)
     new = calls(log)[n:]
     assert len(new) == 1 and new[0]["slow"] == "30"  # the fast, finished one was not redone
     assert rc.returncode == 2  # killed by the timeout
