@@ -180,6 +180,32 @@ std::vector<Rect> block_on_base() {
     return {{"base", -0.5, -0.1, 2.0, 0.1, 0.1}, {"block", 0.0, 0.0, 0.2, 0.1, 0.05}};
 }
 
+// The block of a case made of block_on_base() launched along +x at v0 (m/s) at t = 0 (so the engine books the
+// initial kinetic energy as energy put in) and stepped through stage 0 until its mean velocity reaches zero.
+struct Launch {
+    double t_stop = -1;  // s, -1: never stopped
+    double dist = 0;     // m, travel of the block's centre of mass
+    BalanceWatch bal;
+};
+Launch launch_until_stop(fdem::Simulation& sim, double v0) {
+    Launch l;
+    for (int k : nodes_of(sim, "block")) sim.model().v[2 * k] = v0;
+    const double cx0 = body_mean(sim, "block", sim.model().x, 0);
+    sim.begin_stage(0);
+    l.bal.from_time = 0;  // launched: the energy scale is there from the start
+    while (!sim.stage_finished()) {
+        l.bal.step(sim);
+        if (body_mean(sim, "block", sim.model().v, 0) <= 0.0) {
+            l.t_stop = sim.time();
+            break;
+        }
+    }
+    if (l.t_stop < 0) return l;
+    l.bal.final_step(sim);  // one step past the stop, to measure the balance there
+    l.dist = body_mean(sim, "block", sim.model().x, 0) - cx0;
+    return l;
+}
+
 }  // namespace
 
 TEST_CASE("engine: a block resting on a fixed base settles and then drifts less than 1e-6 m over 1 s",
@@ -300,24 +326,11 @@ gravity = [0.0, -9.81]
 )";
         auto sim = make_contact_sim("engine_slide", block_on_base(), text);
         const double v0 = 1.0;  // m/s
-        // Launched at t = 0 so the engine books the initial kinetic energy as energy put in.
-        for (int k : nodes_of(sim, "block")) sim.model().v[2 * k] = v0;
-        const double cx0 = body_mean(sim, "block", sim.model().x, 0);
-        sim.begin_stage(0);
-        BalanceWatch bal;
-        bal.from_time = 0;  // launched: the energy scale is there from the start
-        double t_stop = -1;
-        while (!sim.stage_finished()) {
-            bal.step(sim);
-            if (body_mean(sim, "block", sim.model().v, 0) <= 0.0) {
-                t_stop = sim.time();
-                break;
-            }
-        }
-        REQUIRE(t_stop > 0);
-        bal.final_step(sim);  // one step past the stop, to measure the balance there
+        const Launch l = launch_until_stop(sim, v0);
+        REQUIRE(l.t_stop > 0);
+        const double t_stop = l.t_stop, dist = l.dist;
+        const BalanceWatch& bal = l.bal;
         const fdem::Energies e = sim.energies();
-        const double dist = body_mean(sim, "block", sim.model().x, 0) - cx0;
         const double expected = v0 * v0 / (2 * mu * kG);
         std::printf("[engine slide] mu %.2f: stop distance %.5f m, expected %.5f m (error %.2f %%), stop time %.4f s "
                     "(expected %.4f s), friction dissipation %.5f J (1/2 M v0^2 = %.5f J), worst balance %.3g %%\n",
@@ -662,23 +675,11 @@ gravity = [0.0, -9.81]
     // The damped contact springs' stable step: the undamped one times sqrt(1 + xi^2) - xi.
     const double dt_c = sim.interactions().contact_stable_dt(sim.model());
     CHECK(sim.interactions().stable_dt(sim.model(), 0.2) == Approx(dt_c * (std::sqrt(1.04) - 0.2)).epsilon(1e-12));
-    for (int k : nodes_of(sim, "block")) sim.model().v[2 * k] = v0;
-    const double cx0 = body_mean(sim, "block", sim.model().x, 0);
-    sim.begin_stage(0);
-    BalanceWatch bal;
-    bal.from_time = 0;
-    double t_stop = -1;
-    while (!sim.stage_finished()) {
-        bal.step(sim);
-        if (body_mean(sim, "block", sim.model().v, 0) <= 0.0) {
-            t_stop = sim.time();
-            break;
-        }
-    }
-    REQUIRE(t_stop > 0);
-    bal.final_step(sim);
+    const Launch l = launch_until_stop(sim, v0);
+    REQUIRE(l.t_stop > 0);
+    const double dist = l.dist;
+    const BalanceWatch& bal = l.bal;
     const fdem::Energies e = sim.energies();
-    const double dist = body_mean(sim, "block", sim.model().x, 0) - cx0;
     const double expected = v0 * v0 / (2 * mu * kG);
     std::printf("[engine slide, contact damping 0.2] stop distance %.5f m, expected %.5f m (error %.2f %%), friction "
                 "%.5f J + dashpots %.3g J (1/2 M v0^2 = %.5f J), worst balance %.3g %%\n",
