@@ -75,7 +75,8 @@ public:
     // evaluates all pairs and adds the contact forces (N) to f. dt in s.
     void step(const double* x, const double* v, double dt, double* f);
     void set_compute_energy(bool on) { opt_.compute_energy = on; }
-    // Contact dashpots (PairParams::beta, s; 0 = none, the default): c = beta k on every loaded edge, normal and,
+    // Contact dashpots ([C79]'s viscous contact damping, made stiffness-proportional like Rayleigh beta damping;
+    // PairParams::beta, s; 0 = none, the default): c = beta k on every loaded edge, normal and,
     // while it sticks, tangential. beta = xi dt_c damps the stiffest contact spring (stable step dt_c = 2 / omega)
     // at a fraction xi of critical and a mode of frequency omega at xi omega dt_c / 2: the contact chatter of the
     // explicit step is damped, a mechanism moving at a quasi-static rate is not.

@@ -25,7 +25,8 @@ public:
 
     // Stable step bound of joint and contact springs (s); +inf when there are none. With contact dashpots at a
     // fraction xi_contact of critical on the stiffest contact spring, the contact bound is multiplied by the damped
-    // central-difference factor sqrt(1 + xi^2) - xi.
+    // central-difference factor sqrt(1 + xi^2) - xi (dt <= (2 / omega)(sqrt(1 + xi^2) - xi), Belytschko, Liu & Moran,
+    // Nonlinear Finite Elements for Continua and Structures, 2000, §6.3).
     double stable_dt(const Model& model, double xi_contact = 0.0) const;
     // Undamped stable step of the contact springs alone (s), +inf without contact: beta = xi * this.
     double contact_stable_dt(const Model& model) const;

@@ -69,6 +69,19 @@ void rotate_about(const double* x, double angle, double* out) {
 
 const double kZero[6] = {0, 0, 0, 0, 0, 0};
 
+// Parameters of a pair under the distance potential (stiffness law): k_n (Pa/m), k_s (Pa/m), thickness t (m),
+// friction mu, time step dt (s).
+PairParams stiffness_pair(double kn, double ks, double t, double mu, double dt) {
+    PairParams p;
+    p.thickness = t;
+    p.c = 0.5 * kn;
+    p.distance_potential = true;
+    p.k_s = ks;
+    p.mu = mu;
+    p.dt = dt;
+    return p;
+}
+
 }  // namespace
 
 TEST_CASE("NBS finds exactly the brute-force pairs on 10,000 random circles", "[unit]") {
@@ -279,13 +292,7 @@ TEST_CASE("Friction on one contacting edge: stick below mu F_n, slip at mu F_n w
     const double d = 1e-4, kn = 1e9, ks = 5e8, t = 0.1, mu = 0.5, dt = 1e-4;
     const double xb[6] = {-1.0, -1.0, 2.0, 0.0, -1.0, 0.0};
     const double xa[6] = {0.0, -d, 1.0, -d, 0.5, 0.6};
-    PairParams p;
-    p.thickness = t;
-    p.c = 0.5 * kn;
-    p.distance_potential = true;
-    p.k_s = ks;
-    p.mu = mu;
-    p.dt = dt;
+    const PairParams p = stiffness_pair(kn, ks, t, mu, dt);
     double va[6] = {0.01, 0, 0.01, 0, 0.01, 0};  // A slides to +x at 1 cm/s
     double hist[6] = {0, 0, 0, 0, 0, 0};
     PairResult r;
@@ -718,13 +725,7 @@ TEST_CASE("Contact dashpots: normal c = beta k_n t L, no pull beyond the elastic
     const double d = 1e-5, kn = 2e10, ks = 1e10, t = 0.3, beta = 1e-6, dt = 1e-6, mu = 0.6;
     const double xb[6] = {-1.0, -0.7, 2.0, 0.0, -1.0, 0.0};
     const double xa[6] = {0.0, -d, 1.0, -d, 0.5, 0.6};
-    PairParams p;
-    p.thickness = t;
-    p.c = 0.5 * kn;
-    p.distance_potential = true;
-    p.k_s = ks;
-    p.mu = mu;
-    p.dt = dt;
+    PairParams p = stiffness_pair(kn, ks, t, mu, dt);
     p.beta = beta;
     p.k_n_area = kn;
     const double fn = kn * d * t;  // elastic push (N), within O(d) of the overlap strip
