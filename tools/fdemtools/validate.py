@@ -18,6 +18,13 @@ Both peaks of a pair are maxima over the same displacement range: when the two r
 displacements (an unfinished run, a stage that ends by time), both are taken up to the smaller one and the row
 says so.
 
+Smoothing (--smooth MM, default 0 = off): the peak, the displacement at peak, the load at the end and the
+quasi-static comparison are then taken on the load averaged over a window of MM millimetres of control displacement
+centred on each history row (one-sided where the curve starts and ends). Explicit runs of rocking and sliding walls
+carry oscillations of the whole wall on top of the quasi-static load (a few per cent of it); the largest raw load is
+then one crest of them. The raw largest load stays in the report (peak_raw_kN) with the largest deviation of the raw
+curve from the smoothed one where the window is whole (oscillation_kN), so the choice is visible.
+
 Trend: when reference.csv has an axial load column (--axial-column, default N_kN), the cases sorted by it are
 checked for a peak load rising monotonically and a displacement at peak falling monotonically with that load.
 
@@ -161,11 +168,27 @@ def _float(v):
 # Results of one run
 
 
-def curve_metrics(run_dir: str) -> dict:
+def smooth_curve(x: np.ndarray, y: np.ndarray, window: float) -> np.ndarray:
+    """y averaged over the rows whose x lies within window / 2 of each row's x (x in the same unit as window; x is
+    the control displacement, made non-decreasing first so that a stalled or jittering actuator does not break the
+    search). Near the ends the window is cut (one-sided mean). window <= 0 returns y unchanged."""
+    y = np.asarray(y, float)
+    if window <= 0 or len(y) == 0:
+        return y
+    xm = np.maximum.accumulate(np.asarray(x, float))
+    cs = np.concatenate(([0.0], np.cumsum(y)))
+    lo = np.searchsorted(xm, xm - 0.5 * window, side="left")
+    hi = np.searchsorted(xm, xm + 0.5 * window, side="right")
+    return (cs[hi] - cs[lo]) / (hi - lo)
+
+
+def curve_metrics(run_dir: str, smooth_m: float = 0.0) -> dict:
     """Peak |load| (N), displacement at peak (m, from the start of the stage) and initial stiffness (N/m) of the
     load-displacement curve in the run's last stage (the loading after precompression); the |load| at the last
     history row (N), the drop after the peak (fraction of the peak) and the largest control displacement reached
-    (m). `x`, `y` (|x - x0| in m, |load| in N) are kept for comparing two runs over the same range."""
+    (m). `x`, `y` (|x - x0| in m, |load| in N) are kept for comparing two runs over the same range. With
+    smooth_m > 0 all of these are taken on the load averaged over smooth_m of displacement (smooth_curve); the raw
+    largest load is peak_raw_N and the largest |raw - smoothed| is oscillation_N."""
     run = load_run(run_dir, allow_unfinished=True)
     last = None
     if run.history is not None and run.history.has("stage") and len(run.history):
@@ -175,6 +198,8 @@ def curve_metrics(run_dir: str) -> dict:
     if len(x) == 0:
         raise ToolError(f"{run_dir}: empty curve")
     x = x - x[0]
+    raw = np.abs(y)
+    y = smooth_curve(np.abs(x), raw, smooth_m)
     i = int(np.argmax(np.abs(y)))
     peak = float(abs(y[i]))
     d_peak = float(abs(x[i]))
@@ -189,7 +214,17 @@ def curve_metrics(run_dir: str) -> dict:
     end = float(abs(y[-1]))
     return {"peak_load_N": peak, "disp_at_peak_m": d_peak, "initial_stiffness_N_m": k0,
             "load_at_end_N": end, "drop_after_peak": (peak - end) / peak if peak > 0 else None,
-            "reach_m": float(np.max(np.abs(x))), "x": np.abs(x), "y": np.abs(y)}
+            "reach_m": float(np.max(np.abs(x))), "x": np.abs(x), "y": np.abs(y),
+            "peak_raw_N": float(np.max(raw)), "oscillation_N": oscillation(np.abs(x), raw, np.abs(y), smooth_m)}
+
+
+def oscillation(x: np.ndarray, raw: np.ndarray, smooth: np.ndarray, window: float) -> float:
+    """Largest |raw - smoothed| (N) over the rows whose window is whole (x - window / 2 >= 0 and x + window / 2 <=
+    the largest x): the one-sided means at the two ends of the curve would count the curve's own slope there."""
+    if window <= 0:
+        return 0.0
+    whole = (x - 0.5 * window >= 0) & (x + 0.5 * window <= np.max(x))
+    return float(np.max(np.abs(raw - smooth)[whole])) if np.any(whole) else float("nan")
 
 
 def past_peak(drop) -> str | None:
@@ -373,7 +408,7 @@ def run_family(args) -> int:
         if rec["status"] in ("completed", "failed", "running") and \
                 os.path.isfile(os.path.join(rec["run_dir"], "history.csv")):
             try:
-                m = curve_metrics(rec["run_dir"])
+                m = curve_metrics(rec["run_dir"], args.smooth * 1e-3)
             except ToolError as e:
                 m = {"note": str(e)}
         by_task[label] = (rec, m)
@@ -406,6 +441,8 @@ def run_family(args) -> int:
         q = qs_by_case.get(stem, {})
         row = {"case": stem, "status": rec["status"],
                "peak_load_kN": kn(peak),
+               "peak_raw_kN": kn(m.get("peak_raw_N")), "oscillation_kN": kn(m.get("oscillation_N")),
+               "smoothing_mm": args.smooth,
                "disp_at_peak_mm": mm(m.get("disp_at_peak_m")),
                "initial_stiffness_kN_mm": m["initial_stiffness_N_m"] / 1e6 if "initial_stiffness_N_m" in m else None,
                "load_at_end_kN": kn(m.get("load_at_end_N")), "drop_after_peak": m.get("drop_after_peak"),
@@ -462,6 +499,11 @@ def report_markdown(family, rows, qs_rows, trend, fixed, args, elapsed) -> str:
                  f"{fmt(r['past_peak'])} | {fmt(r['experiment_kN'])} | {pct(r['error_vs_experiment'])} | "
                  f"{fmt(r['published_fdem_kN'])} | {pct(r['error_vs_published_fdem'])} | {fmt(r['triangles'])} | "
                  f"{fmt(r['steps'])} | {fmt(r['wall_time_s'], 3)} |")
+    if args.smooth > 0:
+        L += ["", f"Smoothing: peak, displacement at peak, load at end and the quasi-static check use the load averaged "
+                  f"over {args.smooth:g} mm of control displacement centred on each row (--smooth). Raw largest load / "
+                  "largest |raw - smoothed| per case (kN): "
+                  + "; ".join(f"{r['case']} {fmt(r['peak_raw_kN'])} / {fmt(r['oscillation_kN'])}" for r in rows) + "."]
     L += ["", f"Peak = largest |load| of the case's curve in its last stage; load at end = its last history row; "
               f"past peak = yes when the load at the end is at least {100 * PAST_PEAK_DROP:g} % below the peak "
               "(PAST_PEAK_DROP), otherwise the curve is still rising or flat and the peak is only the largest load "
@@ -509,6 +551,8 @@ def report_markdown(family, rows, qs_rows, trend, fixed, args, elapsed) -> str:
 
 
 def cmd_validate(args):
+    if not args.smooth >= 0:
+        raise ToolError(f"--smooth must be a window >= 0 mm, got {args.smooth}")
     if args.jobs is None:
         args.jobs = default_jobs(args.threads)
     return run_family(args)
@@ -541,4 +585,7 @@ def add_parser(sub):
     p.add_argument("--rate-key", help="dotted key of the loading rate, used for every checked case (default: each "
                                       "case's last-stage prescribed velocity)")
     p.add_argument("--no-rate-check", action="store_true", help="skip the half-rate reruns")
+    p.add_argument("--smooth", type=float, default=0.0, metavar="MM",
+                   help="take peaks on the load averaged over MM mm of control displacement (default 0: raw); the "
+                        "raw largest load and the oscillation are reported beside them")
     p.set_defaults(func=cmd_validate)

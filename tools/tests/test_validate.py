@@ -2,6 +2,7 @@
 import csv
 import os
 
+import numpy as np
 import pytest
 
 from fdemtools import validate
@@ -128,3 +129,40 @@ def test_rate_and_settings_of_the_wall_cases():
     s = validate.numerical_settings(tree)
     assert s["mesh_size_m"] == 0.025
     assert "stone p_j=1e+10 Pa" in s["penalties"] and "units/units normal_penalty=1e+10 Pa" in s["penalties"]
+
+
+def test_smoothing_window_removes_an_oscillation_of_its_own_wavelength():
+    # y = a x + A sin(2 pi x / lam) sampled uniformly: the mean over a window of one wavelength is a x exactly
+    # (interior rows, where the window is whole: the sine's samples over one period sum to zero)
+    lam, a, amp = 0.5, 2.0, 0.3
+    x = np.arange(0, 4001) * (lam / 100)  # 100 rows per wavelength, 0 to 20 lam
+    y = a * x + amp * np.sin(2 * np.pi * x / lam)
+    s = validate.smooth_curve(x, y, lam)
+    inner = (x > lam) & (x < x[-1] - lam)
+    # bound: the window holds the 100 rows of one period plus at most one extra row at each end
+    assert np.max(np.abs(s[inner] - a * x[inner])) < 2 * amp / 100
+    # a window of zero leaves the curve alone; a stalled actuator (x going back a little) does not break it
+    assert np.array_equal(validate.smooth_curve(x, y, 0.0), y)
+    xj = x.copy()
+    xj[1000] -= lam / 50
+    assert np.all(np.isfinite(validate.smooth_curve(xj, y, lam)))
+
+
+def test_smoothed_report_keeps_the_raw_peak(tmp_path, cli):
+    fam = family(tmp_path, sizes=(0.1,))
+    out = tmp_path / "out"
+    rc, o, err = cli("validate", fam, "--fdem", FAKE, "--out-dir", out, "--set", "rate=0.2", "--no-rate-check",
+                     "--smooth", "0.15")
+    assert rc == 0, err
+    r = read_csv(out / "report.csv")[0]
+    # fake curve: 21 rows 0.05 mm apart, linear to 13.2 kN at 0.5 mm, then flat to 1 mm. A window of 0.15 mm holds
+    # a row and its two neighbours: the flat part stays at 13.2 kN, so the smoothed peak is the raw one. Where the
+    # window is whole, the mean of a line is the line; the one deviation left is at the corner (0.5 mm):
+    # 13.2 - (11.88 + 13.2 + 13.2) / 3 = 0.44 kN (the one-sided first row, 0.66 kN off, is not counted)
+    assert float(r["peak_raw_kN"]) == pytest.approx(13.2, rel=1e-12)
+    assert float(r["peak_load_kN"]) == pytest.approx(13.2, rel=1e-9)
+    assert float(r["oscillation_kN"]) == pytest.approx(0.44, rel=1e-9)
+    assert float(r["smoothing_mm"]) == 0.15
+    assert "averaged over 0.15 mm of control displacement" in (out / "report.md").read_text()
+    rc, o, err = cli("validate", fam, "--fdem", FAKE, "--out-dir", out, "--smooth", "-1")
+    assert rc == 1 and "--smooth must be a window >= 0 mm" in err
