@@ -197,25 +197,25 @@ def curve_metrics(run_dir: str, smooth_m: float = 0.0) -> dict:
     x, y = np.asarray(c.x, float), np.asarray(c.y, float)
     if len(x) == 0:
         raise ToolError(f"{run_dir}: empty curve")
-    x = x - x[0]
+    x = np.abs(x - x[0])
     raw = np.abs(y)
-    y = smooth_curve(np.abs(x), raw, smooth_m)
-    i = int(np.argmax(np.abs(y)))
-    peak = float(abs(y[i]))
-    d_peak = float(abs(x[i]))
+    y = smooth_curve(x, raw, smooth_m)  # the raw |load| itself when smooth_m = 0
+    i = int(np.argmax(y))
+    peak = float(y[i])
+    d_peak = float(x[i])
     # initial stiffness: least-squares line through the origin of the ascending branch up to 40 % of the peak
     j = i
     for k in range(i + 1):
         if abs(y[k]) > 0.4 * peak:
             j = k
             break
-    xs, ys = np.abs(x[: j + 1]), np.abs(y[: j + 1])
+    xs, ys = x[: j + 1], y[: j + 1]
     k0 = float(np.dot(xs, ys) / np.dot(xs, xs)) if np.dot(xs, xs) > 0 else float("nan")
-    end = float(abs(y[-1]))
+    end = float(y[-1])
     return {"peak_load_N": peak, "disp_at_peak_m": d_peak, "initial_stiffness_N_m": k0,
             "load_at_end_N": end, "drop_after_peak": (peak - end) / peak if peak > 0 else None,
-            "reach_m": float(np.max(np.abs(x))), "x": np.abs(x), "y": np.abs(y),
-            "peak_raw_N": float(np.max(raw)), "oscillation_N": oscillation(np.abs(x), raw, np.abs(y), smooth_m)}
+            "reach_m": float(np.max(x)), "x": x, "y": y,
+            "peak_raw_N": float(np.max(raw)), "oscillation_N": oscillation(x, raw, y, smooth_m)}
 
 
 def oscillation(x: np.ndarray, raw: np.ndarray, smooth: np.ndarray, window: float) -> float:
