@@ -25,6 +25,11 @@ carry oscillations of the whole wall on top of the quasi-static load (a few per 
 then one crest of them. The raw largest load stays in the report (peak_raw_kN) with the largest deviation of the raw
 curve from the smoothed one where the window is whole (oscillation_kN), so the choice is visible.
 
+Damping: the work the local damping (D_damp) and the viscous terms (D_visc: element viscosity, contact dashpots)
+did in the loading stage, as shares of the loading work |integral F du| (local_damping_work_share,
+viscous_work_share). Local damping (-alpha |f| sign v) carries a load that does not shrink with the rate, which the
+half-rate check cannot see; its work share shows it.
+
 Trend: when reference.csv has an axial load column (--axial-column, default N_kN), the cases sorted by it are
 checked for a peak load rising monotonically and a displacement at peak falling monotonically with that load.
 
@@ -212,10 +217,34 @@ def curve_metrics(run_dir: str, smooth_m: float = 0.0) -> dict:
     xs, ys = x[: j + 1], y[: j + 1]
     k0 = float(np.dot(xs, ys) / np.dot(xs, xs)) if np.dot(xs, xs) > 0 else float("nan")
     end = float(y[-1])
-    return {"peak_load_N": peak, "disp_at_peak_m": d_peak, "initial_stiffness_N_m": k0,
-            "load_at_end_N": end, "drop_after_peak": (peak - end) / peak if peak > 0 else None,
-            "reach_m": float(np.max(x)), "x": x, "y": y,
-            "peak_raw_N": float(np.max(raw)), "oscillation_N": oscillation(x, raw, y, smooth_m)}
+    out = {"peak_load_N": peak, "disp_at_peak_m": d_peak, "initial_stiffness_N_m": k0,
+           "load_at_end_N": end, "drop_after_peak": (peak - end) / peak if peak > 0 else None,
+           "reach_m": float(np.max(x)), "x": x, "y": y,
+           "peak_raw_N": float(np.max(raw)), "oscillation_N": oscillation(x, raw, y, smooth_m)}
+    out.update(damping_work_shares(run, last, c))
+    return out
+
+
+def damping_work_shares(run, stage, c) -> dict:
+    """What the damping took of the loading work in the curve's stage: the growth of D_damp (local damping) and of
+    D_visc (element viscosity and contact dashpots) over the stage's rows, each divided by the work of the curve's
+    load along its displacement, |integral F du| (trapezoids on the history rows). A load the local damping carries
+    does not shrink when the rate is halved (-alpha |f| sign v), so the half-rate check cannot see it; this share
+    can. None where the history has no such column or the loading did no work."""
+    h = run.history
+    out = {"local_damping_work_share": None, "viscous_work_share": None}
+    if h is None or not h.has("stage"):
+        return out
+    keep = h.numeric("stage") == stage
+    xs, ys = np.asarray(c.x, float), np.asarray(c.y, float)
+    work = abs(float(np.sum(0.5 * (ys[1:] + ys[:-1]) * np.diff(xs)))) if len(xs) > 1 else 0.0
+    if not work > 0:
+        return out
+    for col, key in (("D_damp", "local_damping_work_share"), ("D_visc", "viscous_work_share")):
+        if h.has(col) and run.unit(col) == "J":
+            d = h.numeric(col)[keep]
+            out[key] = float(d[-1] - d[0]) / work
+    return out
 
 
 def oscillation(x: np.ndarray, raw: np.ndarray, smooth: np.ndarray, window: float) -> float:
@@ -289,6 +318,10 @@ def fmt(v, nd=4):
 
 def pct(v):
     return "-" if v is None else f"{100 * v:+.1f} %"
+
+
+def share(v):
+    return "-" if v is None else f"{100 * v:.2f} %"
 
 
 def _stem(path: str) -> str:
@@ -452,7 +485,9 @@ def run_family(args) -> int:
                "peak_half_rate_kN": q.get("peak_half_kN"), "rate_change": q.get("change"),
                "triangles": rec.get("n_triangles"), "steps": rec.get("steps"), "wall_time_s": rec.get("wall_time_s"),
                "dt_s": rec.get("dt"),
-               "energy_balance_error": ((rec.get("summary") or {}).get("energy") or {}).get("balance_error")}
+               "energy_balance_error": ((rec.get("summary") or {}).get("energy") or {}).get("balance_error"),
+               "local_damping_work_share": m.get("local_damping_work_share"),
+               "viscous_work_share": m.get("viscous_work_share")}
         row.update(numerical_settings(trees[c]))
         rows.append(row)
 
@@ -520,11 +555,17 @@ def report_markdown(family, rows, qs_rows, trend, fixed, args, elapsed) -> str:
     L += ["", "## Numerical settings", ""]
     keys = [k for k in rows[0] if k in ("mesh_size_m", "mesh_size_beam_m", "mesh_size_base_m", "loading_rate_m_s",
                                          "local_damping", "contact_damping", "penalties", "dt_setting")]
-    L.append("| case | " + " | ".join(keys) + " | dt used (s) | energy balance error |")
-    L.append("|---|" + "---|" * (len(keys) + 2))
+    L.append("| case | " + " | ".join(keys) + " | dt used (s) | energy balance error | local damping work "
+             "| viscous work |")
+    L.append("|---|" + "---|" * (len(keys) + 4))
     for r in rows:
         L.append(f"| {r['case']} | " + " | ".join(fmt(r.get(k)) for k in keys) + f" | {fmt(r['dt_s'])} | "
-                 f"{pct(r['energy_balance_error'])} |")
+                 f"{pct(r['energy_balance_error'])} | {share(r['local_damping_work_share'])} | "
+                 f"{share(r['viscous_work_share'])} |")
+    L += ["", "Local damping work / viscous work: what the local damping (D_damp) and the element viscosity and "
+              "contact dashpots (D_visc) dissipated in the loading stage, as a share of the loading work |integral "
+              "F du| of the case's curve. The local damping's share is roughly the share of the load it carries, "
+              "and halving the rate does not shrink it: the quasi-static check below cannot see it."]
     same = all(all(r.get(k) == rows[0].get(k) for r in rows) for k in keys if k != "penalties")
     L += ["", "Mesh size, rate, damping and time-step setting are " + ("the same for every case." if same else
                                                                      "NOT the same for every case (see the table).")]

@@ -166,3 +166,21 @@ def test_smoothed_report_keeps_the_raw_peak(tmp_path, cli):
     assert "averaged over 0.15 mm of control displacement" in (out / "report.md").read_text()
     rc, o, err = cli("validate", fam, "--fdem", FAKE, "--out-dir", out, "--smooth", "-1")
     assert rc == 1 and "--smooth must be a window >= 0 mm" in err
+
+
+def test_damping_work_shares_of_the_loading_stage(tmp_path):
+    # synthetic run: D_damp = 0.1 w and D_visc = 0 with w the trapezoidal work of F_top along u_top over all rows, so
+    # over the loading stage's rows D_damp grows by 0.1 x the stage's loading work (the same trapezoids)
+    from synth import make_run
+    run = tmp_path / "run"
+    make_run(str(run), n=61)
+    m = validate.curve_metrics(str(run))
+    assert m["local_damping_work_share"] == pytest.approx(0.1, rel=1e-12)
+    assert m["viscous_work_share"] == 0.0
+    # a history without the energy columns gives no share, not zero
+    lines = (run / "history.csv").read_text().splitlines()
+    head = lines[0].split(",")
+    keep = [i for i, k in enumerate(head) if k not in ("D_damp", "D_visc")]
+    (run / "history.csv").write_text("\n".join(",".join(l.split(",")[i] for i in keep) for l in lines) + "\n")
+    m = validate.curve_metrics(str(run))
+    assert m["local_damping_work_share"] is None and m["viscous_work_share"] is None
