@@ -717,6 +717,8 @@ CaseSpec load_case(const std::string& path, const std::vector<std::string>& over
         s.local_damping = r.number("local_damping", false, "a local damping coefficient in [0, 1)", [](double v) { return v >= 0 && v < 1; });
         s.contact_damping = r.number("contact_damping", false, "a fraction of critical damping of the contact springs in [0, 0.5]",
                                      [](double v) { return v >= 0 && v <= 0.5; });
+        s.mass_damping = r.number("mass_damping", false, "a mass-proportional damping coefficient >= 0 in 1/s",
+                                  [](double v) { return v >= 0 && std::isfinite(v); });
         s.history_interval = r.number("history_interval", false, "an interval > 0 in s", positive);
         s.snapshot_interval = r.number("snapshot_interval", false, "an interval > 0 in s", positive);
         const auto loads = r.tables("loads", false, "[[stages.loads]] blocks");

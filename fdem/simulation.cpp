@@ -4,8 +4,10 @@
 //   1. loads, gravity and prescribed velocities at time t^n (ramps, protocols, tilting);
 //   2. triangle forces f_int(x^n, v^{n-1/2}) in parallel, one 6-double record per triangle;
 //   3. node loop in parallel: gather the triangle records in CSR order, add applied loads and gravity,
-//      local damping f_d = -alpha |f| sign(v) on free DOFs ([C79]), then
-//      v^{n+1/2} = v^{n-1/2} + dt (f + f_d) / m, or the prescribed value (reaction = m dv/dt - f),
+//      local damping f_d = -alpha |f| sign(v) on free DOFs ([C79]) and mass-proportional damping -a m vbar
+//      (Rayleigh alpha; vbar = (v^{n-1/2} + v^{n+1/2}) / 2, so it is implicit in v and never limits the step), then
+//      v^{n+1/2} = ((1 - a dt / 2) v^{n-1/2} + dt (f + f_d) / m) / (1 + a dt / 2), or the prescribed value
+//      (reaction = m dv/dt - f),
 //      x^{n+1} = x^n + dt v^{n+1/2}.
 // Determinism: every parallel loop writes per-item results or per-block partial sums over fixed blocks of
 // kBlock items; partials are added serially in block order. No result depends on the thread count.
@@ -145,7 +147,7 @@ Simulation::Simulation(CaseSpec spec, Model model, RunOptions options)
     tf_.assign(6 * static_cast<std::size_t>(nt), 0.0);
     const int nb = std::max((nn + kBlock - 1) / kBlock, (nt + kBlock - 1) / kBlock);
     block_a_.assign(nb, 0), block_b_.assign(nb, 0), block_c_.assign(nb, 0), block_d_.assign(nb, 0);
-    block_e_.assign(nb, 0), block_f_.assign(nb, 0), block_g_.assign(nb, 0);
+    block_e_.assign(nb, 0), block_f_.assign(nb, 0), block_g_.assign(nb, 0), block_h_.assign(nb, 0), block_i_.assign(nb, 0);
     block_bad_.assign(nb, -1);
     mon_ext_.assign(spec_.monitors.size(), {0, 0, 0});
     compute_dt();
@@ -223,6 +225,7 @@ void Simulation::begin_stage(int s) {
     const int nn = model_.n_nodes();
 
     if (st.local_damping) alpha_ = *st.local_damping;
+    if (st.mass_damping) beta_mass_ = *st.mass_damping;
     if (st.contact_damping) {
         xi_contact_ = *st.contact_damping;
         inter_.set_contact_dashpot(std::isfinite(dt_contact_) ? xi_contact_ * dt_contact_ : 0.0);
@@ -360,6 +363,7 @@ void Simulation::begin_stage(int s) {
     next_snapshot_ = si > 0 ? time_ + si : 1e300;
     log("stage " + std::to_string(s + 1) + "/" + std::to_string(spec_.stages.size()) + " '" + st.name + "' starts at t = " +
         sci(time_) + " s (local damping " + sci(alpha_) +
+        (beta_mass_ > 0 ? ", mass damping " + sci(beta_mass_) + " 1/s" : std::string()) +
         (xi_contact_ > 0 ? ", contact damping " + sci(xi_contact_) + " of critical: dashpots c = " + sci(xi_contact_ * dt_contact_) + " s x k" : std::string()) +
         ")");
     if (s == 0) {  // initial velocities and deformation are energy put in, like external work
@@ -473,6 +477,8 @@ void Simulation::step() {
     // prescribed: their reactions redistribute the forces inside the group and sum to F_d, which the loop books as
     // work; rigid_damp_ moves that share from work to damping after the loop. Serial, in support and node order.
     double rigid_damp = 0, rigid_damp_half = 0;  // J: dt F_d v_bar and dt/2 F_d v^{n+1/2}
+    double rigid_mass = 0, rigid_mass_half = 0;  // J: the same for the mass-proportional damping force -a M v_bar
+    const double hm = 0.5 * dt * beta_mass_;
     for (std::size_t id = 0; id < supports_.size(); ++id) {
         ActiveSupport& s = supports_[id];
         if (s.mode != DofMode::rigid) continue;
@@ -488,9 +494,12 @@ void Simulation::step() {
         if (!(M > 0)) continue;
         const double vold = s.v_common;
         const double Fd = vold > 0 ? -alpha_ * std::abs(F) : vold < 0 ? alpha_ * std::abs(F) : 0.0;
-        const double vnew = vold + dt * (F + Fd) / M;
+        const double vnew = ((1 - hm) * vold + dt * (F + Fd) / M) / (1 + hm);
+        const double Fm = -beta_mass_ * M * 0.5 * (vold + vnew);
         rigid_damp += dt * Fd * 0.5 * (vold + vnew);
         rigid_damp_half += 0.5 * dt * Fd * vnew;
+        rigid_mass += dt * Fm * 0.5 * (vold + vnew);
+        rigid_mass_half += 0.5 * dt * Fm * vnew;
         s.v_common = vnew;
         for (int k : s.nodes)
             if (dof_owner_[2 * k + c] == static_cast<int>(id)) dof_vel_[2 * k + c] = vnew;
@@ -499,6 +508,7 @@ void Simulation::step() {
     // 3. Node loop.
     const int nnb = (nn + kBlock - 1) / kBlock;
     const double alpha = alpha_;
+    const double beta_mass = beta_mass_;
     const double gx = applied_gravity_[0], gy = applied_gravity_[1];
     const int* inc_ptr = model_.inc_ptr.data();
     const int* inc_idx = model_.inc_idx.data();
@@ -514,7 +524,7 @@ void Simulation::step() {
     double* reac = reaction_.data();
 #pragma omp parallel for schedule(static) if (nnb > 1)
     for (int b = 0; b < nnb; ++b) {
-        double dW = 0, dD = 0, unb = 0, scale = 0, K = 0, cW = 0, cD = 0;
+        double dW = 0, dD = 0, unb = 0, scale = 0, K = 0, cW = 0, cD = 0, dM = 0, cM = 0;
         int bad = -1;
         const int k1 = std::min(nn, (b + 1) * kBlock);
         for (int k = b * kBlock; k < k1; ++k) {
@@ -534,12 +544,17 @@ void Simulation::step() {
                 if (kind[d] == 0) {
                     // [C79] local damping: -alpha |f| sign(v).
                     const double fd = vold > 0 ? -alpha * std::abs(f) : vold < 0 ? alpha * std::abs(f) : 0.0;
-                    vnew = vold + dt * (f + fd) * inv_mass[k];
+                    vnew = ((1 - hm) * vold + dt * (f + fd) * inv_mass[k]) / (1 + hm);
                     const double vbar = 0.5 * (vold + vnew);
                     dW += dt * fe[c] * vbar;
                     dD -= dt * fd * vbar;
                     cW += 0.5 * dt * fe[c] * vnew;
                     cD -= 0.5 * dt * fd * vnew;
+                    if (hm > 0) {  // -a m vbar: work dt (-a m vbar) vbar, and its share up to t^n
+                        const double fm = -beta_mass * mass[k] * vbar;
+                        dM -= dt * fm * vbar;
+                        cM -= 0.5 * dt * fm * vnew;
+                    }
                     unb += std::abs(f);
                     scale += std::abs(fin[c]) + std::abs(fe[c]);
                 } else {
@@ -557,14 +572,15 @@ void Simulation::step() {
             }
         }
         block_a_[b] = dW, block_b_[b] = dD, block_c_[b] = unb, block_d_[b] = scale;
-        block_e_[b] = K, block_f_[b] = cW, block_g_[b] = cD;
+        block_e_[b] = K, block_f_[b] = cW, block_g_[b] = cD, block_h_[b] = dM, block_i_[b] = cM;
         block_bad_[b] = bad;
     }
-    double dW = 0, dD = 0, unb = 0, scale = 0;
-    kinetic_n_ = 0, work_half_ = 0, damp_half_ = 0;
+    double dW = 0, dD = 0, unb = 0, scale = 0, dM = 0;
+    kinetic_n_ = 0, work_half_ = 0, damp_half_ = 0, mass_half_ = 0;
     for (int b = 0; b < nnb; ++b) {
         dW += block_a_[b], dD += block_b_[b], unb += block_c_[b], scale += block_d_[b];
         kinetic_n_ += block_e_[b], work_half_ += block_f_[b], damp_half_ += block_g_[b];
+        dM += block_h_[b], mass_half_ += block_i_[b];
         if (block_bad_[b] >= 0) {
             const int k = block_bad_[b];
             fail("node " + std::to_string(k) + " has a non-finite velocity (NaN/inf) near (" + sci(model_.X[2 * k], 6) + ", " +
@@ -573,6 +589,10 @@ void Simulation::step() {
     }
     dW -= rigid_damp, dD -= rigid_damp;
     work_half_ -= rigid_damp_half, damp_half_ -= rigid_damp_half;
+    // The rigid groups' reactions carried their mass damping force too: from work to damping, like F_d.
+    dW -= rigid_mass, dM -= rigid_mass;
+    work_half_ -= rigid_mass_half, mass_half_ -= rigid_mass_half;
+    D_mass_ += dM;
     W_ext_ += dW;
     D_damp_ += dD;
     D_visc_ += dt * visc_power;
@@ -698,7 +718,7 @@ Energies Simulation::energies() const {
     if (stepped) e.kinetic = kinetic_n_;
     e.external = W_ext_ - (stepped ? work_half_ : 0.0);
     e.damping = D_damp_ - (stepped ? damp_half_ : 0.0);
-    e.viscous = D_visc_ + inter_.contact_damping_dissipation();
+    e.viscous = D_visc_ + D_mass_ - (stepped ? mass_half_ : 0.0) + inter_.contact_damping_dissipation();
     e.joint = inter_.joint_energy();
     e.contact = inter_.contact_energy(xe);
     e.fracture = inter_.fracture_dissipation();
@@ -1021,6 +1041,7 @@ void Simulation::write_summary(const std::string& status, const std::string& mes
         o["name"] = s.name;
         if (s.local_damping) o["local_damping"] = *s.local_damping;
         if (s.contact_damping) o["contact_damping"] = *s.contact_damping;
+        if (s.mass_damping) o["mass_damping"] = *s.mass_damping;
         if (s.duration) o["duration_s"] = *s.duration;
         if (s.equilibrium) o["equilibrium"] = *s.equilibrium;
         sd.push_back(o);

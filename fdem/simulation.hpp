@@ -30,7 +30,7 @@ struct Energies {
     double elastic = 0;     // J, triangles
     double external = 0;    // J, work of loads, gravity and supports (cumulative), plus the initial kinetic and stored energy
     double damping = 0;     // J, dissipated by local damping (cumulative)
-    double viscous = 0;     // J, dissipated by viscous element damping and contact dashpots (cumulative)
+    double viscous = 0;     // J, dissipated by viscous element damping, contact dashpots and mass damping (cumulative)
     double joint = 0;       // J, elastic energy of the intact cohesive elements
     double contact = 0;     // J, contact (penalty) energy
     double fracture = 0;    // J, dissipated by fracture (cumulative)
@@ -145,20 +145,22 @@ private:
     std::array<double, 2> applied_gravity_{0, 0};  // m/s^2, after the tilt rotation
     double gravity_ramp_ = 0, tilt_rate_ = 0, tilt_deg_ = 0;
     double alpha_ = 0;  // local damping
+    double beta_mass_ = 0;  // 1/s, mass-proportional damping
 
     // per-step scratch
     std::vector<double> tf_;  // 6 per triangle
     std::vector<double> f_mod_;  // module forces (contact, joints), 2 per node
-    std::vector<double> block_a_, block_b_, block_c_, block_d_, block_e_, block_f_, block_g_;
+    std::vector<double> block_a_, block_b_, block_c_, block_d_, block_e_, block_f_, block_g_, block_h_, block_i_;
     double kinetic_n_ = 0;   // J, K^n = 1/2 m v^{n-1/2} . v^{n+1/2} of the last step
     double work_half_ = 0;   // J, dt/2 (f_ext + R)^n . v^{n+1/2}: the half step W_ext_ runs ahead of t^n
     double damp_half_ = 0;   // J, the same for local damping
+    double mass_half_ = 0;   // J, the same for mass-proportional damping
     std::vector<int> block_bad_;
     double unbalanced_ratio_ = 1;
     bool energy_every_step_ = false;  // tests that read energies after every step
 
     // energies (cumulative)
-    double W_ext_ = 0, D_damp_ = 0, D_visc_ = 0;
+    double W_ext_ = 0, D_damp_ = 0, D_visc_ = 0, D_mass_ = 0;
 
     // stage termination state
     double until_start_ = 0;

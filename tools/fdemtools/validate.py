@@ -4,7 +4,8 @@ Per case: peak load and displacement at peak (of the case's load-displacement cu
 its start), initial stiffness (least-squares line through the origin up to 40 % of the peak, as `eeep`), error
 against the experiment and against the published FDEM (from the family's reference.csv, else the case's
 [reference]), triangles, steps, wall time, and the numerical settings read from the case file with the --set
-overrides applied (mesh size, loading rate, local damping, penalties and stiffnesses, time step).
+overrides applied (mesh size, loading rate, local, contact and mass damping, penalties and stiffnesses, time
+step).
 
 Is the peak a peak: the load at the last history row of the same curve and drop_after_peak = (peak - load at
 end) / peak; past_peak = "yes" when the drop is at least PAST_PEAK_DROP (5 %), else the curve is still rising or
@@ -126,6 +127,7 @@ def numerical_settings(tree: dict) -> dict:
     out["loading_rate_m_s"] = rate if rate is not None else ""
     out["local_damping"] = " / ".join(str(s.get("local_damping", 0)) for s in tree.get("stages") or [])
     out["contact_damping"] = " / ".join(str(s.get("contact_damping", 0)) for s in tree.get("stages") or [])
+    out["mass_damping_1_s"] = " / ".join(str(s.get("mass_damping", 0)) for s in tree.get("stages") or [])
     pens = []
     for name, m in (tree.get("materials") or {}).items():
         fr = m.get("fracture") if isinstance(m, dict) else None
@@ -554,7 +556,8 @@ def report_markdown(family, rows, qs_rows, trend, fixed, args, elapsed) -> str:
         L += ["", trend]
     L += ["", "## Numerical settings", ""]
     keys = [k for k in rows[0] if k in ("mesh_size_m", "mesh_size_beam_m", "mesh_size_base_m", "loading_rate_m_s",
-                                         "local_damping", "contact_damping", "penalties", "dt_setting")]
+                                         "local_damping", "contact_damping", "mass_damping_1_s", "penalties",
+                                         "dt_setting")]
     L.append("| case | " + " | ".join(keys) + " | dt used (s) | energy balance error | local damping work "
              "| viscous work |")
     L.append("|---|" + "---|" * (len(keys) + 4))
