@@ -42,8 +42,9 @@ TEST_CASE("single stone in tension, 25 mm: peak force f_t A within 5 %", "[regre
 }
 
 // Issue 5 acceptance: the [K25]-style 100 kN dry-stone wall, published parameters, peak within 25 % of the measured
-// 44.73 kN (Lourenco et al. 2005), at the family setting (mass scaling 10, contact dashpots 0.3, 0.01 m/s to 10 mm;
-// about 10 minutes on 2 cores, RESULTS.md §5).
+// 44.73 kN (Lourenco et al. 2005), at the family setting (mass scaling 10, contact dashpots 0.3, local damping 0.05,
+// 0.01 m/s to 10 mm; about 12 minutes on 1 thread). The engine's reference check takes the raw largest load: 46.20 kN
+// (+3.3 %) on this machine; the family report's smoothed peak is 46.08 kN (RESULTS.md §7).
 TEST_CASE("dry-stone wall, N = 100 kN, [K25] style: peak within 25 % of the experiment", "[regression]") {
     const std::string s = run_case("lourenco2005/k25_N100.toml", "k25_N100");
     const double err = reference_number(s, "relative_error");
