@@ -42,7 +42,7 @@ LOAD_HEIGHT = 1.0   # m, the actuator node: the beam's left end at the top of th
 K25 = dict(mesh=0.025, penalty=1.0e10, rate=0.01, until=0.010, damping=0.05, contact_damping=0.3, mass_scale=10,
            # precompression: ramps and bound long enough for the mass-scaled wall (vertical period ~0.1 s) to come to rest
            pre_ramp=0.05, pre_max=0.4, snapshots=0.05)
-# QUICK (the default ./run.sh, under 3 minutes on 2 threads): the family setting with mass scaling 100 instead of 10
+# QUICK (the default ./run.sh, about 3.5 minutes on 2 threads): the family setting with mass scaling 100 instead of 10
 # (time step x 3.16). On the 100 kN wall: 46.67 kN smoothed / 47.23 kN raw against 46.08 / 46.20 kN at mass scaling 10
 # (+1.3 %; mass scaling 40: 46.73 kN), 116,352 steps (RESULTS.md §7).
 K25_QUICK = dict(K25, mass_scale=100)
@@ -217,7 +217,7 @@ def k25_case(r, quick=False):
 # Mesh: {s['mesh'] * 1000:g} mm in the blocks (the [K25] size, from the single-stone study), 100 mm in the beam and base.
 {{settings_text}}"""
     if quick:
-        settings_text = f"""# QUICK SETTING, for the default ./run.sh (under 3 minutes on 2 threads): the family's settings (k25_N{r['N_kN']}.toml:
+        settings_text = f"""# QUICK SETTING, for the default ./run.sh (about 3.5 minutes on 2 threads): the family's settings (k25_N{r['N_kN']}.toml:
 #   contact dashpots {s['contact_damping']}, shear-stage local damping {s['damping']}, {s['rate']} m/s to {s['until'] * 1000:g} mm) with the
 #   inertial mass x {s['mass_scale']} instead of x {K25['mass_scale']} ([numerics] mass_scale; gravity keeps the physical mass), time step
 #   x 3.16. Measured on this wall: 46.67 kN (load averaged over 0.5 mm; raw maximum 47.23 kN) against 46.08 kN
