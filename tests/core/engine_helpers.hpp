@@ -53,6 +53,26 @@ inline CliResult run_fdem(const std::string& args, const std::filesystem::path& 
     return r;
 }
 
+// The elastic column of the rigid-support and mass-damping tests: 0.2 m x 1.0 m, t = 0.1 m, 50 mm mesh,
+// E = 1 GPa, nu = 0.2, 2000 kg/m^3, one region "body"; the caller appends its stages.
+inline std::string column_case_head(const std::string& name) {
+    return "\n[case]\nname = \"" + name + R"("
+thickness = 0.1
+plane = "stress"
+[geometry]
+type = "rectangle"
+width = 0.2
+height = 1.0
+mesh_size = 0.05
+[materials.m]
+E = 1.0e9
+nu = 0.2
+density = 2000.0
+[regions]
+body = "m"
+)";
+}
+
 // Loads a case from text, builds its scene (mesh, topology, joints, contact) and returns a Simulation that
 // writes no files.
 inline fdem::Simulation make_simulation(const std::string& case_text, const std::string& name,

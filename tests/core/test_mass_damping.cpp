@@ -20,22 +20,7 @@
 namespace {
 
 std::string falling_column(double a, const std::string& extra) {
-    return R"(
-[case]
-name = "falling_column"
-thickness = 0.1
-plane = "stress"
-[geometry]
-type = "rectangle"
-width = 0.2
-height = 1.0
-mesh_size = 0.05
-[materials.m]
-E = 1.0e9
-nu = 0.2
-density = 2000.0
-[regions]
-body = "m"
+    return testing::column_case_head("falling_column") + R"(
 [[stages]]
 name = "fall"
 duration = 0.5

@@ -19,23 +19,7 @@
 namespace {
 
 std::string column_case(const std::string& top_support, const std::string& stage_extra) {
-    return R"(
-[case]
-name = "column"
-thickness = 0.1
-plane = "stress"
-[geometry]
-type = "rectangle"
-width = 0.2
-height = 1.0
-mesh_size = 0.05
-[materials.m]
-E = 1.0e9
-nu = 0.2
-density = 2000.0
-[regions]
-body = "m"
-)" + stage_extra + top_support;
+    return testing::column_case_head("column") + stage_extra + top_support;
 }
 
 const char* kPressed = R"(
