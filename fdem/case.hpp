@@ -139,8 +139,9 @@ struct StageSpec {
     // Contact dashpots: fraction xi of critical damping at the stiffest contact spring's frequency (0 <= xi <= 0.5);
     // kept by later stages that do not set it, like local_damping. See ContactSystem::set_dashpot.
     std::optional<double> contact_damping;
-    // Mass-proportional (Rayleigh alpha) damping a (1/s): f = -a m v on free nodes and rigid groups; a mode of angular
-    // frequency omega is damped at a / (2 omega) of critical. Kept by later stages that do not set it.
+    // Mass-proportional (Rayleigh alpha, Belytschko, Liu & Moran 2000) damping a (1/s): f = -a m v on free nodes and
+    // rigid groups; a mode of angular frequency omega is damped at a / (2 omega) of critical. Kept by later stages
+    // that do not set it.
     std::optional<double> mass_damping;
     std::vector<LoadSpec> loads;
     std::vector<SupportSpec> supports;

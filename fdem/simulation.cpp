@@ -4,8 +4,8 @@
 //   1. loads, gravity and prescribed velocities at time t^n (ramps, protocols, tilting);
 //   2. triangle forces f_int(x^n, v^{n-1/2}) in parallel, one 6-double record per triangle;
 //   3. node loop in parallel: gather the triangle records in CSR order, add applied loads and gravity,
-//      local damping f_d = -alpha |f| sign(v) on free DOFs ([C79]) and mass-proportional damping -a m vbar
-//      (Rayleigh alpha; vbar = (v^{n-1/2} + v^{n+1/2}) / 2, so it is implicit in v and never limits the step), then
+//      local damping f_d = -alpha |f| sign(v) on free DOFs ([C79]) and mass-proportional (Rayleigh alpha) damping -a m vbar
+//      (Belytschko, Liu & Moran 2000; vbar = (v^{n-1/2} + v^{n+1/2}) / 2, implicit in v, never limits the step), then
 //      v^{n+1/2} = ((1 - a dt / 2) v^{n-1/2} + dt (f + f_d) / m) / (1 + a dt / 2), or the prescribed value
 //      (reaction = m dv/dt - f),
 //      x^{n+1} = x^n + dt v^{n+1/2}.
