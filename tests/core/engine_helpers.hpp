@@ -73,6 +73,14 @@ body = "m"
 )";
 }
 
+// Mass-weighted mean vertical velocity of all nodes (m/s): the momentum of a body over its mass.
+inline double mean_velocity_y(const fdem::Simulation& sim) {
+    const auto& md = sim.model();
+    double p = 0, m = 0;
+    for (int k = 0; k < md.n_nodes(); ++k) p += md.mass[k] * md.v[2 * k + 1], m += md.mass[k];
+    return p / m;
+}
+
 // Loads a case from text, builds its scene (mesh, topology, joints, contact) and returns a Simulation that
 // writes no files.
 inline fdem::Simulation make_simulation(const std::string& case_text, const std::string& name,

@@ -30,13 +30,6 @@ gravity = [0.0, -9.81]
 )" + extra;
 }
 
-double mean_vy(const fdem::Simulation& sim) {
-    const auto& md = sim.model();
-    double p = 0, m = 0;
-    for (int k = 0; k < md.n_nodes(); ++k) p += md.mass[k] * md.v[2 * k + 1], m += md.mass[k];
-    return p / m;
-}
-
 void check_fall(const std::string& extra, const std::string& name) {
     const double a = 4.0, g = 9.81;
     auto sim = testing::make_simulation(falling_column(a, extra), name);
@@ -47,7 +40,7 @@ void check_fall(const std::string& extra, const std::string& name) {
     const double discrete = -(g / a) * (1 - std::pow(r, static_cast<double>(n)));
     const double t = n * dt;  // v^{n-1/2} belongs to t^{n-1/2}; the discrete form counts whole steps from v_0 = 0
     const double continuous = -(g / a) * (1 - std::exp(-a * t));
-    const double v = mean_vy(sim);
+    const double v = testing::mean_velocity_y(sim);
     const fdem::Energies e = sim.energies();
     std::printf("[mass damping] %s: %ld steps of %.3e s, mean vy %.12f m/s, discrete closed form %.12f, continuous "
                 "%.12f, terminal %.4f; D_visc %.6e J, balance %.2e\n",

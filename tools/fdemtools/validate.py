@@ -28,8 +28,8 @@ curve from the smoothed one where the window is whole (oscillation_kN), so the c
 
 Damping: the work the local damping (D_damp) and the viscous terms (D_visc: element viscosity, contact dashpots)
 did in the loading stage, as shares of the loading work |integral F du| (local_damping_work_share,
-viscous_work_share). Local damping (-alpha |f| sign v) carries a load that does not shrink with the rate, which the
-half-rate check cannot see; its work share shows it.
+viscous_work_share; D_visc also holds the mass-proportional damping). Local damping (-alpha |f| sign v) carries a load
+that need not shrink with the rate, which the half-rate check may then not see; its work share shows it.
 
 Trend: when reference.csv has an axial load column (--axial-column, default N_kN), the cases sorted by it are
 checked for a peak load rising monotonically and a displacement at peak falling monotonically with that load.
@@ -229,10 +229,10 @@ def curve_metrics(run_dir: str, smooth_m: float = 0.0) -> dict:
 
 def damping_work_shares(run, stage, c) -> dict:
     """What the damping took of the loading work in the curve's stage: the growth of D_damp (local damping) and of
-    D_visc (element viscosity and contact dashpots) over the stage's rows, each divided by the work of the curve's
+    D_visc (element viscosity, contact dashpots, mass damping) over the stage's rows, each divided by the work of the curve's
     load along its displacement, |integral F du| (trapezoids on the history rows). A load the local damping carries
-    does not shrink when the rate is halved (-alpha |f| sign v), so the half-rate check cannot see it; this share
-    can. None where the history has no such column or the loading did no work."""
+    need not shrink when the rate is halved (-alpha |f| sign v), so the half-rate check may not see it; this share
+    does. None where the history has no such column or the loading did no work."""
     h = run.history
     out = {"local_damping_work_share": None, "viscous_work_share": None}
     if h is None or not h.has("stage"):
@@ -566,9 +566,9 @@ def report_markdown(family, rows, qs_rows, trend, fixed, args, elapsed) -> str:
                  f"{pct(r['energy_balance_error'])} | {share(r['local_damping_work_share'])} | "
                  f"{share(r['viscous_work_share'])} |")
     L += ["", "Local damping work / viscous work: what the local damping (D_damp) and the element viscosity and "
-              "contact dashpots (D_visc) dissipated in the loading stage, as a share of the loading work |integral "
-              "F du| of the case's curve. The local damping's share is roughly the share of the load it carries, "
-              "and halving the rate does not shrink it: the quasi-static check below cannot see it."]
+              "contact dashpots and mass damping (D_visc) dissipated in the loading stage, as a share of the loading "
+              "work |integral F du| of the case's curve. The local damping's share is roughly the share of the load "
+              "it carries, and halving the rate need not shrink it: the quasi-static check below may not see it."]
     same = all(all(r.get(k) == rows[0].get(k) for r in rows) for k in keys if k != "penalties")
     L += ["", "Mesh size, rate, damping and time-step setting are " + ("the same for every case." if same else
                                                                      "NOT the same for every case (see the table).")]
