@@ -423,6 +423,10 @@ void read_joint(Reader& r, JointSpec& j, bool allow_stiffness) {
     j.GI = r.number("GI", true, "a mode I fracture energy > 0 in J/m^2", positive).value_or(std::nan(""));
     j.GII = r.number("GII", true, "a mode II fracture energy > 0 in J/m^2", positive).value_or(std::nan(""));
     j.penalty = r.number("penalty", false, "a joint penalty p_j > 0 in Pa", positive).value_or(std::nan(""));
+    // "strength" ([K25]): the whole shear strength c + |sigma| tan(phi) softens; "cohesion" ([LR97]): only c does,
+    // the friction is kept (fracture/law.hpp).
+    j.keep_friction = r.string("shear_softening", false, "what softens in shear", {"strength", "cohesion"})
+                          .value_or("strength") == "cohesion";
     if (allow_stiffness) {
         j.normal_stiffness = r.number("normal_stiffness", false, "a normal stiffness k_n > 0 in Pa/m", positive).value_or(std::nan(""));
         j.shear_stiffness = r.number("shear_stiffness", false, "a shear stiffness k_s > 0 in Pa/m", positive).value_or(std::nan(""));

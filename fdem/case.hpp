@@ -32,6 +32,7 @@ struct JointSpec {
     double penalty = std::nan("");                // p_j, Pa
     double normal_stiffness = std::nan("");       // k_n, Pa/m
     double shear_stiffness = std::nan("");        // k_s, Pa/m
+    bool keep_friction = false;                   // shear_softening = "cohesion": friction kept while c softens
     int line = 0;
 };
 

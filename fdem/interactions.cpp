@@ -28,6 +28,7 @@ fracture::CohesiveProps to_props(const JointSpec& j) {
     p.penalty = j.penalty;
     p.k_n = j.normal_stiffness;
     p.k_s = j.shear_stiffness;
+    p.keep_friction = j.keep_friction;
     return p;
 }
 
@@ -257,6 +258,9 @@ double Interactions::contact_energy(const double* x_n) const {
     return contact_->normal_energy_at(x_n) + contact_->tangential_energy();
 }
 double Interactions::fracture_dissipation() const { return joints_ ? joints_->dissipated_energy() : 0.0; }
-double Interactions::friction_dissipation() const { return contact_ ? contact_->friction_dissipation() : 0.0; }
+// Contact friction plus the friction of cohesive elements that keep it while their cohesion softens.
+double Interactions::friction_dissipation() const {
+    return (contact_ ? contact_->friction_dissipation() : 0.0) + (joints_ ? joints_->friction_energy() : 0.0);
+}
 
 }  // namespace fdem

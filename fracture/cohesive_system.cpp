@@ -149,6 +149,7 @@ CohesiveSystem::CohesiveSystem(std::vector<CohesiveElement> elems, std::vector<C
   force_.assign(8 * std::size_t(ne), 0.0);
   energy_.assign(ne, 0.0);
   dissipated_.assign(ne, 0.0);
+  friction_.assign(ne, 0.0);
   break_DI_.assign(ne, 0.0);
   break_DII_.assign(ne, 0.0);
   pending_.assign(ne, 0);
@@ -234,7 +235,7 @@ void CohesiveSystem::add_forces(const double* x, double* f) {
     const JointLaw& L = law_[e];
     const double area = length_[e] * thickness_;
     double Tx[3], Ty[3];
-    double energy = 0.0, dissipated = 0.0, DI = 0.0, DII = 0.0;
+    double energy = 0.0, dissipated = 0.0, friction = 0.0, DI = 0.0, DII = 0.0;
     bool all_broken = true;
     for (int i = 0; i < 3; ++i) {
       const double o = dx[i] * nx + dy[i] * ny;
@@ -246,6 +247,7 @@ void CohesiveSystem::add_forces(const double* x, double* f) {
       Ty[i] = w * (r.sigma * ny + r.tau * ty);
       energy += w * r.energy;
       dissipated += w * r.dissipated;
+      friction += w * r.friction_dissipated;
       DI += r.damage_I;
       DII += r.damage_II;
       all_broken = all_broken && r.history.damage >= 1.0;
@@ -264,6 +266,7 @@ void CohesiveSystem::add_forces(const double* x, double* f) {
     fe[7] = -fa1y;
     energy_[e] = energy;
     dissipated_[e] += dissipated;
+    friction_[e] += friction;
     if (all_broken && !pending_[e]) {
       pending_[e] = 1;
       break_DI_[e] = DI / 3.0;
@@ -341,6 +344,12 @@ std::vector<BreakRecord> CohesiveSystem::update_damage(double time, double contr
 double CohesiveSystem::elastic_energy() const {
   double s = 0.0;
   for (int e : active_) s += energy_[e];
+  return s;
+}
+
+double CohesiveSystem::friction_energy() const {
+  double s = 0.0;
+  for (double d : friction_) s += d;
   return s;
 }
 

@@ -105,6 +105,9 @@ class CohesiveSystem {
   double elastic_energy() const;
   double dissipated_energy() const;
   double dissipated_energy(int e) const { return dissipated_[e]; }
+  // Cumulative work of the friction sliders of keep_friction classes (J, whole thickness; 0 without them).
+  // Not part of dissipated_energy(): the engine books it as friction.
+  double friction_energy() const;
 
   // Output for VTU snapshots: damage per element = max over its points; state intact / damaged / broken.
   double damage(int e) const;
@@ -129,6 +132,7 @@ class CohesiveSystem {
   std::vector<double> force_;
   std::vector<double> energy_;
   std::vector<double> dissipated_;
+  std::vector<double> friction_;  // J per element, keep_friction sliders
   std::vector<double> break_DI_, break_DII_;
   std::vector<std::uint8_t> pending_;  // 1: fully damaged at the last add_forces, not yet removed
   std::vector<std::uint8_t> broken_;

@@ -22,6 +22,19 @@
 //
 // Energy-exact ranges: the whole area under sigma(o) in pure mode I is (2/3) f_t o_p + kappa f_t o_t with
 // kappa = int_0^1 z(D) dD, so o_t = (G_I - (2/3) f_t o_p) / (kappa f_t) makes it exactly G_I (likewise s_t, G_II).
+//
+// Option keep_friction (case key shear_softening = "cohesion"; off by default, then the law above is unchanged):
+// only the cohesion softens, the frictional part f_f = max(0, -sigma) tan(phi) of f_s is kept, as in the
+// Coulomb-slip interfaces with softening cohesion of Lourenco & Rots (1997) [LR97] and of 3DEC's joints. A Coulomb
+// slider of stiffness K_s and strength f_f (plastic slip s_f, one more history number) acts in parallel with weight
+// 1 - z(D):
+//   tau = sign(s) z(D) t_s0(s) + (1 - z(D)) tau_f,   tau_f = clamp(K_s (s - s_f), -f_f, f_f),
+// so tau = t_s0 before any damage (the same pre-peak curve) and tends to +-f_f, not 0, as D -> 1 under monotonic
+// slip: f_f + z(D) c past the peak. The softening range then belongs to the cohesion,
+// s_t = (G_II - (2/3) c s_p) / (kappa c), so the area of the softening branch above the friction line is G_II.
+// Energies: recoverable E = z E_0 + (1 - z) tau_f^2 / (2 K_s) (+ the compressive part); friction dissipation
+// (1 - z) f_f |ds_f| (PointResponse::friction_dissipated); damage dissipation -dz (E_0 - tau_f^2 / (2 K_s)), which
+// is >= 0 because D only grows past s_p, where E_0 >= (4/3) f_s^2 / K_s. Work = dE + both dissipations (tested).
 #pragma once
 
 #include <cmath>
@@ -79,6 +92,7 @@ struct JointLaw {
   double inv_shear_stiffness;  // 1/K_s, m/Pa
   double inv_slip_peak0;       // 1/s_p at zero normal stress, 1/m
   double inv_slip_range0;      // 1/s_t at zero normal stress, 1/m
+  bool keep_friction = false;  // only the cohesion softens (see the header); set by make_law from CohesiveProps
 };
 
 // Law constants from stiffnesses K_n, K_s (Pa/m), strengths f_t, c (Pa), tan(phi) and fracture energies (J/m^2).
@@ -90,7 +104,8 @@ JointLaw make_joint_law(double K_n, double K_s, double f_t, double G_I, double c
 struct PointHistory {
   double damage;            // D in [0, 1], the largest value reached (irreversible)
   double trial;             // signed trial damage at the last evaluation (< 0 below both thresholds), -
-  double undamaged_energy;  // E_0 = e_n0 + e_s0 at the last evaluation, J/m^2
+  double undamaged_energy;  // E_0 = e_n0 + e_s0 at the last evaluation (minus the slider's energy with keep_friction), J/m^2
+  double slip_friction;     // s_f, plastic slip of the friction slider (keep_friction only; else 0), m
 };
 
 // History of an untouched point (o = s = 0): the signed trial damage there is max(-o_p/o_t, -s_p/s_t).
@@ -104,8 +119,12 @@ struct PointResponse {
   double damage_II;      // D_II at this state (>= 0)
   double energy;         // recoverable elastic energy at the new state, J/m^2
   double dissipated;     // energy dissipated by the damage increment of this evaluation, J/m^2 (>= 0)
+  double friction_dissipated;  // keep_friction: work of the friction slider's slip in this evaluation, J/m^2 (>= 0)
   PointHistory history;  // new history; history.damage >= the old damage
 };
+
+// keep_friction: softening range of the cohesion alone, (G_II - (2/3) c s_p) / (kappa c), floored like the one below.
+double cohesion_softening_range(const JointLaw& law, double slip_peak);
 
 // Softening range in shear for the current shear strength f_s (Pa) and slip at peak s_p (m). Compression raises
 // f_s and s_p = 2 f_s / K_s and can push (2/3) f_s s_p up to G_II; the range is then floored at 1e-3 s_p (the joint
@@ -139,8 +158,11 @@ inline PointResponse evaluate_point(const JointLaw& L, double o, double s, const
   const double dI = (o - o_p) * L.inv_opening_range;
   // Below the limit only the sign and rough size of dII matter (onset interpolation), so the zero-compression range
   // serves there and spares the compressed joints of a precompressed wall a division per point.
-  const double dII = (o < 0.0 && a_s > s_p) ? (a_s - s_p) / shear_softening_range(L, f_s, s_p)
-                                            : (a_s - s_p) * L.inv_slip_range0;
+  // (keep_friction: the range belongs to the cohesion alone, see the header.)
+  const double dII = (o < 0.0 && a_s > s_p)
+                         ? (a_s - s_p) / (L.keep_friction ? cohesion_softening_range(L, s_p)
+                                                          : shear_softening_range(L, f_s, s_p))
+                         : (a_s - s_p) * L.inv_slip_range0;
   r.damage_I = dI > 0.0 ? dI : 0.0;
   r.damage_II = dII > 0.0 ? dII : 0.0;
   double trial;
@@ -173,13 +195,36 @@ inline PointResponse evaluate_point(const JointLaw& L, double o, double s, const
     t_s0 = prepeak_shape(y) * f_s;
     e_s0 = prepeak_energy_shape(y) * f_s * s_p;
   }
-  const double E0 = e_n0 + e_s0;
+  double E0 = e_n0 + e_s0;
   const double z = D > 0.0 ? softening(D) : 1.0;
   r.sigma = o < 0.0 ? sigma_c : z * t_n0;
   r.tau = (s < 0.0 ? -z : z) * t_s0;
   // Recoverable energy: the work given back when unloading to o = s = 0 at frozen D along the same curves.
   r.energy = z * E0 + (o < 0.0 ? 0.5 * sigma_c * o : 0.0);
   r.dissipated = 0.0;
+  r.friction_dissipated = 0.0;
+  double s_f = 0.0;
+  if (L.keep_friction) {
+    // Coulomb slider in parallel, weight 1 - z: strength f_f = f_s - c under compression, none in tension.
+    const double f_f = o < 0.0 ? f_s - L.cohesion : 0.0;
+    s_f = old.slip_friction;
+    double tau_f = L.shear_stiffness * (s - s_f);
+    if (tau_f > f_f) {
+      tau_f = f_f;
+      s_f = s - f_f * L.inv_shear_stiffness;
+    } else if (tau_f < -f_f) {
+      tau_f = -f_f;
+      s_f = s + f_f * L.inv_shear_stiffness;
+    }
+    const double e_f = 0.5 * tau_f * tau_f * L.inv_shear_stiffness;
+    r.tau += (1.0 - z) * tau_f;
+    r.energy += (1.0 - z) * e_f;
+    // Weight 1 - z at the middle of the step (trapezoid in z): second order like the damage dissipation.
+    const double ds_f = s_f - old.slip_friction;
+    const double z_mid = D > D_old ? 0.5 * (z + (D_old > 0.0 ? softening(D_old) : 1.0)) : z;
+    r.friction_dissipated = (1.0 - z_mid) * f_f * (ds_f < 0.0 ? -ds_f : ds_f);
+    E0 -= e_f;  // damage releases z's share of E_0 less the slider's energy, which (1 - z) takes over
+  }
   if (D > D_old) {
     double phi = 0.0;  // fraction of the step at which the trial damage passed D_old
     if (trial > old.trial) phi = (D_old - old.trial) / (trial - old.trial);
@@ -187,7 +232,7 @@ inline PointResponse evaluate_point(const JointLaw& L, double o, double s, const
     const double E0_a = old.undamaged_energy + phi * (E0 - old.undamaged_energy);
     r.dissipated = (softening(D_old) - z) * 0.5 * (E0_a + E0);
   }
-  r.history = PointHistory{D, trial, E0};
+  r.history = PointHistory{D, trial, E0, s_f};
   return r;
 }
 

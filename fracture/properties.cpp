@@ -89,7 +89,8 @@ std::vector<std::string> check(const CohesiveProps& p, double h_max, double sigm
   }
   const double f_s = p.cohesion + sigma_c * std::tan(p.friction_deg * kPi / 180.0);
   const double s_p = opening_at_peak(f_s, K_s);
-  if (p.G_II <= (2.0 / 3.0) * f_s * s_p) {
+  // keep_friction: G_II pays for the softening of the cohesion only, (2/3) c s_p before the peak.
+  if (p.G_II <= (2.0 / 3.0) * (p.keep_friction ? p.cohesion : f_s) * s_p) {
     std::string need = has_penalty ? "p_j > 4 h f_s^2 / (3 G_II) = " + fmt(4.0 * h_max * f_s * f_s / (3.0 * p.G_II)) + " Pa"
                                    : "k_s > 4 f_s^2 / (3 G_II) = " + fmt(4.0 * f_s * f_s / (3.0 * p.G_II)) + " Pa/m";
     out.push_back("joint too soft for its mode II fracture energy: G_II = " + fmt(p.G_II) +
@@ -102,8 +103,10 @@ std::vector<std::string> check(const CohesiveProps& p, double h_max, double sigm
 JointLaw make_law(const CohesiveProps& p, double h) {
   double K_n = 0.0, K_s = 0.0;
   stiffnesses(p, h, K_n, K_s);
-  return make_joint_law(K_n, K_s, p.tensile_strength, p.G_I, p.cohesion, std::tan(p.friction_deg * kPi / 180.0),
-                        p.G_II);
+  JointLaw L = make_joint_law(K_n, K_s, p.tensile_strength, p.G_I, p.cohesion,
+                              std::tan(p.friction_deg * kPi / 180.0), p.G_II);
+  L.keep_friction = p.keep_friction;
+  return L;
 }
 
 }  // namespace fdem::fracture

@@ -25,6 +25,7 @@ struct CohesiveProps {
   double penalty = unset;                // p_j, Pa (> 0); give this OR k_n and k_s
   double k_n = unset;                    // normal stiffness of a zero-thickness interface, Pa/m (> 0)
   double k_s = unset;                    // shear stiffness of a zero-thickness interface, Pa/m (> 0)
+  bool keep_friction = false;            // only the cohesion softens, friction is kept (law.hpp; [LR97])
 };
 
 // Problems with one class, one line each (empty when fine), for the engine to report against the case file.

@@ -82,7 +82,7 @@ TEST_CASE("point law: branches and continuity at o_p and undamaged compression a
   CHECK(L.opening_range == Approx(softening_range(100.0, 3e6, opening_at_peak(3e6, 4e12))));
   const double o_p = L.opening_peak;
   // History with damage D and no path information (trial = D: a new increment starts from this state).
-  auto H = [](double D) { return PointHistory{D, D, 0.0}; };
+  auto H = [](double D) { return PointHistory{D, D, 0.0, 0.0}; };
 
   auto r = evaluate_point(L, 0.5 * o_p, 0.0, H(0.0));
   CHECK(r.sigma == Approx(0.75 * 3e6));
@@ -183,4 +183,122 @@ TEST_CASE("check() reports a penalty too soft for the fracture energy", "[unit]"
   q.k_s = 1e13;
   q.k_n = 0.99 * 4.0 * q.tensile_strength * q.tensile_strength / (3.0 * q.G_I);
   CHECK(any_contains(check(q, 0.0), "need k_n >"));
+}
+
+namespace {
+// The 1.21 MPa mortar interface of CASES.md §B with keep_friction; sigma the precompression (Pa).
+JointLaw mortar(bool keep_friction) {
+  JointLaw L = make_joint_law(82e9, 36e9, 0.16e6, 12.0, 0.224e6, std::tan(35.0 * 3.14159265358979323846 / 180.0), 50.0);
+  L.keep_friction = keep_friction;
+  return L;
+}
+
+struct SlipPath {
+  double work = 0.0, fracture = 0.0, friction = 0.0, energy0 = 0.0, energy = 0.0, tau = 0.0, damage = 0.0;
+  double above_friction = 0.0;  // integral of tau minus the friction line shape(s/s_p) f_f (f_f past s_p)
+};
+
+// Monotonic slip 0 -> s_end at fixed opening o < 0 in n equal steps; trapezoid work of tau.
+SlipPath slide(const JointLaw& L, double o, double s_end, int n) {
+  SlipPath out;
+  PointHistory h = initial_history(L);
+  PointResponse r = evaluate_point(L, o, 0.0, h);
+  h = r.history;
+  out.energy0 = r.energy;
+  const double sigma = -L.normal_stiffness * o, f_f = sigma * L.tan_friction;
+  const double s_p = 2.0 * (L.cohesion + f_f) / L.shear_stiffness;
+  auto line = [&](double s) { return s < s_p ? prepeak_shape(s / s_p) * f_f : f_f; };
+  double tau_prev = r.tau, s_prev = 0.0;
+  for (int i = 1; i <= n; ++i) {
+    const double s = s_end * i / n;
+    r = evaluate_point(L, o, s, h);
+    h = r.history;
+    out.work += 0.5 * (tau_prev + r.tau) * (s - s_prev);
+    out.above_friction += 0.5 * ((tau_prev - line(s_prev)) + (r.tau - line(s))) * (s - s_prev);
+    out.fracture += r.dissipated;
+    out.friction += r.friction_dissipated;
+    tau_prev = r.tau;
+    s_prev = s;
+  }
+  out.energy = r.energy;
+  out.tau = r.tau;
+  out.damage = h.damage;
+  return out;
+}
+}  // namespace
+
+TEST_CASE("keep_friction: the pre-peak curve is the [K25] one, slip ends on the friction line, G_II above it", "[unit]") {
+  const JointLaw K = mortar(false), C = mortar(true);
+  const double sigma = 1.21e6, o = -sigma / 82e9, f_f = sigma * C.tan_friction, f_s = 0.224e6 + f_f;
+  const double s_p = 2.0 * f_s / 36e9;
+  const double s_t = cohesion_softening_range(C, s_p);
+  CHECK(s_t == Approx((50.0 - (2.0 / 3.0) * 0.224e6 * s_p) / (softening_integral() * 0.224e6)));
+  // Before any damage both laws give the same traction, f_s at s_p.
+  for (double y : {0.1, 0.5, 0.9, 1.0}) {
+    const double a = evaluate_point(K, o, y * s_p, initial_history(K)).tau;
+    CHECK(evaluate_point(C, o, y * s_p, initial_history(C)).tau == Approx(a).epsilon(1e-12));
+  }
+  CHECK(evaluate_point(C, o, s_p, initial_history(C)).tau == Approx(f_s).epsilon(1e-12));
+  // Past full damage: [K25] carries nothing until contact takes over, keep_friction carries sigma tan(phi).
+  const SlipPath k = slide(K, o, s_p + 2.0 * s_t, 20000);
+  const SlipPath c = slide(C, o, s_p + 1.5 * s_t, 20000);
+  CHECK(k.damage == 1.0);
+  CHECK(k.tau == 0.0);
+  CHECK(c.damage == 1.0);
+  CHECK(c.tau == Approx(f_f).epsilon(1e-12));
+  // The area between the curve and the friction line is G_II (energy-exact range of the cohesion).
+  CHECK(c.above_friction == Approx(50.0).epsilon(1e-4));
+  // Energy balance of the point: work = change of recoverable energy + damage + friction dissipation, to second
+  // order in the step (halving the step divides the residual by about 4).
+  const double res1 = c.work - (c.energy - c.energy0) - c.fracture - c.friction;
+  const SlipPath c2 = slide(C, o, s_p + 1.5 * s_t, 40000);
+  const double res2 = c2.work - (c2.energy - c2.energy0) - c2.fracture - c2.friction;
+  CHECK(std::fabs(res1) < 1e-4 * c.work);
+  CHECK(std::fabs(res2) < 0.35 * std::fabs(res1));
+  CHECK(c.fracture > 0.0);
+  CHECK(c.friction > 0.0);
+}
+
+TEST_CASE("keep_friction: after full damage a slip cycle is a rectangular Coulomb loop of 4 f_f (a - f_f / K_s)", "[unit]") {
+  const JointLaw C = mortar(true);
+  const double sigma = 1.21e6, o = -sigma / 82e9, f_f = sigma * C.tan_friction;
+  PointHistory h = initial_history(C);
+  h.damage = 1.0;  // fully damaged, still compressed: the element is about to leave, its faces still rub
+  h.trial = 1.0;
+  const double a = 1e-3;
+  const int n = 4000;  // steps per quarter cycle; the path hits +-a exactly
+  double fric = 0.0;
+  auto go = [&](double from, double to) {
+    for (int i = 1; i <= n; ++i) {
+      const PointResponse r = evaluate_point(C, o, from + (to - from) * i / n, h);
+      h = r.history;
+      fric += r.friction_dissipated;
+      CHECK(std::fabs(r.tau) <= f_f * (1.0 + 1e-12));
+    }
+  };
+  go(0.0, a);  // first loading: slides from f_f / K_s on
+  CHECK(evaluate_point(C, o, a, h).tau == Approx(f_f).epsilon(1e-12));
+  fric = 0.0;
+  go(a, -a);
+  go(-a, a);
+  CHECK(fric == Approx(4.0 * f_f * (a - f_f / 36e9)).epsilon(1e-9));
+  // Opened (o > 0): no friction.
+  CHECK(evaluate_point(C, 1e-6, a + 1e-4, h).tau == 0.0);
+}
+
+TEST_CASE("check(): with keep_friction G_II pays only for the cohesion", "[unit]") {
+  CohesiveProps p;
+  p.tensile_strength = 0.16e6;
+  p.cohesion = 0.224e6;
+  p.friction_deg = 35.0;
+  p.residual_friction_deg = 35.0;
+  p.G_I = 12.0;
+  p.G_II = 30.0;
+  p.k_n = 82e9;
+  p.k_s = 36e9;
+  // At 2.12 MPa: (2/3) f_s s_p = 4 f_s^2 / (3 k_s) = 62.6 J/m^2 > 30, but (2/3) c s_p = 8.4 J/m^2 < 30.
+  CHECK(any_contains(check(p, 0.0, 2.12e6), "too soft for its mode II fracture energy"));
+  p.keep_friction = true;
+  CHECK(check(p, 0.0, 2.12e6).empty());
+  CHECK(make_law(p, 0.03).keep_friction);
 }
