@@ -379,6 +379,8 @@ void read_wall(Ctx& ctx, Reader& r, mesh::WallSpec& w) {
     }
     w.joint = r.string("joint", false, "the joint type", {"dry", "mortar"}).value_or("dry");
     w.joint_thickness = r.number("joint_thickness", false, "a mortar joint thickness >= 0 in m", nonneg).value_or(0);
+    w.unit_cracks = r.string("unit_cracks", false, "where crackable units may crack",
+                             {"anywhere", "middle"}).value_or("anywhere");
     w.beam_height = r.number("beam_height", false, "a beam depth >= 0 in m", nonneg).value_or(0);
     w.beam_overhang = r.number("beam_overhang", false, "a beam overhang >= 0 in m", nonneg).value_or(0);
     w.base = r.string("base", false, "the base", {"none", "fixed", "slab"}).value_or("none");

@@ -37,6 +37,7 @@ mesh::TopologyOptions topology_options(const CaseSpec& spec, const mesh::Mesh& m
         opt.interfaces.push_back(r);
     }
     opt.split_all = spec.geometry.split_all;
+    if (spec.geometry.type == "wall" && spec.geometry.wall.unit_cracks == "middle") opt.crack_group = "unit_cracks";
     return opt;
 }
 

@@ -13,6 +13,7 @@
 #include <cmath>
 #include <map>
 #include <numeric>
+#include <set>
 #include <tuple>
 #include <sstream>
 #include <utility>
@@ -275,6 +276,12 @@ Topology build_topology(const Mesh& m, const TopologyOptions& opt) {
         pair_rule[static_cast<std::size_t>(b) * nr + a] = ab;
     }
 
+    // Edges of the crack group (unordered node pairs), when crack lines are restricted.
+    std::set<std::pair<int, int>> crack_edges;
+    if (!opt.crack_group.empty())
+        if (const PhysicalGroup* g = m.find_group(opt.crack_group))
+            for (const auto& e : g->edges) crack_edges.insert({std::min(e[0], e[1]), std::max(e[0], e[1])});
+
     // Unique edges: sort the 3 * nt half-edges by their unordered node pair.
     struct Half {
         int lo, hi, tri, local;  // local: the half-edge runs from local node `local` to local node (local+1)%3
@@ -333,7 +340,8 @@ Topology build_topology(const Mesh& m, const TopologyOptions& opt) {
                 if (kind == InterfaceKind::dry) cls = EdgeClass::dry;
             }
             if (tied) {
-                const bool can_crack = ra >= 0 && rb >= 0 && crackable[ra] && crackable[rb];
+                const bool can_crack = ra >= 0 && rb >= 0 && crackable[ra] && crackable[rb] &&
+                                       (opt.crack_group.empty() || crack_edges.count({A.lo, A.hi}) > 0);
                 cls = (opt.split_all || can_crack) ? EdgeClass::crackable : EdgeClass::interior;
             }
             if (cls == EdgeClass::interior) {

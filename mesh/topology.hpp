@@ -72,6 +72,9 @@ struct TopologyOptions {
     std::vector<InterfaceRule> interfaces;
     bool split_all = false;                    // classic FDEM limit: every interior and tied edge is crackable
     bool contact_by_node = true;               // contact_capable by a node on a free/dry edge (false: by an edge)
+    // Non-empty: the 1D physical group of the only edges where a crackable material may crack (e.g. the wall
+    // generator's "unit_cracks"); the other edges inside it are interior. Missing group = no such edge.
+    std::string crack_group;
 };
 
 // A 4-node cohesive element joining side A edge a0->a1 and side B edge b0->b1 (split node ids), with a0 and b0

@@ -13,6 +13,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <set>
 #include <sstream>
@@ -101,6 +102,10 @@ std::vector<std::string> check(const WallSpec& s) {
     if (s.base != "none" && s.base != "fixed" && s.base != "slab")
         bad.push_back("geometry.base must be \"none\", \"fixed\" or \"slab\", got \"" + s.base + "\"");
     if (s.base == "slab") need_positive(s.base_height, "base_height");
+    if (s.unit_cracks != "anywhere" && s.unit_cracks != "middle")
+        bad.push_back("geometry.unit_cracks must be \"anywhere\" or \"middle\", got \"" + s.unit_cracks + "\"");
+    if (s.unit_cracks == "middle" && !s.stones.empty())
+        bad.push_back("geometry.unit_cracks = \"middle\" needs generated courses, not stones");
 
     if (s.stones.empty()) {
         need_positive(s.length, "length");
@@ -260,6 +265,35 @@ std::vector<int> points_at(double x, double y, double tol) {
     return out;
 }
 
+// unit_cracks = "middle": the two halves of a split unit are one body (one continuum with a potential crack), so
+// the triangles of the halves of outline i (split[i] not NaN; found by their centroid) get one body id; bodies are
+// then renumbered in order of first appearance.
+void join_split_units(Mesh& m, const std::vector<Polygon>& outlines, const std::vector<double>& split) {
+    const int units = m.find_region("units");
+    if (units < 0 || m.tri_body.empty()) return;
+    std::map<int, int> first_body;  // outline -> body of its first triangle
+    std::map<int, int> same;        // body -> body it joins
+    for (int t = 0; t < m.n_triangles(); ++t) {
+        if (m.tri_region[t] != units) continue;
+        double cx = 0, cy = 0;
+        for (int k = 0; k < 3; ++k) cx += m.xy[2 * m.tri[3 * t + k]] / 3, cy += m.xy[2 * m.tri[3 * t + k] + 1] / 3;
+        for (std::size_t i = 0; i < outlines.size(); ++i) {
+            if (std::isnan(split[i])) continue;
+            const auto& p = outlines[i];
+            if (cx < p[0][0] || cx > p[1][0] || cy < p[0][1] || cy > p[2][1]) continue;
+            const int b = first_body.emplace(static_cast<int>(i), m.tri_body[t]).first->second;
+            if (b != m.tri_body[t]) same[m.tri_body[t]] = b;
+            break;
+        }
+    }
+    std::map<int, int> renumber;
+    for (int& b : m.tri_body) {
+        auto j = same.find(b);
+        const int root = j == same.end() ? b : j->second;
+        b = renumber.emplace(root, static_cast<int>(renumber.size())).first->second;
+    }
+}
+
 void add_group(int dim, const std::vector<int>& tags, const std::string& name) {
     if (tags.empty()) return;
     gmsh::model::setPhysicalName(dim, gmsh::model::addPhysicalGroup(dim, tags), name);
@@ -287,7 +321,33 @@ Mesh generate_wall(const WallSpec& s) {
         std::vector<std::string> labels;
         std::vector<int> role;  // 0 unit, 1 beam, 2 base
         gmsh::vectorpair unit_surfaces;
-        for (const auto& p : outlines) unit_surfaces.push_back({2, add_polygon(p)});
+        // unit_cracks = "middle": whole units become two halves (rectangles of the generated bond); split[i] is
+        // the x of the cut of outline i, or NaN.
+        std::vector<double> split(outlines.size(), std::numeric_limits<double>::quiet_NaN());
+        std::vector<std::size_t> unit_of_surface;  // input surface -> outline index
+        if (s.unit_cracks == "middle") {
+            double widest = 0.0;
+            for (const auto& p : outlines) widest = std::max(widest, p[1][0] - p[0][0]);
+            for (std::size_t i = 0; i < outlines.size(); ++i) {
+                const auto& p = outlines[i];
+                const double x0 = p[0][0], x1 = p[1][0], y0 = p[0][1], y1 = p[2][1];
+                if (x1 - x0 < 0.75 * widest) {
+                    unit_surfaces.push_back({2, add_polygon(p)});
+                    unit_of_surface.push_back(i);
+                    continue;
+                }
+                split[i] = 0.5 * (x0 + x1);
+                unit_surfaces.push_back({2, add_box(x0, y0, split[i], y1)});
+                unit_of_surface.push_back(i);
+                unit_surfaces.push_back({2, add_box(split[i], y0, x1, y1)});
+                unit_of_surface.push_back(i);
+            }
+        } else {
+            for (std::size_t i = 0; i < outlines.size(); ++i) {
+                unit_surfaces.push_back({2, add_polygon(outlines[i])});
+                unit_of_surface.push_back(i);
+            }
+        }
         std::vector<std::vector<int>> unit_pieces(unit_surfaces.size());
         if (!s.openings.empty()) {
             gmsh::vectorpair holes, out;
@@ -304,7 +364,7 @@ Mesh generate_wall(const WallSpec& s) {
         for (std::size_t i = 0; i < unit_pieces.size(); ++i)
             for (int tag : unit_pieces[i]) {
                 inputs.push_back({2, tag});
-                labels.push_back(std::string(what_unit) + " " + std::to_string(i));
+                labels.push_back(std::string(what_unit) + " " + std::to_string(unit_of_surface[i]));
                 role.push_back(0);
             }
         if (has_beam) {
@@ -399,6 +459,16 @@ Mesh generate_wall(const WallSpec& s) {
             add_group(1, curves_in(-s.base_overhang, bottom, -s.base_overhang, 0, tol, base), "base_left");
             add_group(1, curves_in(L + s.base_overhang, bottom, L + s.base_overhang, 0, tol, base), "base_right");
         }
+        if (s.unit_cracks == "middle") {
+            std::vector<int> mids;
+            for (std::size_t i = 0; i < outlines.size(); ++i)
+                if (!std::isnan(split[i]))
+                    for (int c : curves_in(split[i], outlines[i][0][1], split[i], outlines[i][2][1], tol, units))
+                        mids.push_back(c);
+            std::sort(mids.begin(), mids.end());
+            mids.erase(std::unique(mids.begin(), mids.end()), mids.end());
+            add_group(1, mids, "unit_cracks");
+        }
         add_group(0, points_at(0, 0, tol), "toe_left");
         add_group(0, points_at(L, 0, tol), "toe_right");
         add_group(0, points_at(0, H, tol), "wall_top_left");
@@ -406,7 +476,9 @@ Mesh generate_wall(const WallSpec& s) {
 
         gmsh::model::mesh::generate(2);
         throw_on_gmsh_error("meshing the wall");
-        return extract_current_model();
+        Mesh m = extract_current_model();
+        if (s.unit_cracks == "middle") join_split_units(m, outlines, split);
+        return m;
     } catch (const MeshError&) {
         throw;
     } catch (const std::exception& ex) {

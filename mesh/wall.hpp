@@ -73,6 +73,12 @@ struct WallSpec {
     double mesh_size_beam = 0;     // m, in the beam; 0 = mesh_size
     double mesh_size_base = 0;     // m, in the base; 0 = mesh_size
     std::vector<WallRefinement> refine;
+    // Where a crackable unit may crack: "anywhere" (every interior edge, the default) or "middle": one vertical
+    // potential crack at mid-length of every whole unit (the simplified micro-models of Lourenco & Rots 1997 and the
+    // DEM reproductions of the Vermeltfoort walls). The unit is meshed as two halves that stay one body; the mid
+    // lines form the 1D group "unit_cracks", which the topology then takes as the only crackable unit edges.
+    // Generated bonds only; half units at the wall ends (shorter than 3/4 of the longest unit) are not split.
+    std::string unit_cracks = "anywhere";
 };
 
 // User-readable problems with a spec, one line each ("geometry.openings[1]: the opening reaches x = 1.2 m,

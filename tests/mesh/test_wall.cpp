@@ -227,3 +227,56 @@ TEST_CASE("the generator is deterministic: same spec, same bits", "[regression]"
     CHECK(a.tri_body == b.tri_body);
     CHECK(a.tri_region == b.tri_region);
 }
+
+TEST_CASE("unit_cracks = middle: one vertical potential crack per whole unit, the halves stay one body", "[unit]") {
+    WallSpec s = cases_a_wall();
+    s.unit_cracks = "middle";
+    const Mesh m = generate_wall(s);
+    CHECK(m.n_bodies() == 55);  // the two halves of a unit are one body
+    CHECK(std::abs(mesh_area(m) - 1.0) <= 1e-12);
+    const PhysicalGroup* g = m.find_group("unit_cracks");
+    REQUIRE(g != nullptr);
+    REQUIRE(g->dim == 1);
+    // The 45 whole 200 mm units are cut at their mid-length: every crack node is at a unit centre x, and the lines
+    // add up to 45 x 0.1 m.
+    std::set<double> centres;
+    for (const auto& p : wall_unit_outlines(s))
+        if (p[1][0] - p[0][0] > 0.15) centres.insert(0.5 * (p[0][0] + p[1][0]));
+    REQUIRE(centres.size() == 9);  // 5 in even courses, 4 in odd ones
+    double length = 0.0;
+    for (const auto& e : g->edges) {
+        const double xa = m.xy[2 * e[0]], xb = m.xy[2 * e[1]];
+        CHECK(xa == Approx(xb).margin(1e-12));
+        bool at_centre = false;
+        for (double c : centres) at_centre = at_centre || std::abs(xa - c) < 1e-9;
+        CHECK(at_centre);
+        length += std::abs(m.xy[2 * e[1] + 1] - m.xy[2 * e[0] + 1]);
+    }
+    CHECK(length == Approx(4.5).epsilon(1e-12));
+
+    // Topology with crackable units restricted to the group: only those edges are crackable, the dry joints as before.
+    TopologyOptions opt;
+    opt.regions = {{"units", true}};
+    opt.interfaces = {{"units", "units", InterfaceKind::dry}};
+    opt.crack_group = "unit_cracks";
+    const Topology topo = build_topology(m, opt);
+    double crack_length = 0.0;
+    int crackable = 0;
+    for (const auto& ce : topo.cohesive) {
+        if (ce.kind != EdgeClass::crackable) continue;
+        ++crackable;
+        const double* X = topo.mesh.xy.data();
+        CHECK(X[2 * ce.n[0]] == Approx(X[2 * ce.n[1]]).margin(1e-12));
+        CHECK(ce.body_a == ce.body_b);
+        crack_length += std::abs(X[2 * ce.n[1] + 1] - X[2 * ce.n[0] + 1]);
+    }
+    CHECK(crackable == static_cast<int>(g->edges.size()));
+    CHECK(crack_length == Approx(4.5).epsilon(1e-12));
+    opt.crack_group.clear();  // every interior edge of the units
+    int anywhere = 0;
+    for (const auto& ce : build_topology(m, opt).cohesive) anywhere += ce.kind == EdgeClass::crackable;
+    CHECK(anywhere > 5 * crackable);
+
+    s.unit_cracks = "diagonal";
+    CHECK_THROWS_WITH(generate_wall(s), Catch::Contains("geometry.unit_cracks"));
+}
