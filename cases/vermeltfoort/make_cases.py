@@ -104,7 +104,9 @@ local_damping = {DAMPING_SHEAR}
 #   the top and bottom ones clamped in steel beams (modelled: the 16 active courses, 992 mm, between a top beam and a
 #   base). Precompression N = sigma x 0.099 m^2 = {r['N_kN']} kN, then horizontal top displacement with the top beam
 #   kept horizontal. Measured peak about {r['experiment_kN']} kN (band +-15 %: {r['band_low_kN']}-{r['band_high_kN']} kN).
-# Properties (Pulatsu et al. DEM reproduction): bricks E 16.7 GPa, nu 0.15, may crack: f_t 2.0 MPa, c = 1.4 f_t,
+# Properties (Pulatsu et al. DEM reproduction): bricks E 16.7 GPa, nu 0.15, one potential crack at mid-length of
+#   every whole brick (geometry.unit_cracks = "middle", as in the simplified micro-models of Lourenco & Rots 1997 and
+#   the DEM reproductions; the rest of the brick is elastic): f_t 2.0 MPa, c = 1.4 f_t,
 #   friction 45 deg, G_I 80 N/m, G_II 500 N/m; unit-mortar interfaces (simplified micro-model: bricks expanded by half
 #   a joint, zero-thickness bonded interfaces): k_n 82 GPa/m, k_s 36 GPa/m, f_t {r['f_t_interface_MPa']} MPa, c = 1.4 f_t,
 #   friction 35 deg, G_I 12 N/m, G_II {r['GII_interface_N_per_m']} N/m.
@@ -139,6 +141,7 @@ base_height = 0.1        # m
 mesh_size = 0.031        # m
 mesh_size_beam = 0.1     # m
 mesh_size_base = 0.1     # m
+unit_cracks = "middle"   # one vertical potential crack per whole brick (see the header)
 
 [materials.brick]
 E = 1.67e10              # Pa
