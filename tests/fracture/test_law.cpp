@@ -296,7 +296,7 @@ TEST_CASE("check(): with keep_friction G_II pays only for the cohesion", "[unit]
   p.G_II = 30.0;
   p.k_n = 82e9;
   p.k_s = 36e9;
-  // At 2.12 MPa: (2/3) f_s s_p = 4 f_s^2 / (3 k_s) = 62.6 J/m^2 > 30, but (2/3) c s_p = 8.4 J/m^2 < 30.
+  // At 2.12 MPa: (2/3) f_s s_p = 4 f_s^2 / (3 k_s) = 108 J/m^2 > 30, but (2/3) c s_p = 14.2 J/m^2 < 30.
   CHECK(any_contains(check(p, 0.0, 2.12e6), "too soft for its mode II fracture energy"));
   p.keep_friction = true;
   CHECK(check(p, 0.0, 2.12e6).empty());
