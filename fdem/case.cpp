@@ -340,8 +340,19 @@ LoadSpec read_load(Ctx& ctx, const toml::table& t, const std::string& path) {
     l.group = r.string("group", true, "the name of a group (Gmsh physical group)").value_or("");
     auto force = r.vec2("force", false, "[Fx, Fy], the total force on the group in N");
     auto pressure = r.number("pressure", false, "a pressure in Pa");
-    if (force && pressure) ctx.error(path, l.line, "give either force or pressure, not both");
-    if (!r.has("force") && !r.has("pressure")) ctx.error(path, l.line, "missing; expected force = [Fx, Fy] (N) or pressure (Pa)");
+    const bool spring = r.has("spring");
+    if (int(bool(force)) + int(bool(pressure)) + int(spring) > 1)
+        ctx.error(path, l.line, "give one of force, pressure or spring");
+    if (!r.has("force") && !r.has("pressure") && !spring)
+        ctx.error(path, l.line, "missing; expected force = [Fx, Fy] (N), pressure (Pa) or spring = { component, stiffness, velocity }");
+    if (const toml::table* p = r.table("spring", false, "a table { component = \"x\", stiffness = k (N/m), velocity = v (m/s) }")) {
+        Reader sr(ctx, *p, r.key_path("spring"));
+        l.is_spring = true;
+        l.spring_component = component_index(sr.string("component", true, "\"x\" or \"y\"", kComponents).value_or("x"));
+        l.spring_stiffness = sr.number("stiffness", true, "a spring stiffness > 0 in N/m", [](double v) { return v > 0; }).value_or(1.0);
+        l.spring_velocity = sr.number("velocity", true, "the anchor's velocity in m/s").value_or(0.0);
+        sr.finish();
+    }
     if (force) l.force = *force;
     if (pressure) l.is_pressure = true, l.pressure = *pressure;
     l.ramp = r.number("ramp", false, "a ramp time >= 0 in s", [](double v) { return v >= 0; }).value_or(0.0);

@@ -83,7 +83,15 @@ struct LoadSpec {
     bool is_pressure = false;
     std::array<double, 2> force{0, 0};  // total force on the group, N (whole thickness), distributed by tributary length
     double pressure = 0;                // Pa, acting against the current outward normal of the group's edges
-    double ramp = 0;                    // s, linear ramp from the previous value
+    double ramp = 0;                    // s, linear ramp from the previous value (spring: smooth (1 - cos) ramp-up
+                                        // of the anchor's velocity, like a prescribed velocity)
+    // spring = { component, stiffness, velocity }: a compliant actuator. A spring of stiffness k (N/m) pulls the
+    // group (force shared as for a force load) towards an anchor that starts at the group's mean position and moves
+    // at `velocity` (m/s) in one component: F = k (anchor - mean position). The other component is left free.
+    bool is_spring = false;
+    int spring_component = 0;
+    double spring_stiffness = 0;         // N/m
+    double spring_velocity = 0;          // m/s
     int line = 0;
 };
 

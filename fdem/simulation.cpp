@@ -306,8 +306,9 @@ void Simulation::begin_stage(int s) {
         l.t0 = time_;
         l.ramp = ls.ramp;
         l.target = ls.is_pressure ? std::array<double, 2>{ls.pressure, 0} : ls.force;
+        l.is_spring = ls.is_spring;
         for (auto it = loads_.begin(); it != loads_.end(); ++it)
-            if (it->group == ls.group && it->is_pressure == ls.is_pressure) {
+            if (it->group == ls.group && it->is_pressure == ls.is_pressure && it->is_spring == ls.is_spring) {
                 const double w = it->ramp > 0 ? std::min(1.0, (time_ - it->t0) / it->ramp) : 1.0;
                 for (int c = 0; c < 2; ++c) l.start[c] = it->start[c] + w * (it->target[c] - it->start[c]);
                 loads_.erase(it);
@@ -336,6 +337,12 @@ void Simulation::begin_stage(int s) {
             if (grp.edges.empty())
                 for (int k : grp.nodes) share[k] += 1.0, total += 1.0;
             for (auto& [k, w] : share) l.nodes.push_back(k), l.weight.push_back(w / total);
+        }
+        if (ls.is_spring) {
+            // The anchor starts at the group's weighted mean position: no force at the start of the stage.
+            l.comp = ls.spring_component, l.k = ls.spring_stiffness, l.v = ls.spring_velocity;
+            l.anchor0 = 0;
+            for (std::size_t i = 0; i < l.nodes.size(); ++i) l.anchor0 += l.weight[i] * model_.x[2 * l.nodes[i] + l.comp];
         }
         loads_.push_back(std::move(l));
     }
@@ -386,6 +393,21 @@ void Simulation::apply_time_dependent(double t) {
     for (int d : loaded_dofs_) f_ext_[d] = 0;
     loaded_dofs_.clear();
     for (const ActiveLoad& l : loads_) {
+        if (l.is_spring) {
+            // Anchor displacement: the integral of a velocity ramped up like a prescribed one, (1 - cos) over ramp.
+            const double tau = t - l.t0, R = l.ramp;
+            const double s = R > 0 && tau < R ? l.v * 0.5 * (tau - R / kPi * std::sin(kPi * tau / R))
+                                              : l.v * (tau - (R > 0 ? 0.5 * R : 0.0));
+            double xm = 0;
+            for (std::size_t i = 0; i < l.nodes.size(); ++i) xm += l.weight[i] * model_.x[2 * l.nodes[i] + l.comp];
+            const double F = l.k * (l.anchor0 + s - xm);
+            for (std::size_t i = 0; i < l.nodes.size(); ++i) {
+                const int d = 2 * l.nodes[i] + l.comp;
+                f_ext_[d] += l.weight[i] * F;
+                loaded_dofs_.push_back(d);
+            }
+            continue;
+        }
         const double w = l.ramp > 0 ? std::min(1.0, (t - l.t0) / l.ramp) : 1.0;
         const double v0 = l.start[0] + w * (l.target[0] - l.start[0]);
         const double v1 = l.start[1] + w * (l.target[1] - l.start[1]);

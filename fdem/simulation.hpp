@@ -80,6 +80,9 @@ private:
         std::vector<double> weight;                  // force share per node (sums to 1)
         std::vector<std::array<int, 2>> edges;       // pressure: edges oriented counter-clockwise around the body
         bool is_pressure = false;
+        bool is_spring = false;                      // spring: k, v and the anchor's start position (m)
+        int comp = 0;
+        double k = 0, v = 0, anchor0 = 0;
         std::array<double, 2> start{0, 0}, target{0, 0};  // force N or pressure Pa (component 0)
         double ramp = 0, t0 = 0;
         std::string group;
