@@ -732,6 +732,8 @@ CaseSpec load_case(const std::string& path, const std::vector<std::string>& over
         s.gravity_ramp = r.number("gravity_ramp", false, "a ramp time >= 0 in s", [](double v) { return v >= 0; }).value_or(0);
         s.tilt_rate = r.number("tilt_rate", false, "a rotation rate of gravity in deg/s").value_or(0);
         s.local_damping = r.number("local_damping", false, "a local damping coefficient in [0, 1)", [](double v) { return v >= 0 && v < 1; });
+        s.local_damping_filter = r.number("local_damping_filter", false, "a filter time constant >= 0 in s (0: absolute velocity)",
+                                          [](double v) { return v >= 0 && std::isfinite(v); });
         s.contact_damping = r.number("contact_damping", false, "a fraction of critical damping of the contact springs in [0, 0.5]",
                                      [](double v) { return v >= 0 && v <= 0.5; });
         s.mass_damping = r.number("mass_damping", false, "a mass-proportional damping coefficient >= 0 in 1/s",

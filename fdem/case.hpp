@@ -145,6 +145,11 @@ struct StageSpec {
     double gravity_ramp = 0;
     double tilt_rate = 0;
     std::optional<double> local_damping;  // alpha of FORMULATION §4, 0 <= alpha < 1
+    // Time constant tau (s) of the moving mean each DOF's velocity is measured against for the sign of the local
+    // damping force: -alpha |f| sign(v - vbar_tau). 0 (default): the absolute velocity, as in [C79]. A steady motion
+    // (a wall driven at a constant rate) is then not braked: only fluctuations faster than tau are damped. Kept by
+    // later stages that do not set it.
+    std::optional<double> local_damping_filter;
     // Contact dashpots: fraction xi of critical damping at the stiffest contact spring's frequency (0 <= xi <= 0.5);
     // kept by later stages that do not set it, like local_damping. See ContactSystem::set_dashpot.
     std::optional<double> contact_damping;

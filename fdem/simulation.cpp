@@ -225,6 +225,15 @@ void Simulation::begin_stage(int s) {
     const int nn = model_.n_nodes();
 
     if (st.local_damping) alpha_ = *st.local_damping;
+    if (st.local_damping_filter) {
+        // The moving mean starts from the current velocities, so switching the filter on does not kick the motion.
+        if (*st.local_damping_filter > 0 && !(tau_ld_ > 0)) {
+            v_ref_ = model_.v;
+            for (auto& sp : supports_) sp.v_ref = sp.v_common;
+        }
+        tau_ld_ = *st.local_damping_filter;
+        if (!(tau_ld_ > 0)) v_ref_.clear();
+    }
     if (st.mass_damping) beta_mass_ = *st.mass_damping;
     if (st.contact_damping) {
         xi_contact_ = *st.contact_damping;
@@ -271,6 +280,7 @@ void Simulation::begin_stage(int s) {
                 double p = 0, m = 0;
                 for (int k : a.nodes) p += model_.mass[k] * model_.v[2 * k + c], m += model_.mass[k];
                 a.v_common = m > 0 ? p / m : 0.0;
+                a.v_ref = a.v_common;  // the filtered local damping's mean starts there (no kick)
             }
             const int id = static_cast<int>(supports_.size());
             for (int k : a.nodes) {
@@ -370,6 +380,7 @@ void Simulation::begin_stage(int s) {
     next_snapshot_ = si > 0 ? time_ + si : 1e300;
     log("stage " + std::to_string(s + 1) + "/" + std::to_string(spec_.stages.size()) + " '" + st.name + "' starts at t = " +
         sci(time_) + " s (local damping " + sci(alpha_) +
+        (tau_ld_ > 0 ? " against the velocities' moving mean over " + sci(tau_ld_) + " s" : std::string()) +
         (beta_mass_ > 0 ? ", mass damping " + sci(beta_mass_) + " 1/s" : std::string()) +
         (xi_contact_ > 0 ? ", contact damping " + sci(xi_contact_) + " of critical: dashpots c = " + sci(xi_contact_ * dt_contact_) + " s x k" : std::string()) +
         ")");
@@ -500,6 +511,10 @@ void Simulation::step() {
     // work; rigid_damp_ moves that share from work to damping after the loop. Serial, in support and node order.
     double rigid_damp = 0, rigid_damp_half = 0;  // J: dt F_d v_bar and dt/2 F_d v^{n+1/2}
     double rigid_mass = 0, rigid_mass_half = 0;  // J: the same for the mass-proportional damping force -a M v_bar
+    // Filtered local damping: each DOF's moving mean vref += wf (v - vref), the exact one-step weight of an
+    // exponential mean over tau for a velocity held over the step.
+    const double wf = tau_ld_ > 0 ? -std::expm1(-dt / tau_ld_) : 0.0;
+    double* vref = tau_ld_ > 0 ? v_ref_.data() : nullptr;
     const double hm = 0.5 * dt * beta_mass_;
     for (std::size_t id = 0; id < supports_.size(); ++id) {
         ActiveSupport& s = supports_[id];
@@ -515,7 +530,8 @@ void Simulation::step() {
         }
         if (!(M > 0)) continue;
         const double vold = s.v_common;
-        const double Fd = vold > 0 ? -alpha_ * std::abs(F) : vold < 0 ? alpha_ * std::abs(F) : 0.0;
+        const double vrel = tau_ld_ > 0 ? vold - s.v_ref : vold;
+        const double Fd = vrel > 0 ? -alpha_ * std::abs(F) : vrel < 0 ? alpha_ * std::abs(F) : 0.0;
         const double vnew = ((1 - hm) * vold + dt * (F + Fd) / M) / (1 + hm);
         const double Fm = -beta_mass_ * M * 0.5 * (vold + vnew);
         rigid_damp += dt * Fd * 0.5 * (vold + vnew);
@@ -523,6 +539,7 @@ void Simulation::step() {
         rigid_mass += dt * Fm * 0.5 * (vold + vnew);
         rigid_mass_half += 0.5 * dt * Fm * vnew;
         s.v_common = vnew;
+        if (tau_ld_ > 0) s.v_ref += wf * (vnew - s.v_ref);
         for (int k : s.nodes)
             if (dof_owner_[2 * k + c] == static_cast<int>(id)) dof_vel_[2 * k + c] = vnew;
     }
@@ -564,8 +581,9 @@ void Simulation::step() {
                 const double vold = vw[d];
                 double vnew;
                 if (kind[d] == 0) {
-                    // [C79] local damping: -alpha |f| sign(v).
-                    const double fd = vold > 0 ? -alpha * std::abs(f) : vold < 0 ? alpha * std::abs(f) : 0.0;
+                    // [C79] local damping: -alpha |f| sign(v), or sign(v - vref) with the filter.
+                    const double vrel = vref ? vold - vref[d] : vold;
+                    const double fd = vrel > 0 ? -alpha * std::abs(f) : vrel < 0 ? alpha * std::abs(f) : 0.0;
                     vnew = ((1 - hm) * vold + dt * (f + fd) * inv_mass[k]) / (1 + hm);
                     const double vbar = 0.5 * (vold + vnew);
                     dW += dt * fe[c] * vbar;
@@ -588,6 +606,7 @@ void Simulation::step() {
                     scale += std::abs(fin[c]) + std::abs(fe[c]);
                 }
                 K += 0.5 * mass[k] * vold * vnew;
+                if (vref) vref[d] += wf * (vnew - vref[d]);
                 if (!std::isfinite(vnew) && bad < 0) bad = k;
                 vw[d] = vnew;
                 xw[d] += dt * vnew;
@@ -1062,6 +1081,7 @@ void Simulation::write_summary(const std::string& status, const std::string& mes
         Json o = Json::object();
         o["name"] = s.name;
         if (s.local_damping) o["local_damping"] = *s.local_damping;
+        if (s.local_damping_filter) o["local_damping_filter_s"] = *s.local_damping_filter;
         if (s.contact_damping) o["contact_damping"] = *s.contact_damping;
         if (s.mass_damping) o["mass_damping"] = *s.mass_damping;
         if (s.duration) o["duration_s"] = *s.duration;

@@ -93,6 +93,7 @@ private:
         DofMode mode = DofMode::fixed;
         double v_start = 0, v_target = 0, ramp = 0, t0 = 0;
         double v_common = 0;         // rigid: the group's common velocity (m/s) at the last half step
+        double v_ref = 0;            // rigid: its moving mean for the filtered local damping (m/s)
         std::vector<double> pt, pu;  // protocol: times (s, from t0) and displacements (m)
         std::vector<double> pI;      // protocol: INT_pt[0]^pt[i] u dt at each knot (m s), for the corner smoothing
         std::string group;
@@ -148,6 +149,8 @@ private:
     std::array<double, 2> applied_gravity_{0, 0};  // m/s^2, after the tilt rotation
     double gravity_ramp_ = 0, tilt_rate_ = 0, tilt_deg_ = 0;
     double alpha_ = 0;  // local damping
+    double tau_ld_ = 0;  // s, local damping filter time constant (0: sign of the absolute velocity)
+    std::vector<double> v_ref_;  // m/s, per DOF: moving mean of the velocity over tau_ld_ (empty while tau_ld_ = 0)
     double beta_mass_ = 0;  // 1/s, mass-proportional damping
 
     // per-step scratch
