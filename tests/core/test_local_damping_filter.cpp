@@ -1,6 +1,6 @@
 // Stage key local_damping_filter = tau (s): the local damping force -alpha |f| sign(v - vbar) is signed by each DOF's
 // velocity relative to its exponential moving mean vbar over tau, so a steady motion is not braked and only the
-// fluctuations about it are damped (cases/lourenco2005/RESULTS.md §7.10: a wall driven at a constant rate whose
+// fluctuations about it are damped (cases/lourenco2005/RESULTS.md §8: a wall driven at a constant rate whose
 // oscillation rides on the drive's motion).
 //
 // CONSERVATION LAW
