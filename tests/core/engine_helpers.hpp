@@ -73,6 +73,17 @@ body = "m"
 )";
 }
 
+// The elastic column with a monitor "F" of the x load on its left edge (the spring-load tests); stages follow.
+inline std::string column_with_left_load_monitor(const std::string& name) {
+    return column_case_head(name) + R"(
+[[monitors]]
+name = "F"
+type = "load"
+group = "left"
+component = "x"
+)";
+}
+
 // Mass-weighted mean vertical velocity of all nodes (m/s): the momentum of a body over its mass.
 inline double mean_velocity_y(const fdem::Simulation& sim) {
     const auto& md = sim.model();

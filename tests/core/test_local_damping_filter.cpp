@@ -29,13 +29,7 @@
 namespace {
 
 std::string pull_case(const std::string& damping, double duration) {
-    return testing::column_case_head("ldf") + R"(
-[[monitors]]
-name = "F"
-type = "load"
-group = "left"
-component = "x"
-
+    return testing::column_with_left_load_monitor("ldf") + R"(
 [[stages]]
 name = "drift"
 duration = 0.6440796326794897

@@ -17,13 +17,7 @@
 namespace {
 
 std::string spring_case(const std::string& spring) {
-    return testing::column_case_head("spring") + R"(
-[[monitors]]
-name = "F"
-type = "load"
-group = "left"
-component = "x"
-
+    return testing::column_with_left_load_monitor("spring") + R"(
 [[stages]]
 name = "pull"
 duration = 0.1
