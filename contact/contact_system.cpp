@@ -19,17 +19,6 @@ namespace {
 // oversubscribed machine its barrier can cost milliseconds. Results are the same bits either way.
 constexpr int kParallelMin = 4096;
 
-inline double smallest_altitude(const double* T) {
-    const double area2 = std::fabs((T[2] - T[0]) * (T[5] - T[1]) - (T[4] - T[0]) * (T[3] - T[1]));
-    double lmax = 0.0;
-    for (int k = 0; k < 3; ++k) {
-        const int j = (k + 1) % 3;
-        const double ex = T[2 * j] - T[2 * k], ey = T[2 * j + 1] - T[2 * k + 1];
-        lmax = std::max(lmax, ex * ex + ey * ey);
-    }
-    return area2 / std::sqrt(lmax);
-}
-
 // A separated pair forgets its sliding history; written only when there is something to forget (most pairs
 // are apart and this keeps their history lines clean in cache).
 inline void forget(double* h) {
@@ -334,18 +323,15 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f)
         prm.distance_potential = L.normal_is_stiffness;
         prm.c = L.normal_is_stiffness ? 0.5 * L.normal : L.normal;
         // A penalty p (Pa) becomes a pressure/overlap slope 3 p (1/H_a + 1/H_b) (Pa/m) ([MA00] phi = 3 min L_k):
-        // p_t for friction, p_n for the dashpots.
-        double inv_h = 0.0;  // 1/H_a + 1/H_b (1/m), computed once when a penalty law needs it
-        auto slope = [&](double penalty) {
-            if (inv_h == 0.0) inv_h = 1.0 / smallest_altitude(xa) + 1.0 / smallest_altitude(xb);
-            return 3.0 * penalty * inv_h;
-        };
-        prm.k_s = L.tangential_is_stiffness ? L.tangential : slope(L.tangential);
+        // p_t for friction, p_n for the dashpots; pair_contact works it out once it knows the pair overlaps.
+        if (L.tangential_is_stiffness) prm.k_s = L.tangential;
+        else prm.p_t = L.tangential;
         prm.mu = L.mu;
         prm.dt = dt;
         if (beta_ > 0.0) {
             prm.beta = beta_;
-            prm.k_n_area = L.normal_is_stiffness ? L.normal : slope(L.normal);
+            if (L.normal_is_stiffness) prm.k_n_area = L.normal;
+            else prm.p_n = L.normal;
         }
         PairResult r;
         if (pair_contact(xa, xb, va, vb, prm, want_energy, &hist_[6 * static_cast<size_t>(p)], r)) {

@@ -85,11 +85,11 @@ double integrate_potential(const double* omega, int n, const double* T, const do
 // One loaded edge: the edge (nodes e, e+1) of triangle O ("owner") lies partly inside triangle Q ("other").
 // Normal load c * phi_Q on the owner's edge along -n_O; the reaction on Q through its area coordinates.
 // Friction: one tangential spring per edge at the centre of pressure ([K25] Eqs. 4-5, FORMULATION §5).
-void load_edge(const double* xo, const double* vo, double* fo, const double* vq, double* fq, int e, const double* I,
-               const PairParams& p, double& hist, PairResult& r) {
+// len: the owner's edge length (m), as edge_integrals computed it.
+void load_edge(const double* xo, const double* vo, double* fo, const double* vq, double* fq, int e, double len,
+               const double* I, const PairParams& p, double& hist, PairResult& r) {
     const int e1 = (e + 1) % 3;
     const double dx = xo[2 * e1] - xo[2 * e], dy = xo[2 * e1 + 1] - xo[2 * e + 1];
-    const double len = std::sqrt(dx * dx + dy * dy);
     const double nx = dy / len, ny = -dx / len, tx = dx / len, ty = dy / len;
     const double ct = p.c * p.thickness;
     fo[2 * e] -= ct * I[0] * nx;
@@ -159,6 +159,17 @@ void load_edge(const double* xo, const double* vo, double* fo, const double* vq,
 
 }  // namespace
 
+double smallest_altitude(const double* T) {
+    const double area2 = std::fabs((T[2] - T[0]) * (T[5] - T[1]) - (T[4] - T[0]) * (T[3] - T[1]));
+    double lmax = 0.0;
+    for (int k = 0; k < 3; ++k) {
+        const int j = (k + 1) % 3;
+        const double ex = T[2 * j] - T[2 * k], ey = T[2 * j + 1] - T[2 * k + 1];
+        lmax = std::max(lmax, ex * ex + ey * ey);
+    }
+    return area2 / std::sqrt(lmax);
+}
+
 void potential_weights(const double* x, bool distance_potential, double* w) {
     if (!distance_potential) {
         w[0] = w[1] = w[2] = 3.0;
@@ -175,7 +186,13 @@ void potential_weights(const double* x, bool distance_potential, double* w) {
 namespace {
 
 // Core of edge_in_triangle on the area coordinates of the segment ends: La[k] = L_k(p0), Lb[k] = L_k(p1).
-bool edge_integrals(const double* La, const double* Lb, double len, const double* w, double* out) {
+// The segment's length is computed only once it is known to enter the triangle; *len_out receives it then.
+bool edge_integrals(const double* La, const double* Lb, const double* p0, const double* p1, const double* w,
+                    double* out, double* len_out) {
+    // Both ends on the outside of one edge line: the segment misses the triangle. Exactly the cases in which the
+    // interval below comes out empty (or b = 0 with a < 0), taken before its three divisions.
+    for (int k = 0; k < 3; ++k)
+        if ((La[k] < 0.0 && Lb[k] <= 0.0) || (La[k] <= 0.0 && Lb[k] < 0.0)) return false;
     double a[3], b[3];
     double lo = 0.0, hi = 1.0;
     for (int k = 0; k < 3; ++k) {
@@ -190,6 +207,8 @@ bool edge_integrals(const double* La, const double* Lb, double len, const double
         }
     }
     if (!(hi > lo)) return false;
+    const double len = std::sqrt((p1[0] - p0[0]) * (p1[0] - p0[0]) + (p1[1] - p0[1]) * (p1[1] - p0[1]));
+    *len_out = len;
     // breakpoints of min_k w_k L_k(s) inside (lo, hi)
     double br[5];
     int nb = 0;
@@ -249,8 +268,8 @@ bool edge_in_triangle(const double* p0, const double* p1, const double* T, const
         La[k] = affine(g + 3 * k, p0[0], p0[1]);
         Lb[k] = affine(g + 3 * k, p1[0], p1[1]);
     }
-    return edge_integrals(La, Lb, std::sqrt((p1[0] - p0[0]) * (p1[0] - p0[0]) + (p1[1] - p0[1]) * (p1[1] - p0[1])),
-                          w, out);
+    double len;
+    return edge_integrals(La, Lb, p0, p1, w, out, &len);
 }
 
 double pair_energy(const double* xa, const double* xb, const PairParams& p) {
@@ -274,7 +293,7 @@ double pair_energy(const double* xa, const double* xb, const PairParams& p) {
     return p.thickness * p.c * (ia + ib);
 }
 
-bool pair_contact(const double* xa, const double* xb, const double* va, const double* vb, const PairParams& p,
+bool pair_contact(const double* xa, const double* xb, const double* va, const double* vb, const PairParams& params,
                   bool want_energy, double* hist, PairResult& r) {
     for (int i = 0; i < 6; ++i) r.fa[i] = r.fb[i] = 0.0;
     r.energy_normal = r.energy_tangential = r.dissipation = r.damping = 0.0;
@@ -292,24 +311,26 @@ bool pair_contact(const double* xa, const double* xb, const double* va, const do
         for (int s = 0; s < 6; ++s) hist[s] = 0.0;
         return false;
     }
+    PairParams p = params;
+    if (p.p_t > 0.0 || (p.beta > 0.0 && p.p_n > 0.0)) {
+        const double inv_h = 1.0 / smallest_altitude(xa) + 1.0 / smallest_altitude(xb);  // 1/m
+        if (p.p_t > 0.0) p.k_s = 3.0 * p.p_t * inv_h;
+        if (p.beta > 0.0 && p.p_n > 0.0) p.k_n_area = 3.0 * p.p_n * inv_h;
+    }
     double wa[3], wb[3];
     potential_weights(xa, p.distance_potential, wa);
     potential_weights(xb, p.distance_potential, wb);
-    double I[6];
+    double I[6], len;
     for (int e = 0; e < 3; ++e) {
         const int e1 = (e + 1) % 3;
-        const double la = std::sqrt((xa[2 * e1] - xa[2 * e]) * (xa[2 * e1] - xa[2 * e]) +
-                                    (xa[2 * e1 + 1] - xa[2 * e + 1]) * (xa[2 * e1 + 1] - xa[2 * e + 1]));
-        if (edge_integrals(a_in_b + 3 * e, a_in_b + 3 * e1, la, wb, I)) {
-            load_edge(xa, va, r.fa, vb, r.fb, e, I, p, hist[e], r);
+        if (edge_integrals(a_in_b + 3 * e, a_in_b + 3 * e1, xa + 2 * e, xa + 2 * e1, wb, I, &len)) {
+            load_edge(xa, va, r.fa, vb, r.fb, e, len, I, p, hist[e], r);
             ++r.active_edges;
         } else {
             hist[e] = 0.0;
         }
-        const double lb = std::sqrt((xb[2 * e1] - xb[2 * e]) * (xb[2 * e1] - xb[2 * e]) +
-                                    (xb[2 * e1 + 1] - xb[2 * e + 1]) * (xb[2 * e1 + 1] - xb[2 * e + 1]));
-        if (edge_integrals(b_in_a + 3 * e, b_in_a + 3 * e1, lb, wa, I)) {
-            load_edge(xb, vb, r.fb, va, r.fa, e, I, p, hist[3 + e], r);
+        if (edge_integrals(b_in_a + 3 * e, b_in_a + 3 * e1, xb + 2 * e, xb + 2 * e1, wa, I, &len)) {
+            load_edge(xb, vb, r.fb, va, r.fa, e, len, I, p, hist[3 + e], r);
             ++r.active_edges;
         } else {
             hist[3 + e] = 0.0;

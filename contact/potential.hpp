@@ -42,6 +42,11 @@ struct PairParams {
     // length of the edge inside the other triangle (each of the two faces carries half the contact).
     double beta = 0.0;       // s
     double k_n_area = 0.0;   // normal pressure per overlap (Pa/m), for the dashpot
+    // Penalty laws: when > 0, k_s (and, with beta > 0, k_n_area) are set inside pair_contact, only for pairs that
+    // overlap, to the pressure/overlap slope 3 p (1/H_a + 1/H_b) (Pa/m) of the tangential penalty p_t and normal
+    // penalty p_n (Pa) ([MA00] phi = 3 min L_k; H the triangles' smallest altitudes). 0: use k_s, k_n_area as given.
+    double p_t = 0.0;        // Pa
+    double p_n = 0.0;        // Pa
 };
 
 struct PairResult {
@@ -53,6 +58,9 @@ struct PairResult {
     double damping = 0.0;            // work of the dashpots in this step (J, >= 0)
     int active_edges = 0;            // edges carrying a normal force
 };
+
+// Smallest altitude of a triangle (m): twice its area over its longest edge.
+double smallest_altitude(const double* x);
 
 // Potential weights w_k of a triangle (see THE POTENTIAL).
 void potential_weights(const double* x, bool distance_potential, double* w);
