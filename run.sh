@@ -5,6 +5,7 @@
 # its peak load against the experiment.
 set -euo pipefail
 cd "$(dirname "$0")"
+FDEM_BUILD_TARGET=${FDEM_BUILD_TARGET:-fdem}  # the executable only; ./test.sh builds the tests
 source tools/setup.sh
 case_file=${1:-cases/lourenco2005/k25_N100_quick.toml}
 [ $# -gt 0 ] && shift

@@ -2,6 +2,7 @@
 # Shared set-up for ./run.sh and ./test.sh: install the Debian packages that are missing
 # (apt-get update at most once), then configure and build fdem in ./build with every core.
 # Source it; it defines FDEM_BUILD (the build folder) and FDEM_BIN (the fdem executable).
+# FDEM_BUILD_TARGET (optional): build only that target (./run.sh builds "fdem": the tests are half the build).
 set -euo pipefail
 FDEM_ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 FDEM_BUILD=${FDEM_BUILD:-$FDEM_ROOT/build}
@@ -25,7 +26,7 @@ fdem_build() {
   local jobs
   jobs=$(nproc 2>/dev/null || echo 2)
   cmake -S "$FDEM_ROOT" -B "$FDEM_BUILD" -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
-  cmake --build "$FDEM_BUILD" --parallel "$jobs" -- ${FDEM_BUILD_QUIET:+--quiet}
+  cmake --build "$FDEM_BUILD" --parallel "$jobs" ${FDEM_BUILD_TARGET:+--target "$FDEM_BUILD_TARGET"} -- ${FDEM_BUILD_QUIET:+--quiet}
 }
 
 fdem_install_missing
