@@ -1,6 +1,8 @@
-// fdem_bench: triangle force + integration throughput (triangle-steps per second) of an elastic mesh,
-// for 1 and 2 threads (or --threads LIST), median of several runs, written to a CSV.
-//   fdem_bench [--triangles N] [--steps S] [--repeats R] [--threads 1,2] [--csv FILE]
+// fdem_bench: step throughput (triangle-steps per second) for 1 and 2 threads (or --threads LIST), median of
+// several runs, written to a CSV. Without --case: triangle forces and integration of an elastic plate of about N
+// triangles. With --case FILE: the first steps of that case's first stage (contact, joints and all), so that the
+// thread scaling of a real scene is measured; --set key=value as for `fdem run`.
+//   fdem_bench [--triangles N | --case FILE [--set k=v ...]] [--steps S] [--repeats R] [--threads 1,2] [--csv FILE]
 #include <omp.h>
 
 #include <algorithm>
@@ -15,15 +17,18 @@
 #include <vector>
 
 #include "fdem/case.hpp"
+#include "fdem/errors.hpp"
 #include "fdem/omp_env.hpp"
 #include "fdem/model.hpp"
+#include "fdem/scene.hpp"
 #include "fdem/simulation.hpp"
 #include "mesh/gmsh_source.hpp"
 
 int main(int argc, char** argv) {
     fdem::ensure_passive_wait(argv);
     long triangles = 120000, steps = 200, repeats = 5;
-    std::string csv = "bench.csv", threads_list = "1,2";
+    std::string csv = "bench.csv", threads_list = "1,2", case_file;
+    std::vector<std::string> sets;
     for (int i = 1; i + 1 < argc; i += 2) {
         const std::string a = argv[i], v = argv[i + 1];
         if (a == "--triangles") triangles = std::atol(v.c_str());
@@ -31,42 +36,66 @@ int main(int argc, char** argv) {
         else if (a == "--repeats") repeats = std::atol(v.c_str());
         else if (a == "--threads") threads_list = v;
         else if (a == "--csv") csv = v;
+        else if (a == "--case") case_file = v;
+        else if (a == "--set") sets.push_back(v);
         else {
-            std::cerr << "usage: fdem_bench [--triangles N] [--steps S] [--repeats R] [--threads 1,2] [--csv FILE]\n";
+            std::cerr << "usage: fdem_bench [--triangles N | --case FILE [--set k=v ...]] [--steps S] [--repeats R] "
+                         "[--threads 1,2] [--csv FILE]\n";
             return 1;
         }
     }
-    // A 2 x 1 m plate; unstructured triangles of size h give about 2 * area / (h^2 sqrt(3)/2 * ...) triangles.
-    const double h = std::sqrt(2.0 * 2.0 / (triangles * 0.866));
+    if ((argc - 1) % 2 != 0) {
+        std::cerr << "fdem_bench: option '" << argv[argc - 1] << "' has no value\n";
+        return 1;
+    }
     fdem::CaseSpec spec;
-    spec.file = "bench";
-    spec.name = "bench";
-    spec.thickness = 0.1;
-    spec.geometry.type = "rectangle";
-    spec.materials.push_back({"m", 1e9, 0.25, 1000, 0, 0});
-    spec.region_material["body"] = "m";
-    fdem::StageSpec st;
-    st.name = "shake";
-    st.duration = 1e9;
-    st.gravity = std::array<double, 2>{0, -9.81};
-    st.local_damping = 0.1;
-    fdem::SupportSpec sup;
-    sup.group = "left";
-    sup.mode = {fdem::DofMode::fixed, fdem::DofMode::fixed};
-    st.supports.push_back(sup);
-    spec.stages.push_back(st);
-    fdem::mesh::Mesh m = fdem::mesh::mesh_rectangle(0, 0, 2.0, 1.0, h);
-    std::printf("mesh: %d triangles, %d nodes (h = %.4g m); %ld steps x %ld repeats\n", m.n_triangles(), m.n_nodes(), h, steps, repeats);
+    fdem::Model model;
+    std::string label;
+    try {
+        if (!case_file.empty()) {
+            spec = fdem::load_case(case_file, sets);
+            model = fdem::build_scene(spec);
+            label = spec.name;
+        } else {
+            // A 2 x 1 m plate of unstructured triangles of size h (about `triangles` of them).
+            const double h = std::sqrt(2.0 * 2.0 / (triangles * 0.866));
+            spec.file = "bench";
+            spec.name = "bench";
+            spec.thickness = 0.1;
+            spec.geometry.type = "rectangle";
+            spec.materials.push_back({"m", 1e9, 0.25, 1000, 0, 0});
+            spec.region_material["body"] = "m";
+            fdem::StageSpec st;
+            st.name = "shake";
+            st.duration = 1e9;
+            st.gravity = std::array<double, 2>{0, -9.81};
+            st.local_damping = 0.1;
+            fdem::SupportSpec sup;
+            sup.group = "left";
+            sup.mode = {fdem::DofMode::fixed, fdem::DofMode::fixed};
+            st.supports.push_back(sup);
+            spec.stages.push_back(st);
+            model = fdem::build_model(spec, fdem::mesh::mesh_rectangle(0, 0, 2.0, 1.0, h));
+            label = "plate";
+        }
+    } catch (const std::exception& e) {
+        std::cerr << "error: " << e.what() << "\n";
+        return 1;
+    }
+    std::printf("%s: %d triangles, %d nodes, %zu cohesive elements; %ld steps x %ld repeats\n", label.c_str(),
+                model.n_triangles(), model.n_nodes(), model.cohesive.size(), steps, repeats);
     std::ofstream out(csv);
-    out << "threads,triangles,nodes,steps,repeat,seconds,triangle_steps_per_s\n";
+    out << "case,threads,triangles,nodes,steps,repeat,seconds,triangle_steps_per_s\n";
     std::stringstream tl(threads_list);
     std::vector<std::pair<int, double>> medians;
+    std::vector<double> first_x;  // end state of the first thread count: every count runs the same steps
+    bool same_bits = true;
     for (std::string tok; std::getline(tl, tok, ',');) {
         const int nth = std::atoi(tok.c_str());
         fdem::RunOptions opt;
         opt.quiet = true;
         opt.threads = nth;
-        fdem::Simulation sim(spec, fdem::build_model(spec, m), opt);
+        fdem::Simulation sim(spec, model, opt);
         sim.begin_stage(0);
         for (int i = 0; i < 20; ++i) sim.step();  // warm-up
         std::vector<double> rates;
@@ -74,10 +103,13 @@ int main(int argc, char** argv) {
             const auto t0 = std::chrono::steady_clock::now();
             for (long s = 0; s < steps; ++s) sim.step();
             const double sec = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-            const double rate = static_cast<double>(steps) * m.n_triangles() / sec;
+            const double rate = static_cast<double>(steps) * model.n_triangles() / sec;
             rates.push_back(rate);
-            out << nth << "," << m.n_triangles() << "," << m.n_nodes() << "," << steps << "," << r << "," << sec << "," << rate << "\n";
+            out << label << "," << nth << "," << model.n_triangles() << "," << model.n_nodes() << "," << steps << "," << r << "," << sec << "," << rate << "\n";
         }
+        const std::vector<double>& xe = sim.model().x;
+        if (first_x.empty()) first_x = xe;
+        else same_bits = same_bits && first_x == xe;
         std::sort(rates.begin(), rates.end());
         const double med = rates[rates.size() / 2];
         medians.emplace_back(nth, med);
@@ -86,6 +118,8 @@ int main(int argc, char** argv) {
     if (medians.size() > 1)
         std::printf("speed-up %d -> %d threads: %.2f\n", medians.front().first, medians.back().first,
                     medians.back().second / medians.front().second);
+    if (medians.size() > 1)
+        std::printf("end positions bit-identical across thread counts: %s\n", same_bits ? "yes" : "NO");
     std::printf("CSV: %s\n", csv.c_str());
     return 0;
 }
