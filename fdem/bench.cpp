@@ -25,7 +25,7 @@
 #include "mesh/gmsh_source.hpp"
 
 int main(int argc, char** argv) {
-    fdem::ensure_passive_wait(argv);
+    fdem::ensure_wait_policy(argv);
     long triangles = 120000, steps = 200, repeats = 5;
     std::string csv = "bench.csv", threads_list = "1,2", case_file;
     std::vector<std::string> sets;

@@ -81,7 +81,7 @@ Args parse_args(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
-    fdem::ensure_passive_wait(argv);
+    fdem::ensure_wait_policy(argv);
     try {
         if (argc >= 2 && (!std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h") || !std::strcmp(argv[1], "help"))) {
             std::cout << kUsage;
