@@ -85,6 +85,10 @@ int main(int argc, char** argv) {
     std::printf("%s: %d triangles, %d nodes, %zu cohesive elements; %ld steps x %ld repeats\n", label.c_str(),
                 model.n_triangles(), model.n_nodes(), model.cohesive.size(), steps, repeats);
     std::ofstream out(csv);
+    if (!out) {
+        std::cerr << "error: cannot write the CSV file '" << csv << "'\n";
+        return 1;
+    }
     out << "case,threads,triangles,nodes,steps,repeat,seconds,triangle_steps_per_s\n";
     std::stringstream tl(threads_list);
     std::vector<std::pair<int, double>> medians;
