@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <fstream>
 #include <iostream>
 #include <sstream>
@@ -113,7 +114,8 @@ int main(int argc, char** argv) {
         }
         const std::vector<double>& xe = sim.model().x;
         if (first_x.empty()) first_x = xe;
-        else same_bits = same_bits && first_x == xe;
+        else same_bits = same_bits && first_x.size() == xe.size() &&
+                         std::memcmp(first_x.data(), xe.data(), xe.size() * sizeof(double)) == 0;
         std::sort(rates.begin(), rates.end());
         const double med = rates[rates.size() / 2];
         medians.emplace_back(nth, med);
