@@ -18,7 +18,6 @@
 #include <vector>
 
 #include "fdem/case.hpp"
-#include "fdem/errors.hpp"
 #include "fdem/omp_env.hpp"
 #include "fdem/model.hpp"
 #include "fdem/scene.hpp"
@@ -49,6 +48,19 @@ int main(int argc, char** argv) {
         std::cerr << "fdem_bench: option '" << argv[argc - 1] << "' has no value\n";
         return 1;
     }
+    std::vector<int> thread_counts;
+    {
+        std::stringstream tl(threads_list);
+        for (std::string tok; std::getline(tl, tok, ',');) thread_counts.push_back(std::atoi(tok.c_str()));
+    }
+    const bool bad_threads = thread_counts.empty() ||
+                             std::any_of(thread_counts.begin(), thread_counts.end(), [](int n) { return n < 1; });
+    if (steps < 1 || repeats < 1 || triangles < 1 || bad_threads) {
+        std::cerr << "fdem_bench: --steps, --repeats and --triangles take positive integers and --threads a list of "
+                     "positive integers such as 1,2 (got steps " << steps << ", repeats " << repeats << ", triangles "
+                  << triangles << ", threads '" << threads_list << "')\n";
+        return 1;
+    }
     fdem::CaseSpec spec;
     fdem::Model model;
     std::string label;
@@ -56,12 +68,11 @@ int main(int argc, char** argv) {
         if (!case_file.empty()) {
             spec = fdem::load_case(case_file, sets);
             model = fdem::build_scene(spec);
-            label = spec.name;
         } else {
             // A 2 x 1 m plate of unstructured triangles of size h (about `triangles` of them).
             const double h = std::sqrt(2.0 * 2.0 / (triangles * 0.866));
             spec.file = "bench";
-            spec.name = "bench";
+            spec.name = "plate";
             spec.thickness = 0.1;
             spec.geometry.type = "rectangle";
             spec.materials.push_back({"m", 1e9, 0.25, 1000, 0, 0});
@@ -77,8 +88,8 @@ int main(int argc, char** argv) {
             st.supports.push_back(sup);
             spec.stages.push_back(st);
             model = fdem::build_model(spec, fdem::mesh::mesh_rectangle(0, 0, 2.0, 1.0, h));
-            label = "plate";
         }
+        label = spec.name;
     } catch (const std::exception& e) {
         std::cerr << "error: " << e.what() << "\n";
         return 1;
@@ -91,12 +102,10 @@ int main(int argc, char** argv) {
         return 1;
     }
     out << "case,threads,triangles,nodes,steps,repeat,seconds,triangle_steps_per_s\n";
-    std::stringstream tl(threads_list);
     std::vector<std::pair<int, double>> medians;
     std::vector<double> first_x;  // end state of the first thread count: every count runs the same steps
     bool same_bits = true;
-    for (std::string tok; std::getline(tl, tok, ',');) {
-        const int nth = std::atoi(tok.c_str());
+    for (const int nth : thread_counts) {
         fdem::RunOptions opt;
         opt.quiet = true;
         opt.threads = nth;
@@ -121,11 +130,11 @@ int main(int argc, char** argv) {
         medians.emplace_back(nth, med);
         std::printf("threads %d: median %.3g triangle-steps/s (min %.3g, max %.3g)\n", nth, med, rates.front(), rates.back());
     }
-    if (medians.size() > 1)
+    if (medians.size() > 1) {
         std::printf("speed-up %d -> %d threads: %.2f\n", medians.front().first, medians.back().first,
                     medians.back().second / medians.front().second);
-    if (medians.size() > 1)
         std::printf("end positions bit-identical across thread counts: %s\n", same_bits ? "yes" : "NO");
+    }
     std::printf("CSV: %s\n", csv.c_str());
     return 0;
 }
