@@ -532,6 +532,13 @@ CaseSpec load_case(const std::string& path, const std::vector<std::string>& over
                                [](double v) { return v >= 0 && v < 60; }).value_or(10.0);
         g.split_all = r.string("split", false, "\"joints\" (default) or \"all\" (every edge crackable, the classic FDEM limit)",
                                {"joints", "all"}).value_or("joints") == "all";
+        g.joint_roughness = r.number("joint_roughness", false, "the largest inward offset of a dry-joint face, >= 0 in m",
+                                     [](double v) { return v >= 0; }).value_or(0.0);
+        g.roughness_wavelength = r.number("roughness_wavelength", g.joint_roughness > 0,
+                                          "the wavelength of the joint roughness, > 0 in m (needed with joint_roughness > 0)",
+                                          positive).value_or(0.0);
+        g.roughness_seed = r.integer("roughness_seed", false, "a whole number >= 0 that seeds the joint roughness",
+                                     [](long long v) { return v >= 0 && v <= 2147483647; }).value_or(1);
         r.finish();
     }
 

@@ -72,6 +72,11 @@ struct GeometrySpec {
     double size_factor = 1;  // multiplies the .geo script's mesh sizes, -
     double min_angle = 10;   // deg, smallest triangle angle accepted (sliver check)
     bool split_all = false;  // classic FDEM limit: every edge of the mesh crackable (needs fracture properties)
+    // Uneven bearing at dry joints (mesh/roughness.hpp): each body's dry-joint faces pulled inwards by a smooth
+    // random offset in [0, joint_roughness] m with the given wavelength (m); 0 = flat faces.
+    double joint_roughness = 0;
+    double roughness_wavelength = 0;
+    int roughness_seed = 1;
     // wall: the masonry wall generator; the TOML keys are the WallSpec field names (mesh/wall.hpp)
     mesh::WallSpec wall;
     int line = 0;

@@ -49,6 +49,10 @@ Interactions::Interactions(const CaseSpec& spec, const Model& model) {
         dry_len_.push_back(std::hypot(X[2 * d.n[1]] - X[2 * d.n[0]], X[2 * d.n[1] + 1] - X[2 * d.n[0] + 1]));
         dry_ref_mid_.push_back(0.5 * (X[2 * d.n[0]] + X[2 * d.n[1]]));
         dry_ref_mid_.push_back(0.5 * (X[2 * d.n[0] + 1] + X[2 * d.n[1] + 1]));
+        // A roughened joint (geometry.joint_roughness) starts with a gap: opening and slip count from the start.
+        double opening, slip;
+        joint_motion(d.n.data(), X, opening, slip);
+        dry_motion0_.push_back(opening), dry_motion0_.push_back(slip);
     }
     set_dry_record(spec.joint_open, spec.joint_slip);
     const auto& regions = model.mesh.regions;
@@ -230,6 +234,7 @@ int Interactions::record_dry_joints(double time, double control_displacement, co
         const auto& d = dry_[e];
         double opening, slip;
         joint_motion(d.n.data(), x, opening, slip);
+        opening -= dry_motion0_[2 * e], slip -= dry_motion0_[2 * e + 1];
         const double r_open = opening / open_thr_, r_slip = std::abs(slip) / slip_thr_;
         for (int mode = 0; mode < 2; ++mode) {
             char& seen = mode == 0 ? dry_open_[e] : dry_slip_[e];

@@ -81,6 +81,7 @@ private:
     std::vector<mesh::CohesiveElement> dry_;
     std::vector<char> dry_open_, dry_slip_;
     std::vector<double> dry_len_, dry_ref_mid_;  // m: reference length and midpoint (2 per segment)
+    std::vector<double> dry_motion0_;            // m: opening and slip in the reference state (2 per segment)
     double open_thr_ = 1e-4, slip_thr_ = 1e-4;   // m
     long long n_open_ = 0, n_slip_ = 0;
 };

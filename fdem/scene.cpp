@@ -5,6 +5,7 @@
 
 #include "fdem/errors.hpp"
 #include "fdem/simulation.hpp"
+#include "mesh/roughness.hpp"
 
 namespace fdem {
 
@@ -49,14 +50,31 @@ mesh::Topology build_topology_only(const CaseSpec& spec) {
             for (std::size_t a = 0; a < m.regions.size(); ++a)
                 for (std::size_t b = a; b < m.regions.size(); ++b)
                     opt.interfaces.push_back({m.regions[a], m.regions[b], mesh::InterfaceKind::tied});
-        return mesh::build_topology(m, opt);
+        mesh::Topology topo = mesh::build_topology(m, opt);
+        if (spec.geometry.joint_roughness > 0) {
+            try {
+                const mesh::RoughnessStats rs = mesh::roughen_dry_joints(
+                    topo, spec.geometry.joint_roughness, spec.geometry.roughness_wavelength,
+                    static_cast<std::uint64_t>(spec.geometry.roughness_seed));
+                if (rs.points == 0) throw mesh::MeshError("the mesh has no dry joint face to roughen (no [[interfaces]] of kind \"dry\" touches)");
+            } catch (const mesh::MeshError& e) {
+                throw InputError(spec.file + ":" + std::to_string(spec.geometry.line) + ": key 'geometry.joint_roughness': " + e.what());
+            }
+        }
+        return topo;
     } catch (const mesh::MeshError& e) {
         throw InputError(spec.file + ": [[interfaces]] / [geometry]: " + e.what());
     }
 }
 
 Model build_scene(const CaseSpec& spec) {
-    if (!needs_topology(spec)) return build_model(spec, make_mesh(spec));
+    if (!needs_topology(spec)) {
+        if (spec.geometry.joint_roughness > 0)
+            throw InputError(spec.file + ":" + std::to_string(spec.geometry.line) + ": key 'geometry.joint_roughness': "
+                             "the case has no dry joint to roughen (every interface is tied); expected an [[interfaces]] "
+                             "of kind \"dry\" or no joint_roughness");
+        return build_model(spec, make_mesh(spec));
+    }
     mesh::Topology topo = build_topology_only(spec);
     return build_model(spec, std::move(topo.mesh), std::move(topo.cohesive), std::move(topo.contact_capable),
                        std::move(topo.dry_joints));

@@ -72,9 +72,11 @@ struct Scene {
     std::vector<char> upper;  // per node: belongs to the upper course
 };
 
-Scene make_scene(const std::string& name) {
+Scene make_scene(const std::string& name, const std::string& geometry_extra = "") {
     const auto dir = testing::tmp_dir(name);
-    const std::string path = testing::write_text(dir / "case.toml", wall_case("0.4") + R"(
+    std::string text = wall_case("0.4");
+    text.insert(text.find("[materials.m]"), geometry_extra);
+    const std::string path = testing::write_text(dir / "case.toml", text + R"(
 [[stages]]
 name = "s"
 duration = 0.001
@@ -163,6 +165,32 @@ TEST_CASE("joint record: lifting the upper course by 2x the threshold records ev
     }
     CHECK(inter.dry_open_count() == n_bed);
     CHECK(inter.dry_slip_count() == n_bed);
+}
+
+TEST_CASE("joint record: with roughened joints (gaps up to 6x the threshold) opening counts from the start",
+          "[unit][joint_record]") {
+    Scene s = make_scene("joint_record_rough", "joint_roughness = 3e-4\nroughness_wavelength = 0.1\n");
+    const fdem::Model& md = s.model;
+    fdem::Interactions inter(s.spec, md);
+    double largest_gap = 0;
+    for (const auto& d : inter.dry_joints()) {
+        double o, sl;
+        fdem::Interactions::joint_motion(d.n.data(), md.X.data(), o, sl);
+        largest_gap = std::max(largest_gap, o);
+    }
+    CHECK(largest_gap > 2e-4);  // twice the threshold: a record of absolute gaps would call it open
+    CHECK(inter.record_dry_joints(0.0, 0.0, md.X.data()) == 0);
+    std::vector<double> x = md.X;
+    for (int k = 0; k < md.n_nodes(); ++k)
+        if (s.upper[k]) x[2 * k + 1] += 2e-4;
+    int n_bed = 0;
+    for (const auto& d : inter.dry_joints()) n_bed += std::abs(ref_mid_y(md, d) - 0.1) < 1e-3;
+    CHECK(n_bed == 8);
+    CHECK(inter.record_dry_joints(0.1, 0.0, x.data()) == n_bed);
+    for (const auto& r : rows_of(inter.cracks_csv())) {
+        CHECK(r.mode == "open");
+        CHECK(r.D_I == Approx(2.0).epsilon(0.01));  // the lift over the threshold, to the joints' rotation by the roughness
+    }
 }
 
 TEST_CASE("joint record: a rigid rotation and translation of the whole wall records nothing", "[unit][joint_record]") {

@@ -84,6 +84,16 @@ TEST_CASE("bad geometry and meshes give exit code 1 naming the problem", "[unit]
         {"interface naming a missing region", edit(kWall, "regions = [\"units\", \"beam\"]", "regions = [\"units\", \"slab\"]"), "slab"},
         {"support on a missing group", edit(kWall, "group = \"wall_bottom\"", "group = \"base_bottom\""), "base_bottom"},
         {"sliver limit above the mesh's angles", edit(kWall, "mesh_size = 0.05", "mesh_size = 0.05\nmin_angle = 59.0"), "sliver"},
+        {"roughness without its wavelength", edit(kWall, "mesh_size = 0.05", "mesh_size = 0.05\njoint_roughness = 2e-4"),
+         "geometry.roughness_wavelength"},
+        {"roughness too large for the mesh", edit(kWall, "mesh_size = 0.05", "mesh_size = 0.05\njoint_roughness = 0.02\nroughness_wavelength = 0.1"),
+         "smallest altitude"},
+        {"negative roughness", edit(kWall, "mesh_size = 0.05", "mesh_size = 0.05\njoint_roughness = -2e-4\nroughness_wavelength = 0.1"),
+         "geometry.joint_roughness"},
+        {"roughness without a dry joint",
+         edit(edit(kWall, "kind = \"dry\"\nfriction = 31.8\nnormal_stiffness = 8.08e12", "kind = \"tied\""), "mesh_size = 0.05",
+              "mesh_size = 0.05\njoint_roughness = 2e-4\nroughness_wavelength = 0.1"),
+         "no dry joint"},
         {"missing .msh file", edit(kWall, "type = \"wall\"", "type = \"msh\"\nfile = \"nowhere.msh\"\n#"), "nowhere.msh"},
     };
     for (const auto& b : bad) {
