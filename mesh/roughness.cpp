@@ -1,6 +1,8 @@
 // mesh/roughness.cpp: see roughness.hpp.
 #include "mesh/roughness.hpp"
 
+#include "mesh/quality.hpp"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -132,12 +134,7 @@ RoughnessStats roughen_dry_joints(Topology& topo, double amplitude, double wavel
         for (int k = 0; k < 3; ++k) touched = touched || move.count(key(n[k]));
         if (!touched) continue;
         const double* p = m.xy.data();
-        const double a2 = std::abs((p[2 * n[1]] - p[2 * n[0]]) * (p[2 * n[2] + 1] - p[2 * n[0] + 1]) -
-                                   (p[2 * n[2]] - p[2 * n[0]]) * (p[2 * n[1] + 1] - p[2 * n[0] + 1]));
-        double longest = 0;
-        for (int k = 0; k < 3; ++k)
-            longest = std::max(longest, std::hypot(p[2 * n[(k + 1) % 3]] - p[2 * n[k]], p[2 * n[(k + 1) % 3] + 1] - p[2 * n[k] + 1]));
-        const double h = a2 / longest;
+        const double h = triangle_quality(&p[2 * n[0]], &p[2 * n[1]], &p[2 * n[2]]).altitude;
         if (h < stats.smallest_altitude) {
             stats.smallest_altitude = h;
             where[0] = (p[2 * n[0]] + p[2 * n[1]] + p[2 * n[2]]) / 3, where[1] = (p[2 * n[0] + 1] + p[2 * n[1] + 1] + p[2 * n[2] + 1]) / 3;
