@@ -109,11 +109,16 @@ int main(int argc, char** argv) {
         }
         if (a.command == "mesh") {
             const fdem::CaseSpec spec = fdem::load_case(a.case_file, a.sets);
-            const fdem::mesh::Topology topo = fdem::build_topology_only(spec);
+            fdem::mesh::RoughnessStats rough;
+            const fdem::mesh::Topology topo = fdem::build_topology_only(spec, &rough);
             const std::filesystem::path dir = a.out.empty() ? std::filesystem::path("runs") / spec.name : std::filesystem::path(a.out);
             std::filesystem::create_directories(dir);
             fdem::mesh::write_topology_vtu((dir / "mesh.vtu").string(), topo);
-            std::cout << fdem::mesh::format_stats(fdem::mesh::mesh_stats(topo)) << "mesh written to " << (dir / "mesh.vtu").string() << "\n";
+            std::cout << fdem::mesh::format_stats(fdem::mesh::mesh_stats(topo));
+            if (rough.points > 0)
+                std::cout << "joint roughness      " << rough.points << " face points moved inwards, mean " << rough.mean
+                          << " m, largest " << rough.largest << " m\n";
+            std::cout << "mesh written to " << (dir / "mesh.vtu").string() << "\n";
             return 0;
         }
         fdem::RunOptions opt;

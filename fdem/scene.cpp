@@ -5,7 +5,6 @@
 
 #include "fdem/errors.hpp"
 #include "fdem/simulation.hpp"
-#include "mesh/roughness.hpp"
 
 namespace fdem {
 
@@ -42,7 +41,7 @@ mesh::TopologyOptions topology_options(const CaseSpec& spec, const mesh::Mesh& m
     return opt;
 }
 
-mesh::Topology build_topology_only(const CaseSpec& spec) {
+mesh::Topology build_topology_only(const CaseSpec& spec, mesh::RoughnessStats* roughness) {
     mesh::Mesh m = make_mesh(spec);
     try {
         mesh::TopologyOptions opt = topology_options(spec, m);
@@ -56,6 +55,7 @@ mesh::Topology build_topology_only(const CaseSpec& spec) {
                 const mesh::RoughnessStats rs = mesh::roughen_dry_joints(
                     topo, spec.geometry.joint_roughness, spec.geometry.roughness_wavelength,
                     static_cast<std::uint64_t>(spec.geometry.roughness_seed));
+                if (roughness) *roughness = rs;
                 if (rs.points == 0) throw mesh::MeshError("the mesh has no dry joint face to roughen (no [[interfaces]] of kind \"dry\" touches)");
             } catch (const mesh::MeshError& e) {
                 throw InputError(spec.file + ":" + std::to_string(spec.geometry.line) + ": key 'geometry.joint_roughness': " + e.what());

@@ -5,6 +5,7 @@
 
 #include "fdem/case.hpp"
 #include "fdem/model.hpp"
+#include "mesh/roughness.hpp"
 #include "mesh/topology.hpp"
 
 namespace fdem {
@@ -21,7 +22,8 @@ mesh::TopologyOptions topology_options(const CaseSpec& spec, const mesh::Mesh& m
 // then the model with its cohesive elements and contact-capable triangles.
 Model build_scene(const CaseSpec& spec);
 
-// The mesh and its topology, for `fdem mesh`.
-mesh::Topology build_topology_only(const CaseSpec& spec);
+// The mesh and its topology, for `fdem mesh`; with geometry.joint_roughness the faces are roughened and, if
+// `roughness` is given, what moved is reported there.
+mesh::Topology build_topology_only(const CaseSpec& spec, mesh::RoughnessStats* roughness = nullptr);
 
 }  // namespace fdem

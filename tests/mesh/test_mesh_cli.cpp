@@ -68,6 +68,17 @@ TEST_CASE("fdem mesh writes the mesh and its statistics", "[unit]") {
     CHECK(std::filesystem::exists(dir / "out" / "mesh.vtu"));
 }
 
+TEST_CASE("fdem mesh reports the roughened joint faces", "[unit]") {
+    const auto dir = testing::tmp_dir("mesh_cli_rough");
+    const auto path = testing::write_text(
+        dir / "case.toml", edit(kWall, "mesh_size = 0.05", "mesh_size = 0.05\njoint_roughness = 2e-4\nroughness_wavelength = 0.1"));
+    const auto r = testing::run_fdem("mesh \"" + path + "\" --out \"" + (dir / "out").string() + "\"", dir);
+    INFO(r.out << r.err);
+    REQUIRE(r.code == 0);
+    CHECK(r.out.find("joint roughness") != std::string::npos);
+    CHECK(r.out.find("face points moved inwards") != std::string::npos);
+}
+
 TEST_CASE("bad geometry and meshes give exit code 1 naming the problem", "[unit]") {
     struct Bad {
         const char* what;
