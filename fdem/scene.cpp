@@ -68,13 +68,8 @@ mesh::Topology build_topology_only(const CaseSpec& spec, mesh::RoughnessStats* r
 }
 
 Model build_scene(const CaseSpec& spec) {
-    if (!needs_topology(spec)) {
-        if (spec.geometry.joint_roughness > 0)
-            throw InputError(spec.file + ":" + std::to_string(spec.geometry.line) + ": key 'geometry.joint_roughness': "
-                             "the case has no dry joint to roughen (every interface is tied); expected an [[interfaces]] "
-                             "of kind \"dry\" or no joint_roughness");
-        return build_model(spec, make_mesh(spec));
-    }
+    // With joint_roughness, build_topology_only refuses a case without a dry joint (nothing to roughen).
+    if (!needs_topology(spec) && !(spec.geometry.joint_roughness > 0)) return build_model(spec, make_mesh(spec));
     mesh::Topology topo = build_topology_only(spec);
     return build_model(spec, std::move(topo.mesh), std::move(topo.cohesive), std::move(topo.contact_capable),
                        std::move(topo.dry_joints));

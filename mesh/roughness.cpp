@@ -54,9 +54,9 @@ RoughnessStats roughen_dry_joints(Topology& topo, double amplitude, double wavel
     Mesh& m = topo.mesh;
     const int nn = m.n_nodes(), nt = m.n_triangles();
 
-    // The body a node copy belongs to: the smallest body among its triangles (copies shared by tied bodies move once).
-    // An input node with a copy that several bodies share (a tied interface, e.g. a beam tied to the top course) is
-    // not moved at all: its copies in one body could otherwise have different owners and part.
+    // The body a node copy belongs to: the smallest body among its triangles. An input node with a copy that several
+    // bodies share (a tied interface, e.g. a beam tied to the top course) is not moved at all: its copies in one body
+    // could otherwise have different owners and part.
     std::vector<int> owner(nn, std::numeric_limits<int>::max());
     std::vector<char> shared(nn, 0);
     for (int t = 0; t < nt; ++t)
