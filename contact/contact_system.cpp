@@ -121,6 +121,27 @@ void ContactSystem::include_pair(int ta, int tb) {
     dirty_ = true;
 }
 
+void ContactSystem::set_vertex_copies(std::vector<int> vertex) {
+    if (!vertex.empty() && static_cast<int>(vertex.size()) != n_nodes_)
+        throw std::invalid_argument("ContactSystem::set_vertex_copies: one vertex per node, or none");
+    int n_vertices = 0;
+    for (int v : vertex) {
+        if (v < 0) throw std::invalid_argument("ContactSystem::set_vertex_copies: negative vertex index");
+        n_vertices = std::max(n_vertices, v + 1);
+    }
+    vertex_ = std::move(vertex);
+    released_.assign(n_vertices, 0);
+    dirty_ = true;
+}
+
+void ContactSystem::release_vertex_of(int node) {
+    if (node < 0 || node >= n_nodes_) throw std::out_of_range("ContactSystem::release_vertex_of: node index");
+    if (vertex_.empty()) return;
+    char& r = released_[vertex_[node]];
+    if (!r) dirty_ = true;
+    r = 1;
+}
+
 double ContactSystem::stable_dt(const double* x, const double* node_mass) const {
     // Per material: the stiffest stiffness-law slope (Pa/m) and the largest penalty (Pa) it can meet.
     std::vector<double> k_max(n_mat_, 0.0), p_max(n_mat_, 0.0);
@@ -197,7 +218,8 @@ void ContactSystem::detect(const double* x) {
     }
     nbs_detect(icx.data(), icy.data(), ir.data(), items_.data(), n, buffer_, cand_, ws_);
 
-    // Drop pairs that share a node or an intact cohesive element, in parallel into flags, then compact in order.
+    // Drop pairs that share a node, an intact cohesive element or an unreleased vertex of one body, in parallel into
+    // flags, then compact in order.
     const int nc = cand_.size();
     std::vector<char>& keep = keep_;
     keep.resize(nc);
@@ -218,6 +240,16 @@ void ContactSystem::detect(const double* x) {
                     break;
                 }
         if (ok && law_of(a, b) < 0) ok = false;  // a combination that never touches
+        if (ok && !vertex_.empty() && body_[a] == body_[b])  // corner neighbours inside an intact unit
+            for (int i = 0; i < 3 && ok; ++i) {
+                const int va = vertex_[tri_[3 * a + i]];
+                if (released_[va]) continue;
+                for (int j = 0; j < 3; ++j)
+                    if (vertex_[tri_[3 * b + j]] == va) {
+                        ok = false;
+                        break;
+                    }
+            }
         keep[p] = ok ? 1 : 0;
     }
     std::vector<int>& na = new_a_;

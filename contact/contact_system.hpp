@@ -18,7 +18,8 @@
 //                                            // defaults to the interface law (r, r)
 //   ContactSystem cs(tri, n_tri, n_nodes, t, tri_class, tri_body, laws);   // throws std::invalid_argument
 //   cs.set_capable(e, true) for free-boundary / dry-interface triangles; cs.exclude_pair(ea, eb) for the two
-//   triangles of every intact cohesive element; when it breaks: include_pair + set_capable on both.
+//   triangles of every intact cohesive element; when it breaks: include_pair + set_capable on both, and
+//   release_vertex_of(k) for its nodes k (see set_vertex_copies).
 //   dt = min(dt_triangles, cs.stable_dt(x, node_mass)) * safety.
 //   each step, after zeroing f and before the update: cs.step(x, v, dt, f)  (adds contact forces).
 //   energies: cs.elastic_energy() (J, set_compute_energy(true) on the steps that report it),
@@ -65,6 +66,15 @@ public:
     // Triangles joined by an intact cohesive element never form a pair; include_pair when it breaks.
     void exclude_pair(int ta, int tb);
     void include_pair(int ta, int tb);
+    // Copies of one mesh vertex (FORMULATION §1 duplicates a node wherever a crack may open; §5: triangles sharing a
+    // node never form a pair). vertex[k], one per node (or empty: off, the default), is the mesh vertex node k is a
+    // copy of. Two triangles of one body that meet only at copies of a vertex (corner neighbours inside a crackable
+    // unit) then form no pair until release_vertex_of(k) is called for a copy k of that vertex, which the engine
+    // does for the nodes of every cohesive element that breaks. Without it, the corners of intact neighbours
+    // overlap as the cohesive elements between them compress and carry contact forces that the continuum already
+    // carries (in the dry-stone walls, a third of the loaded pairs). Triangles of different bodies are not affected.
+    void set_vertex_copies(std::vector<int> vertex);
+    void release_vertex_of(int node);
 
     // FORMULATION §3: min over triangles that can ever touch (all triangles, since any may become capable) of
     // 2 sqrt(m / k), m the lightest node mass of the triangle (kg), k = (stiffest normal or tangential slope of
@@ -118,6 +128,8 @@ private:
 
     std::vector<char> capable_;
     std::vector<std::vector<int>> excluded_;  // per triangle, partners joined by an intact cohesive element
+    std::vector<int> vertex_;                 // per node: the mesh vertex it copies (empty: no vertex rule)
+    std::vector<char> released_;              // per vertex: a cohesive element at it broke
     bool dirty_ = true;
     double buffer_ = 0.0;        // m
     double travel_ = 0.0;        // m, sum of dt max|v| since the last detection

@@ -167,6 +167,7 @@ Interactions::Interactions(const CaseSpec& spec, const Model& model) {
         throw InputError(spec.file + ": [[interfaces]]: " + e.what());
     }
     for (int t : model.contact_capable) contact_->set_capable(t, true);
+    contact_->set_vertex_copies(model.node_vertex);
     if (joints_)
         for (int e = 0; e < joints_->size(); ++e) {
             const auto& el = joints_->element(e);
@@ -204,6 +205,7 @@ int Interactions::after_step(double time, double control_displacement, const dou
             if (r.tri_a >= 0) contact_->set_capable(r.tri_a, true);
             if (r.tri_b >= 0) contact_->set_capable(r.tri_b, true);
             if (r.tri_a >= 0 && r.tri_b >= 0) contact_->include_pair(r.tri_a, r.tri_b);
+            for (int k : joints_->element(r.element).n) contact_->release_vertex_of(k);
         }
     }
     cracks_csv_ += os.str();

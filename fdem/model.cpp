@@ -161,9 +161,11 @@ Model build_model(const CaseSpec& spec, mesh::Mesh mesh) {
     return md;
 }
 
-Model build_model(const CaseSpec& spec, mesh::Mesh mesh, std::vector<mesh::CohesiveElement> cohesive,
-                  std::vector<int> contact_capable, std::vector<mesh::CohesiveElement> dry_joints) {
-    Model md = build_model(spec, std::move(mesh));
+Model build_model(const CaseSpec& spec, mesh::Topology topo) {
+    Model md = build_model(spec, std::move(topo.mesh));
+    std::vector<mesh::CohesiveElement>& cohesive = topo.cohesive;
+    std::vector<mesh::CohesiveElement>& dry_joints = topo.dry_joints;
+    std::vector<int>& contact_capable = topo.contact_capable;
     for (auto* list : {&cohesive, &dry_joints})
         for (auto& c : *list) {
             for (int& n : c.n) n = md.node_new_of_old[n];
@@ -175,6 +177,8 @@ Model build_model(const CaseSpec& spec, mesh::Mesh mesh, std::vector<mesh::Cohes
     std::sort(contact_capable.begin(), contact_capable.end());
     md.cohesive = std::move(cohesive);
     md.contact_capable = std::move(contact_capable);
+    md.node_vertex.resize(topo.node_origin.size());
+    for (std::size_t k = 0; k < topo.node_origin.size(); ++k) md.node_vertex[md.node_new_of_old[k]] = topo.node_origin[k];
     md.has_topology = true;
     return md;
 }

@@ -36,6 +36,7 @@ struct Model {
     std::vector<mesh::CohesiveElement> cohesive;
     std::vector<mesh::CohesiveElement> dry_joints;  // one per dry edge (kind dry): followed for the joint record
     std::vector<int> contact_capable;  // sorted
+    std::vector<int> node_vertex;      // per node: the input-mesh node it is a copy of (Topology::node_origin)
     bool has_topology = false;
     // build_model renumbers nodes and triangles for memory locality; these map the input mesh's ids to the model's.
     std::vector<int> node_new_of_old, tri_new_of_old;
@@ -54,10 +55,9 @@ std::pair<std::vector<int>, std::vector<int>> reorder_for_locality(mesh::Mesh& m
 // material constants (plane stress or strain), viscous coefficients. Throws InputError for a region without
 // material and mesh::MeshError for a triangle with non-positive reference area.
 Model build_model(const CaseSpec& spec, mesh::Mesh mesh);
-// The same with a topology's cohesive elements, dry joint segments and contact-capable triangles (renumbered with
-// the mesh).
-Model build_model(const CaseSpec& spec, mesh::Mesh mesh, std::vector<mesh::CohesiveElement> cohesive,
-                  std::vector<int> contact_capable, std::vector<mesh::CohesiveElement> dry_joints = {});
+// The same from a topology: its split mesh, cohesive elements, dry joint segments, contact-capable triangles and
+// node origins (renumbered with the mesh).
+Model build_model(const CaseSpec& spec, mesh::Topology topo);
 
 // Stable time step of the triangles alone (FORMULATION §3): min over triangles of h_e / c_p, reduced for
 // viscous damping by (sqrt(1 + xi^2) - xi). Returns the limit (s) and the triangle that sets it.

@@ -70,9 +70,7 @@ mesh::Topology build_topology_only(const CaseSpec& spec, mesh::RoughnessStats* r
 Model build_scene(const CaseSpec& spec) {
     // With joint_roughness, build_topology_only refuses a case without a dry joint (nothing to roughen).
     if (!needs_topology(spec) && !(spec.geometry.joint_roughness > 0)) return build_model(spec, make_mesh(spec));
-    mesh::Topology topo = build_topology_only(spec);
-    return build_model(spec, std::move(topo.mesh), std::move(topo.cohesive), std::move(topo.contact_capable),
-                       std::move(topo.dry_joints));
+    return build_model(spec, build_topology_only(spec));
 }
 
 }  // namespace fdem

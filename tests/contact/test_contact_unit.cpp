@@ -512,6 +512,49 @@ TEST_CASE("Capable set, excluded pairs and history that survives re-detection", 
     CHECK(fy0() == 0.0);
 }
 
+TEST_CASE("Corner neighbours of one body (copies of a vertex) form no pair until the vertex is released", "[unit]") {
+    // Triangle 0 has node 0 at the vertex (0, 0); triangle 1's node 3 is a copy of the same vertex, pushed 1 mm into
+    // triangle 0, as when the cohesive elements between corner neighbours compress. Vertex ids: node 3 -> vertex 0.
+    const std::vector<double> x = {0.0, 0.0, 1.0, 0.0, 0.0, 1.0,        // 0: nodes 0-2
+                                   1e-3, 1e-3, -1.0, 0.0, 0.0, -1.0};  // 1: nodes 3-5
+    const int tri[6] = {0, 1, 2, 3, 4, 5};
+    const std::vector<int> vertex = {0, 1, 2, 0, 4, 5};
+    ContactLaws laws(1);
+    laws.set_interface(0, 0, ContactLaw::stiffness(1e9, 1e9, 30.0));
+    auto force_on_1 = [&](ContactSystem& cs) {
+        std::vector<double> v(12, 0.0), f(12, 0.0);
+        cs.step(x.data(), v.data(), 1e-4, f.data());
+        return std::hypot(f[6] + f[8] + f[10], f[7] + f[9] + f[11]);  // N
+    };
+    ContactSystem plain(tri, 2, 6, 0.1, {0, 0}, {0, 0}, laws);
+    plain.set_capable(0, true);
+    plain.set_capable(1, true);
+    const double f_overlap = force_on_1(plain);
+    REQUIRE(f_overlap > 0.0);  // without the vertex rule the corners push each other apart
+
+    ContactSystem one_body(tri, 2, 6, 0.1, {0, 0}, {0, 0}, laws);
+    one_body.set_capable(0, true);
+    one_body.set_capable(1, true);
+    one_body.set_vertex_copies(vertex);
+    CHECK(force_on_1(one_body) == 0.0);
+    CHECK(one_body.pair_a().empty());
+    one_body.release_vertex_of(4);  // another vertex: nothing changes
+    CHECK(force_on_1(one_body) == 0.0);
+    one_body.release_vertex_of(3);  // a cohesive element at vertex 0 broke
+    CHECK(force_on_1(one_body) == f_overlap);
+    CHECK(one_body.pair_a().size() == 1);
+
+    ContactSystem two_bodies(tri, 2, 6, 0.1, {0, 0}, {0, 1}, laws);  // stones meeting at a joint corner: always a pair
+    two_bodies.set_capable(0, true);
+    two_bodies.set_capable(1, true);
+    two_bodies.set_vertex_copies(vertex);
+    CHECK(force_on_1(two_bodies) == f_overlap);
+
+    CHECK_THROWS_AS(one_body.set_vertex_copies({0, 1, 2}), std::invalid_argument);
+    CHECK_THROWS_AS(one_body.set_vertex_copies({0, 1, 2, -1, 4, 5}), std::invalid_argument);
+    CHECK_THROWS_AS(one_body.release_vertex_of(6), std::out_of_range);
+}
+
 TEST_CASE("stable_dt: contact springs stay stable at and below the bound", "[unit]") {
     // Node masses on contact springs: a triangle pushed by constant nodal forces onto a fixed one, its nodes moving
     // independently (no elasticity), so only the contact bound matters. Stable: it oscillates between touching

@@ -78,6 +78,27 @@ std::vector<Crack> broken_elements(const fdem::Simulation& sim) {
     return out;
 }
 
+// Contact pairs of one body whose triangles meet only at copies of one vertex (corner neighbours, FORMULATION §1):
+// the contact system drops them until a cohesive element at that vertex breaks.
+int corner_pairs(const fdem::Simulation& sim) {
+    const auto* c = sim.interactions().contact();
+    REQUIRE(c != nullptr);
+    const auto& m = sim.model();
+    REQUIRE(m.node_vertex.size() == static_cast<std::size_t>(m.n_nodes()));
+    auto body = [&](int t) { return m.mesh.tri_body.empty() ? 0 : m.mesh.tri_body[t]; };
+    int n = 0;
+    for (std::size_t p = 0; p < c->pair_a().size(); ++p) {
+        const int a = c->pair_a()[p], b = c->pair_b()[p];
+        if (body(a) != body(b)) continue;
+        int shared = 0;
+        for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < 3; ++j)
+                shared += m.node_vertex[m.mesh.tri[3 * a + i]] == m.node_vertex[m.mesh.tri[3 * b + j]];
+        n += shared == 1;
+    }
+    return n;
+}
+
 long long broken_count(const fdem::Simulation& sim) {
     const auto* c = sim.interactions().counts();
     return c ? c->total() : 0;
@@ -116,9 +137,14 @@ TEST_CASE("engine bar in tension with every edge crackable: one straight crack, 
         sim.begin_stage(0);
         double peak = 0, peak_time = 0, peak_left = 0;
         double t_sep = -1;
+        int corners_intact = -1, corners_cracked = -1;
+        std::vector<std::array<double, 2>> rising;  // (R, R_left) per step while R > 0 (N)
         while (!sim.stage_finished()) {
             sim.step();
+            if (corners_intact < 0) corners_intact = corner_pairs(sim);
+            if (t_sep > 0 && corners_cracked < 0) corners_cracked = corner_pairs(sim);  // the step after separation
             const double R = sim.monitor_value(1);
+            if (R > 0.0) rising.push_back({R, sim.monitor_value(2)});
             if (R > peak) {
                 peak = R, peak_time = sim.time(), peak_left = sim.monitor_value(2);
             }
@@ -126,6 +152,13 @@ TEST_CASE("engine bar in tension with every edge crackable: one straight crack, 
             // 1 ms (5 axial transits of the bar) after the separation, to see whether anything else breaks.
             if (t_sep > 0 && sim.time() > t_sep + 1e-3) break;
         }
+        // The loading branch at 98 % of the peak: the first step with R >= 0.98 peak.
+        double load_R = 0, load_left = 0;
+        for (const auto& s : rising)
+            if (s[0] >= 0.98 * peak) {
+                load_R = s[0], load_left = s[1];
+                break;
+            }
         const fdem::Energies e = energies_now(sim);
         const auto cracks = broken_elements(sim);
         double xmin = 1e9, xmax = -1e9, len = 0, ymin = 1e9, ymax = -1e9;
@@ -135,16 +168,20 @@ TEST_CASE("engine bar in tension with every edge crackable: one straight crack, 
             len += c.length();
         }
         std::printf("bar nx=%d h=%.4g m: dt=%.4g s, %ld steps, broken %zu at x=%.5g..%.5g m, crack length %.5g m, "
-                    "peak R/(f_t A)=%.5f at t=%.4g s (R_left/R=%.5f), D_frac/(G_I A)=%.5f, balance error %.3g, "
+                    "peak R/(f_t A)=%.5f at t=%.4g s (R_left/R=%.5f; at 0.98 peak %.5f), D_frac/(G_I A)=%.5f, balance error %.3g, "
                     "separated at %.4g s\n",
                     nx, h, sim.dt(), sim.steps(), cracks.size(), xmin, xmax, len, peak / (ft * A), peak_time,
-                    -peak_left / peak, e.fracture / (GI * A), e.balance_error(), t_sep);
+                    -peak_left / peak, -load_left / load_R, e.fracture / (GI * A), e.balance_error(), t_sep);
         INFO("nx = " << nx);
         REQUIRE(t_sep > 0);
         // A single crack: exactly the ny edges of one vertical line, spanning the whole section.
         CHECK(cracks.size() == static_cast<std::size_t>(ny));
         CHECK(xmax - xmin < 1e-9);
         CHECK(len == Approx(H).epsilon(1e-9));
+        // Corner neighbours along the free boundary form no pair while the bar is intact; the crack's vertices are
+        // released when it breaks, so the triangles meeting at them across and along the crack may touch.
+        CHECK(corners_intact == 0);
+        CHECK(corners_cracked > 0);
         CHECK(ymin == Approx(0.0).margin(1e-9));
         CHECK(ymax == Approx(H).epsilon(1e-9));
         CHECK(peak / (ft * A) == Approx(1.0).epsilon(0.03));
@@ -152,8 +189,12 @@ TEST_CASE("engine bar in tension with every edge crackable: one straight crack, 
         // Quasi-static: the pull reaches the peak in ~10 ms, 25 periods of the bar's first axial mode (4 L / c =
         // 0.39 ms, c = sqrt(E / rho) = 2040 m/s), after a 1 ms smooth velocity ramp; the dynamic stress of the
         // velocity itself, rho c v = 49 kPa, is 1.3 % of f_t before damping. Check: both supports carry the same
-        // force at the peak (their difference is the bar's inertia force).
-        CHECK(std::abs(peak_left + peak) / peak < 0.015);
+        // force on the loading branch at 98 % of the peak (their difference is the bar's inertia force). Not at the
+        // largest R itself: with local damping 0.8 the pulled end can hold f_t A for a few tenths of a ms while the
+        // crack already softens (the damping, not inertia, then carries the difference), and the largest sample may
+        // fall there (nx = 20 with the crack one element from the fixed end: R_left / R 0.72 at it).
+        REQUIRE(load_R > 0.0);
+        CHECK(std::abs(load_left + load_R) / load_R < 0.015);
         // Pure mode I, no compression, no contact: the books close to the integrator's O(dt^2) (measured < 2e-6).
         CHECK(e.balance_error() < 1e-4);
     }
