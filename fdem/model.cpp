@@ -163,20 +163,17 @@ Model build_model(const CaseSpec& spec, mesh::Mesh mesh) {
 
 Model build_model(const CaseSpec& spec, mesh::Topology topo) {
     Model md = build_model(spec, std::move(topo.mesh));
-    std::vector<mesh::CohesiveElement>& cohesive = topo.cohesive;
-    std::vector<mesh::CohesiveElement>& dry_joints = topo.dry_joints;
-    std::vector<int>& contact_capable = topo.contact_capable;
-    for (auto* list : {&cohesive, &dry_joints})
+    for (auto* list : {&topo.cohesive, &topo.dry_joints})
         for (auto& c : *list) {
             for (int& n : c.n) n = md.node_new_of_old[n];
             if (c.tri_a >= 0) c.tri_a = md.tri_new_of_old[c.tri_a];
             if (c.tri_b >= 0) c.tri_b = md.tri_new_of_old[c.tri_b];
         }
-    md.dry_joints = std::move(dry_joints);
-    for (int& t : contact_capable) t = md.tri_new_of_old[t];
-    std::sort(contact_capable.begin(), contact_capable.end());
-    md.cohesive = std::move(cohesive);
-    md.contact_capable = std::move(contact_capable);
+    for (int& t : topo.contact_capable) t = md.tri_new_of_old[t];
+    std::sort(topo.contact_capable.begin(), topo.contact_capable.end());
+    md.cohesive = std::move(topo.cohesive);
+    md.dry_joints = std::move(topo.dry_joints);
+    md.contact_capable = std::move(topo.contact_capable);
     md.node_vertex.resize(topo.node_origin.size());
     for (std::size_t k = 0; k < topo.node_origin.size(); ++k) md.node_vertex[md.node_new_of_old[k]] = topo.node_origin[k];
     md.has_topology = true;
