@@ -32,7 +32,9 @@ viscous_work_share; D_visc also holds the mass-proportional damping). Local damp
 that need not shrink with the rate, which the half-rate check may then not see; its work share shows it.
 
 Trend: when reference.csv has an axial load column (--axial-column, default N_kN), the cases sorted by it are
-checked for a peak load rising monotonically and a displacement at peak falling monotonically with that load.
+checked for a peak load rising monotonically and a displacement at peak falling monotonically with that load, and
+for the EEEP ductility ([K25] Eq. 14 via `eeep`: K_e by regression up to 70 % of the peak, Delta_u = displacement
+at the peak; report.csv column ductility_eeep) falling monotonically.
 
 Reference file (optional) FAMILY/reference.csv: one row per experiment with a column `cases` listing the case file
 stems it applies to (space separated), `experiment_kN`, and the published predictions in `*_kN` columns; the column
@@ -53,6 +55,7 @@ from concurrent.futures import ThreadPoolExecutor
 import numpy as np
 
 from .batch import Batch, collect, default_jobs, fdem_binary, parse_assignment, run_name
+from .eeep import eeep
 from .common import ToolError, load_curve, load_run, write_csv
 
 QS_LIMIT = 0.02  # the peak may change by less than this when the rate is halved
@@ -224,6 +227,13 @@ def curve_metrics(run_dir: str, smooth_m: float = 0.0) -> dict:
            "reach_m": float(np.max(x)), "x": x, "y": y,
            "peak_raw_N": float(np.max(raw)), "oscillation_N": oscillation(x, raw, y, smooth_m)}
     out.update(damping_work_shares(run, last, c))
+    # EEEP ductility of the same curve ([K25] Eq. 14, FORMULATION §9: K_e by regression up to 70 % of the peak,
+    # Delta_u = displacement at the peak, the [K25] choice); None when the curve has no elastic branch to fit.
+    try:
+        mu = float(eeep(x, y, source=run_dir)["ductility"])
+        out["ductility"] = mu if np.isfinite(mu) else None
+    except (ToolError, ValueError, ZeroDivisionError, FloatingPointError):
+        out["ductility"] = None
     return out
 
 
@@ -370,7 +380,7 @@ def axial_trend(rows: list, refs: list, column: str) -> str | None:
     for r in rows:
         n = _float(reference_for(refs, r["case"]).get(column))
         if n is not None and r["peak_load_kN"] is not None:
-            pts.append((n, r["case"], r["peak_load_kN"], r["disp_at_peak_mm"], r["status"]))
+            pts.append((n, r["case"], r["peak_load_kN"], r["disp_at_peak_mm"], r["status"], r.get("ductility_eeep")))
     if not pts:
         return None
     pts.sort()
@@ -390,6 +400,10 @@ def axial_trend(rows: list, refs: list, column: str) -> str | None:
     line = (head + f"capacity rising with {name}: {yn(rising)}; displacement at peak falling with {name}: "
             f"{yn(falling)} (values, sorted by {name}: {name} = {', '.join(f'{v:g}' for v in ns)} {unit}; "
             f"peak {', '.join(fmt(v) for v in peaks)} kN; displacement at peak {', '.join(fmt(v) for v in dpk)} mm).")
+    mus = [p[5] for p in pts]
+    if all(v is not None for v in mus):
+        line += (f" EEEP ductility ([K25] Eq. 14, displacement at peak as Delta_u) falling with {name}: "
+                 f"{yn(all(b < a for a, b in zip(mus, mus[1:])))} ({', '.join(fmt(v) for v in mus)}).")
     unfinished = [f"{p[1]} ({p[4]})" for p in pts if p[4] != "completed"]
     if unfinished:
         line += " Not completed, values so far: " + ", ".join(unfinished) + "."
@@ -479,6 +493,7 @@ def run_family(args) -> int:
                "peak_raw_kN": kn(m.get("peak_raw_N")), "oscillation_kN": kn(m.get("oscillation_N")),
                "smoothing_mm": args.smooth,
                "disp_at_peak_mm": mm(m.get("disp_at_peak_m")),
+               "ductility_eeep": m.get("ductility"),
                "initial_stiffness_kN_mm": m["initial_stiffness_N_m"] / 1e6 if "initial_stiffness_N_m" in m else None,
                "load_at_end_kN": kn(m.get("load_at_end_N")), "drop_after_peak": m.get("drop_after_peak"),
                "past_peak": past_peak(m.get("drop_after_peak")),

@@ -234,6 +234,35 @@ def test_trend_line_ordered_family(tmp_path, cli, fake):
             "0.9, 0.7, 0.5 mm).") in md
 
 
+def eeep_ductility(P, u_peak, soft, u_end):
+    """[K25] Eq. 14 in closed form for the fake curve with hardening (soft < 0): linear to (u_peak, P), then a line
+    to (u_end, P_max); K_e = P / u_peak (the 70 % regression points are all on the first branch), Delta_u = u_end."""
+    p_max = P * (1 - soft * (u_end - u_peak) / 1e-3)
+    area = 0.5 * P * u_peak + 0.5 * (P + p_max) * (u_end - u_peak)
+    k_e = P / u_peak
+    p_y = k_e * (u_end - (u_end ** 2 - 2 * area / k_e) ** 0.5)
+    return u_end / (p_y / k_e)
+
+
+def test_trend_line_reports_eeep_ductility(tmp_path, cli, fake):
+    # hardening after a yield at u_peak (largest load at the end, 1 mm): the later the yield, the lower the ductility
+    cases = {"w_N30": 0.25e-3, "w_N100": 0.5e-3, "w_N200": 0.75e-3}
+    fam = make_family(tmp_path, {k: f"peak_kN = 10.0\nu_peak = {u}\nsoftening = -0.2" for k, u in cases.items()}, REF)
+    out = tmp_path / "out"
+    rc, o, err = cli("validate", fam, "--fdem", fake, "--out-dir", out, "--no-rate-check",
+                     env={"FAKE_FDEM_LOG": str(tmp_path / "calls.log")})
+    assert rc == 0, err
+    rep = {r["case"]: r for r in read_csv(out / "report.csv")}
+    mus = {k: eeep_ductility(10e3, u, -0.2, 1e-3) for k, u in cases.items()}
+    for k, mu in mus.items():
+        assert float(rep[k]["ductility_eeep"]) == pytest.approx(mu, rel=1e-9)
+    assert mus["w_N30"] > mus["w_N100"] > mus["w_N200"] > 1.0
+    md = (out / "report.md").read_text()
+    assert ("EEEP ductility ([K25] Eq. 14, displacement at peak as Delta_u) falling with N: yes ("
+            + ", ".join(validate.fmt(mus[k]) for k in ("w_N30", "w_N100", "w_N200")) + ").") in md
+    assert "displacement at peak falling with N: no" in md  # all three peak at the end, 1 mm
+
+
 def test_trend_line_unordered_family(tmp_path, cli, fake):
     fam = make_family(tmp_path, {"w_N30": "peak_kN = 10.0\nu_peak = 0.5e-3",
                                  "w_N100": "peak_kN = 30.0\nu_peak = 0.7e-3",
