@@ -138,21 +138,22 @@ TEST_CASE("engine bar in tension with every edge crackable: one straight crack, 
         double peak = 0, peak_time = 0, peak_left = 0;
         double t_sep = -1;
         int corners_intact = -1, corners_cracked = -1;
-        std::vector<std::array<double, 2>> rising;  // (R, R_left) per step while R > 0 (N)
+        std::vector<std::array<double, 2>> rising;  // (R, R_left) at each new largest R (N)
         while (!sim.stage_finished()) {
             sim.step();
             if (corners_intact < 0) corners_intact = corner_pairs(sim);
             if (t_sep > 0 && corners_cracked < 0) corners_cracked = corner_pairs(sim);  // the step after separation
             const double R = sim.monitor_value(1);
-            if (R > 0.0) rising.push_back({R, sim.monitor_value(2)});
             if (R > peak) {
+                rising.push_back({R, sim.monitor_value(2)});
                 peak = R, peak_time = sim.time(), peak_left = sim.monitor_value(2);
             }
             if (t_sep < 0 && broken_count(sim) >= ny) t_sep = sim.time();
             // 1 ms (5 axial transits of the bar) after the separation, to see whether anything else breaks.
             if (t_sep > 0 && sim.time() > t_sep + 1e-3) break;
         }
-        // The loading branch at 98 % of the peak: the first step with R >= 0.98 peak.
+        // The loading branch at 98 % of the peak: the first step with R >= 0.98 peak (a new largest R, since every
+        // step before it had less).
         double load_R = 0, load_left = 0;
         for (const auto& s : rising)
             if (s[0] >= 0.98 * peak) {
