@@ -91,69 +91,63 @@ void load_edge(const double* xo, const double* vo, double* fo, const double* vq,
     const int e1 = (e + 1) % 3;
     const double dx = xo[2 * e1] - xo[2 * e], dy = xo[2 * e1 + 1] - xo[2 * e + 1];
     const double nx = dy / len, ny = -dx / len, tx = dx / len, ty = dy / len;
-    const double ct = p.c * p.thickness;
-    fo[2 * e] -= ct * I[0] * nx;
-    fo[2 * e + 1] -= ct * I[0] * ny;
-    fo[2 * e1] -= ct * I[1] * nx;
-    fo[2 * e1 + 1] -= ct * I[1] * ny;
-    for (int k = 0; k < 3; ++k) {
-        fq[2 * k] += ct * I[2 + k] * nx;
-        fq[2 * k + 1] += ct * I[2 + k] * ny;
-    }
     const double total = I[0] + I[1];
-    const double fn = ct * total;  // N
+    const double fn = p.c * p.thickness * total;  // N
+    // Centre of pressure: along the edge s = I1 / (I0 + I1); in the other triangle the area coordinates
+    // I[2 + k] / (I0 + I1). The normal load c t INT N_a phi on the edge's nodes is fn at that point, and so is its
+    // reaction on the other triangle; friction and dashpots act at the same point, so one force vector (gx, gy) on
+    // the owner, the opposite on the other, carries all of it.
+    const double inv_total = 1.0 / total;
+    const double s = I[1] * inv_total;
+    double lq[3];
+    for (int k = 0; k < 3; ++k) lq[k] = I[2 + k] * inv_total;
+    double gx = -fn * nx, gy = -fn * ny;
     const double k_t = 0.5 * p.k_s * p.thickness * I[5];  // N/m; each of the two faces carries half the contact
     const bool friction = p.mu > 0.0 && k_t > 0.0;
     if (!friction) hist = 0.0;
-    if (!friction && !(p.beta > 0.0)) return;
-    const double s = I[1] / total;  // centre of pressure along the edge
-    double lq[3];
-    for (int k = 0; k < 3; ++k) lq[k] = I[2 + k] / total;
-    const double vox = (1.0 - s) * vo[2 * e] + s * vo[2 * e1], voy = (1.0 - s) * vo[2 * e + 1] + s * vo[2 * e1 + 1];
-    const double vqx = lq[0] * vq[0] + lq[1] * vq[2] + lq[2] * vq[4];
-    const double vqy = lq[0] * vq[1] + lq[1] * vq[3] + lq[2] * vq[5];
-    const double vrx = vox - vqx, vry = voy - vqy;  // owner relative to other, at the centre of pressure
-    const double vt = vrx * tx + vry * ty;
-    // Forces on the owner at the centre of pressure; the other triangle gets the opposite at the same point.
-    // (f: magnitude along the unit vector (ux, uy).)
-    auto apply = [&](double f, double ux, double uy) {
-        fo[2 * e] += (1.0 - s) * f * ux;
-        fo[2 * e + 1] += (1.0 - s) * f * uy;
-        fo[2 * e1] += s * f * ux;
-        fo[2 * e1 + 1] += s * f * uy;
-        for (int k = 0; k < 3; ++k) {
-            fq[2 * k] -= lq[k] * f * ux;
-            fq[2 * k + 1] -= lq[k] * f * uy;
+    if (friction || p.beta > 0.0) {
+        const double vox = (1.0 - s) * vo[2 * e] + s * vo[2 * e1], voy = (1.0 - s) * vo[2 * e + 1] + s * vo[2 * e1 + 1];
+        const double vqx = lq[0] * vq[0] + lq[1] * vq[2] + lq[2] * vq[4];
+        const double vqy = lq[0] * vq[1] + lq[1] * vq[3] + lq[2] * vq[5];
+        const double vrx = vox - vqx, vry = voy - vqy;  // owner relative to other, at the centre of pressure
+        const double vt = vrx * tx + vry * ty;
+        bool sticks = false;
+        double ft = 0.0;  // along t_O on the owner (N)
+        const double cap = p.mu * fn;
+        if (friction) {
+            // [K25] Eq. 4: delta_s += v_rel,t dt; Eq. 5: F_t = min(k_t |delta_s|, mu |F_n|), opposing the slip.
+            const double trial = hist + vt * p.dt;
+            ft = -k_t * trial;
+            double kept = trial;
+            sticks = std::fabs(ft) <= cap;
+            if (!sticks) {
+                kept = (trial > 0.0 ? 1.0 : -1.0) * cap / k_t;
+                ft = -k_t * kept;
+                r.dissipation += cap * std::fabs(trial - kept);
+            }
+            hist = kept;
+            r.energy_tangential += 0.5 * k_t * kept * kept;
         }
-    };
-    bool sticks = false;
-    double ft = 0.0;  // along t_O on the owner (N)
-    const double cap = p.mu * fn;
-    if (friction) {
-        // [K25] Eq. 4: delta_s += v_rel,t dt; Eq. 5: F_t = min(k_t |delta_s|, mu |F_n|), opposing the slip.
-        const double trial = hist + vt * p.dt;
-        ft = -k_t * trial;
-        double kept = trial;
-        sticks = std::fabs(ft) <= cap;
-        if (!sticks) {
-            kept = (trial > 0.0 ? 1.0 : -1.0) * cap / k_t;
-            ft = -k_t * kept;
-            r.dissipation += cap * std::fabs(trial - kept);
+        double fdn = 0.0, fdt = 0.0;
+        if (p.beta > 0.0) {
+            // Dashpots (PairParams::beta). The normal one never pulls the faces together: its pull is at most the
+            // elastic push fn. The tangential one acts only while the edge sticks and keeps the sum within the
+            // Coulomb limit, so a sliding edge carries mu fn whatever the rate.
+            const double vn = vrx * nx + vry * ny;  // > 0: the owner's edge moves into the other triangle
+            fdn = std::min(-p.beta * 0.5 * p.k_n_area * p.thickness * I[5] * vn, fn);  // along n_O
+            fdt = sticks ? std::clamp(-p.beta * k_t * vt, -cap - ft, cap - ft) : 0.0;  // along t_O
+            r.damping -= (fdn * vn + fdt * vt) * p.dt;
         }
-        hist = kept;
-        r.energy_tangential += 0.5 * k_t * kept * kept;
-        apply(ft, tx, ty);
+        gx += fdn * nx + (ft + fdt) * tx;
+        gy += fdn * ny + (ft + fdt) * ty;
     }
-    if (p.beta > 0.0) {
-        // Dashpots (PairParams::beta). The normal one never pulls the faces together: its pull is at most the
-        // elastic push fn. The tangential one acts only while the edge sticks and keeps the sum within the Coulomb
-        // limit, so a sliding edge carries mu fn whatever the rate.
-        const double vn = vrx * nx + vry * ny;  // > 0: the owner's edge moves into the other triangle
-        const double fdn = std::min(-p.beta * 0.5 * p.k_n_area * p.thickness * I[5] * vn, fn);  // along n_O
-        const double fdt = sticks ? std::clamp(-p.beta * k_t * vt, -cap - ft, cap - ft) : 0.0;  // along t_O
-        r.damping -= (fdn * vn + fdt * vt) * p.dt;
-        apply(fdn, nx, ny);
-        if (fdt != 0.0) apply(fdt, tx, ty);
+    fo[2 * e] += (1.0 - s) * gx;
+    fo[2 * e + 1] += (1.0 - s) * gy;
+    fo[2 * e1] += s * gx;
+    fo[2 * e1 + 1] += s * gy;
+    for (int k = 0; k < 3; ++k) {
+        fq[2 * k] -= lq[k] * gx;
+        fq[2 * k + 1] -= lq[k] * gy;
     }
 }
 
@@ -223,27 +217,34 @@ bool edge_integrals(const double* La, const double* Lb, const double* p0, const 
     br[nb++] = hi;
     for (int i = 2; i < nb - 1; ++i)  // insertion sort of at most 3 interior breakpoints
         for (int j = i; j > 1 && br[j] < br[j - 1]; --j) std::swap(br[j], br[j - 1]);
-    for (int i = 0; i < 6; ++i) out[i] = 0.0;
-    auto phi = [&](double s, double* L) {
-        double m = 1e300;
-        for (int k = 0; k < 3; ++k) {
-            L[k] = a[k] + b[k] * s;
-            m = std::min(m, w[k] * L[k]);
-        }
+    // phi is continuous and linear between breakpoints, so its values at the breakpoints (clamped at 0 against
+    // rounding) define it. With P0 = INT phi ds and P1 = INT s phi ds over the inside part (s in [0, 1] along the
+    // segment), N1 = s, N0 = 1 - s and L_k = a_k + b_k s:
+    //   INT N0 phi dG = len (P0 - P1),  INT N1 phi dG = len P1,  INT L_k phi dG = len (a_k P0 + b_k P1).
+    // On a piece [s0, s1] with end values f0, f1 (trapezoid rule exact for linear, Simpson for the quadratic):
+    //   INT phi ds = h (f0 + f1) / 2,  INT s phi ds = h (s0 (2 f0 + f1) + s1 (f0 + 2 f1)) / 6,  h = s1 - s0.
+    auto phi = [&](double s) {
+        double m = w[0] * (a[0] + b[0] * s);
+        m = std::min(m, w[1] * (a[1] + b[1] * s));
+        m = std::min(m, w[2] * (a[2] + b[2] * s));
         return std::max(0.0, m);
     };
-    for (int i = 0; i + 1 < nb; ++i) {
-        const double s0 = br[i], s1 = br[i + 1], sm = 0.5 * (s0 + s1);
+    double P0 = 0.0, P1 = 0.0;
+    double s0 = br[0], f0 = phi(s0);
+    for (int i = 1; i < nb; ++i) {
+        const double s1 = br[i];
         if (!(s1 > s0)) continue;
-        double L0[3], Lm[3], L1[3];
-        const double f0 = phi(s0, L0), fm = phi(sm, Lm), f1 = phi(s1, L1);
-        const double h = (s1 - s0) * len / 6.0;  // Simpson, exact for the product of two linear functions
-        out[0] += h * ((1.0 - s0) * f0 + 4.0 * (1.0 - sm) * fm + (1.0 - s1) * f1);
-        out[1] += h * (s0 * f0 + 4.0 * sm * fm + s1 * f1);
-        for (int k = 0; k < 3; ++k) out[2 + k] += h * (L0[k] * f0 + 4.0 * Lm[k] * fm + L1[k] * f1);
+        const double f1 = phi(s1), h = s1 - s0;
+        P0 += 0.5 * h * (f0 + f1);
+        P1 += h * (s0 * (2.0 * f0 + f1) + s1 * (f0 + 2.0 * f1)) * (1.0 / 6.0);
+        s0 = s1;
+        f0 = f1;
     }
+    out[0] = len * (P0 - P1);
+    out[1] = len * P1;
+    for (int k = 0; k < 3; ++k) out[2 + k] = len * (a[k] * P0 + b[k] * P1);
     out[5] = (hi - lo) * len;
-    return out[0] + out[1] > 0.0;
+    return P0 > 0.0;
 }
 
 // Area coordinates in T (affine coefficients g) of the three vertices of X: L[3 v + k] = L_k(x_v).

@@ -23,7 +23,8 @@
 //   sign convention for grad phi; the force here is repulsive, checked against -dE/du in the tests.)
 //   Discrete: each edge segment inside the other triangle is split where the minimum in phi changes branch; on each
 //   piece phi is linear, so INT N_a phi dG (edge nodes, linear shape functions N) and INT L_k phi dG (the other
-//   triangle's nodes, area coordinates) are products of linear functions, integrated exactly by Simpson's rule.
+//   triangle's nodes, area coordinates) are products of linear functions. All of them follow exactly from the two
+//   moments INT phi ds and INT s phi ds along the segment, summed over the pieces from phi's values at the breakpoints.
 //   Both ends get the same distributed load at the same points: sum of forces and of moments are zero exactly.
 #pragma once
 
