@@ -46,8 +46,8 @@ K25 = dict(mesh=0.025, penalty=1.0e10, rate=0.01, until=0.010, damping=0.05, ld_
            # precompression: ramps and bound long enough for the mass-scaled wall (vertical period ~0.1 s) to come to rest
            pre_ramp=0.05, pre_max=0.4, snapshots=0.05)
 # QUICK (the default ./run.sh, about 2 minutes on 2 threads): the family setting with mass scaling 100 instead of 10
-# (time step x 3.16). On the 100 kN wall with the filtered local damping of RESULTS.md §8: 45.63 kN raw against
-# 45.14 kN raw at mass scaling 10 (+1.1 %), 116,078 steps, 126 s on 2 threads (RESULTS.md §15; before §8: 47.23
+# (time step x 3.16). On the 100 kN wall with the filtered local damping of RESULTS.md §8: 45.58 kN raw against
+# 45.13 kN raw at mass scaling 10 (+1.0 %), 116,405 steps, 123-137 s on 2 threads (RESULTS.md §17; before §8: 47.23
 # against 46.20 kN, RESULTS.md §7.4).
 K25_QUICK = dict(K25, mass_scale=100)
 # 3DEC family: local damping 0.8 in the shear stage, as 3DEC's default (Itasca's local damping 0.8), signed by the
@@ -234,8 +234,8 @@ def k25_case(r, quick=False):
         settings_text = f"""# QUICK SETTING, for the default ./run.sh (about 2 minutes on 2 threads): the family's settings (k25_N{r['N_kN']}.toml:
 #   contact dashpots {s['contact_damping']}, shear-stage local damping {s['damping']}, {s['rate']} m/s to {s['until'] * 1000:g} mm) with the
 #   inertial mass x {s['mass_scale']} instead of x {K25['mass_scale']} ([numerics] mass_scale; gravity keeps the physical mass), time step
-#   x 3.16. Measured on this wall: raw maximum 45.63 kN against 45.14 kN for the family setting, +1.1 %
-#   (RESULTS.md §8, §15). The family report is the validation; this is its fast preview."""
+#   x 3.16. Measured on this wall: raw maximum 45.58 kN against 45.13 kN for the family setting, +1.0 %
+#   (RESULTS.md §8, §17). The family report is the validation; this is its fast preview."""
     else:
         settings_text = f"""# Mass scaling: inertial mass x {s['mass_scale']} ([numerics] mass_scale; gravity keeps the physical mass): time step
 #   ~3.7e-6 s instead of ~1.2e-6 s. Shear stage: contact dashpots at {s['contact_damping']} of critical (stage key
