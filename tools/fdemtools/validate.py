@@ -19,6 +19,17 @@ Both peaks of a pair are maxima over the same displacement range: when the two r
 displacements (an unfinished run, a stage that ends by time), both are taken up to the smaller one and the row
 says so.
 
+Which peak (--peak, default largest): `largest` takes the largest load of the curve; `first` takes the first
+peak, the largest load reached before the load first falls FIRST_PEAK_DROP (5 %) below the largest value so far,
+once that value is at least FIRST_PEAK_FLOOR (half) of the curve's largest load (the start of a loading stage can
+carry an inertia spike of a few per cent of the capacity, which is not a peak); a curve that never falls that far has
+no first peak: its largest load is taken and past_peak says so. A wall
+that softens and then rises again on a second mechanism (a growing vertical force, re-seated blocks) reports its
+first capacity, which does not depend on which branch the later response takes. `--peak-up-to MM` cuts every
+curve at MM mm of control displacement before anything is measured (peak, load at the end, EEEP, half-rate check):
+a stated window, for runs that go further than the test did. The largest load of the whole curve stays in the
+report (largest_load_kN, largest_at_mm), so a chosen peak never hides a larger one.
+
 Smoothing (--smooth MM, default 0 = off): the peak, the displacement at peak, the load at the end and the
 quasi-static comparison are then taken on the load averaged over a window of MM millimetres of control displacement
 centred on each history row (one-sided where the curve starts and ends). Explicit runs of rocking and sliding walls
@@ -60,6 +71,9 @@ from .common import ToolError, load_curve, load_run, write_csv
 
 QS_LIMIT = 0.02  # the peak may change by less than this when the rate is halved
 PAST_PEAK_DROP = 0.05  # the load at the end must be this far below the peak (fraction of it) to call it a peak
+FIRST_PEAK_DROP = 0.05  # --peak first: the load must fall this far below the largest value so far (fraction)
+FIRST_PEAK_FLOOR = 0.5  # --peak first: only a maximum of at least this fraction of the largest load is a peak
+PEAK_RULES = ("largest", "first")
 SAME_END_RTOL = 0.005  # two runs whose control displacements reached differ by less than this (relative) end alike
 
 
@@ -192,13 +206,43 @@ def smooth_curve(x: np.ndarray, y: np.ndarray, window: float) -> np.ndarray:
     return (cs[hi] - cs[lo]) / (hi - lo)
 
 
-def curve_metrics(run_dir: str, smooth_m: float = 0.0) -> dict:
+def peak_index(y: np.ndarray, rule: str = "largest") -> tuple:
+    """(index of the peak, whether the curve fell past it) by --peak's rule. largest: the first row of the largest
+    value, past when the last row is PAST_PEAK_DROP below it. first: the running maximum at the first row that lies
+    FIRST_PEAK_DROP below it, counting only maxima of at least FIRST_PEAK_FLOOR times the curve's largest value (so
+    the inertia spike when an actuator starts is not a peak); then past by construction. A curve that never falls
+    that far gives its largest value and past = False."""
+    y = np.asarray(y, float)
+    if rule == "first" and len(y):
+        floor = FIRST_PEAK_FLOOR * float(np.max(y))
+        best = 0
+        for k in range(1, len(y)):
+            if y[k] > y[best]:
+                best = k
+            elif y[best] >= floor and y[k] <= (1.0 - FIRST_PEAK_DROP) * y[best]:
+                return best, True
+        rule = "largest"
+    if rule != "largest":
+        raise ToolError(f"--peak must be one of {', '.join(PEAK_RULES)}, got '{rule}'")
+    i = int(np.argmax(y))
+    return i, bool(y[i] > 0 and (y[i] - y[-1]) / y[i] >= PAST_PEAK_DROP)
+
+
+def cut_at(x: np.ndarray, d: float) -> int:
+    """Number of rows of a curve up to and including the first row whose control displacement reaches d (m)."""
+    hit = np.nonzero(np.asarray(x) >= d * (1 - 1e-12))[0]
+    return int(hit[0]) + 1 if len(hit) else len(x)
+
+
+def curve_metrics(run_dir: str, smooth_m: float = 0.0, rule: str = "largest", up_to_m: float | None = None) -> dict:
     """Peak |load| (N), displacement at peak (m, from the start of the stage) and initial stiffness (N/m) of the
     load-displacement curve in the run's last stage (the loading after precompression); the |load| at the last
     history row (N), the drop after the peak (fraction of the peak) and the largest control displacement reached
     (m). `x`, `y` (|x - x0| in m, |load| in N) are kept for comparing two runs over the same range. With
     smooth_m > 0 all of these are taken on the load averaged over smooth_m of displacement (smooth_curve); the raw
-    largest load is peak_raw_N and the largest |raw - smoothed| is oscillation_N."""
+    largest load is peak_raw_N and the largest |raw - smoothed| is oscillation_N. rule picks the peak (peak_index);
+    up_to_m cuts the curve at that displacement first (after smoothing, so the window does not change the mean of
+    the rows it keeps)."""
     run = load_run(run_dir, allow_unfinished=True)
     last = None
     if run.history is not None and run.history.has("stage") and len(run.history):
@@ -210,7 +254,9 @@ def curve_metrics(run_dir: str, smooth_m: float = 0.0) -> dict:
     x = np.abs(x - x[0])
     raw = np.abs(y)
     y = smooth_curve(x, raw, smooth_m)  # the raw |load| itself when smooth_m = 0
-    i = int(np.argmax(y))
+    n = len(x) if up_to_m is None else cut_at(x, up_to_m)
+    x, y, raw = x[:n], y[:n], raw[:n]
+    i, past = peak_index(y, rule)
     peak = float(y[i])
     d_peak = float(x[i])
     # initial stiffness: least-squares line through the origin of the ascending branch up to 40 % of the peak
@@ -222,39 +268,44 @@ def curve_metrics(run_dir: str, smooth_m: float = 0.0) -> dict:
     xs, ys = x[: j + 1], y[: j + 1]
     k0 = float(np.dot(xs, ys) / np.dot(xs, xs)) if np.dot(xs, xs) > 0 else float("nan")
     end = float(y[-1])
+    il = int(np.argmax(y))
     out = {"peak_load_N": peak, "disp_at_peak_m": d_peak, "initial_stiffness_N_m": k0,
-           "load_at_end_N": end, "drop_after_peak": (peak - end) / peak if peak > 0 else None,
+           "load_at_end_N": end, "drop_after_peak": (peak - end) / peak if peak > 0 else None, "past_peak": past,
+           "largest_load_N": float(y[il]), "largest_at_m": float(x[il]), "rule": rule,
            "reach_m": float(np.max(x)), "x": x, "y": y,
            "peak_raw_N": float(np.max(raw)), "oscillation_N": oscillation(x, raw, y, smooth_m)}
-    out.update(damping_work_shares(run, last, c))
-    # EEEP ductility of the same curve ([K25] Eq. 14, FORMULATION §9: K_e by regression up to 70 % of the peak,
-    # Delta_u = displacement at the peak, the [K25] choice); None when the curve has no elastic branch to fit.
+    out.update(damping_work_shares(run, last, c, n))
+    # EEEP ductility of the same curve ([K25] Eq. 14, FORMULATION §9: K_e by regression to 70 % of the peak,
+    # Delta_u = displacement at the peak, the [K25] choice); None when the curve has no elastic branch to fit. With
+    # --peak first the curve ends at the first peak, so that peak is eeep's.
     try:
-        mu = float(eeep(x, y, source=run_dir)["ductility"])
+        xe, ye = (x, y) if rule == "largest" else (x[: i + 1], y[: i + 1])
+        mu = float(eeep(xe, ye, source=run_dir)["ductility"])
         out["ductility"] = mu if np.isfinite(mu) else None
     except (ToolError, ValueError, ZeroDivisionError, FloatingPointError):
         out["ductility"] = None
     return out
 
 
-def damping_work_shares(run, stage, c) -> dict:
+def damping_work_shares(run, stage, c, n: int | None = None) -> dict:
     """What the damping took of the loading work in the curve's stage: the growth of D_damp (local damping) and of
     D_visc (element viscosity, contact dashpots, mass damping) over the stage's rows, each divided by the work of the curve's
     load along its displacement, |integral F du| (trapezoids on the history rows). A load the local damping carries
     need not shrink when the rate is halved (-alpha |f| sign v), so the half-rate check may not see it; this share
-    does. None where the history has no such column or the loading did no work."""
+    does. None where the history has no such column or the loading did no work. n: only the stage's first n rows
+    (the --peak-up-to window)."""
     h = run.history
     out = {"local_damping_work_share": None, "viscous_work_share": None}
     if h is None or not h.has("stage"):
         return out
     keep = h.numeric("stage") == stage
-    xs, ys = np.asarray(c.x, float), np.asarray(c.y, float)
+    xs, ys = np.asarray(c.x, float)[:n], np.asarray(c.y, float)[:n]
     work = abs(float(np.sum(0.5 * (ys[1:] + ys[:-1]) * np.diff(xs)))) if len(xs) > 1 else 0.0
     if not work > 0:
         return out
     for col, key in (("D_damp", "local_damping_work_share"), ("D_visc", "viscous_work_share")):
         if h.has(col) and run.unit(col) == "J":
-            d = h.numeric(col)[keep]
+            d = h.numeric(col)[keep][:n]
             out[key] = float(d[-1] - d[0]) / work
     return out
 
@@ -268,18 +319,18 @@ def oscillation(x: np.ndarray, raw: np.ndarray, smooth: np.ndarray, window: floa
     return float(np.max(np.abs(raw - smooth)[whole])) if np.any(whole) else float("nan")
 
 
-def past_peak(drop) -> str | None:
-    if drop is None:
+def past_peak(past) -> str | None:
+    if past is None:
         return None
-    return "yes" if drop >= PAST_PEAK_DROP else "no (still rising / flat)"
+    return "yes" if past else "no (still rising / flat)"
 
 
 def peak_up_to(m: dict, d: float) -> float:
-    """Largest |load| (N) of a run's curve up to the first row where the control displacement reaches d (m)."""
+    """The peak (N) of a run's curve, by the run's --peak rule, up to the first row where the control displacement
+    reaches d (m)."""
     x, y = m["x"], m["y"]
-    hit = np.nonzero(x >= d * (1 - 1e-12))[0]
-    n = int(hit[0]) + 1 if len(hit) else len(x)
-    return float(np.max(y[:n]))
+    y = y[: cut_at(x, d)]
+    return float(y[peak_index(y, m.get("rule", "largest"))[0]])
 
 
 def compare_rates(m_full: dict, m_half: dict) -> dict:
@@ -457,7 +508,8 @@ def run_family(args) -> int:
         if rec["status"] in ("completed", "failed", "running") and \
                 os.path.isfile(os.path.join(rec["run_dir"], "history.csv")):
             try:
-                m = curve_metrics(rec["run_dir"], args.smooth * 1e-3)
+                m = curve_metrics(rec["run_dir"], args.smooth * 1e-3, args.peak,
+                                  None if args.peak_up_to is None else args.peak_up_to * 1e-3)
             except ToolError as e:
                 m = {"note": str(e)}
         by_task[label] = (rec, m)
@@ -496,7 +548,9 @@ def run_family(args) -> int:
                "ductility_eeep": m.get("ductility"),
                "initial_stiffness_kN_mm": m["initial_stiffness_N_m"] / 1e6 if "initial_stiffness_N_m" in m else None,
                "load_at_end_kN": kn(m.get("load_at_end_N")), "drop_after_peak": m.get("drop_after_peak"),
-               "past_peak": past_peak(m.get("drop_after_peak")),
+               "past_peak": past_peak(m.get("past_peak")),
+               "largest_load_kN": kn(m.get("largest_load_N")), "largest_at_mm": mm(m.get("largest_at_m")),
+               "peak_rule": args.peak, "peak_up_to_mm": args.peak_up_to,
                "experiment_kN": exp_N / 1e3 if exp_N else None, "error_vs_experiment": rel(peak, exp_N),
                "published_fdem_kN": pub_N / 1e3 if pub_N else None, "error_vs_published_fdem": rel(peak, pub_N),
                "peak_half_rate_kN": q.get("peak_half_kN"), "rate_change": q.get("change"),
@@ -556,10 +610,25 @@ def report_markdown(family, rows, qs_rows, trend, fixed, args, elapsed) -> str:
                   f"over {args.smooth:g} mm of control displacement centred on each row (--smooth). Raw largest load / "
                   "largest |raw - smoothed| per case (kN): "
                   + "; ".join(f"{r['case']} {fmt(r['peak_raw_kN'])} / {fmt(r['oscillation_kN'])}" for r in rows) + "."]
-    L += ["", f"Peak = largest |load| of the case's curve in its last stage; load at end = its last history row; "
-              f"past peak = yes when the load at the end is at least {100 * PAST_PEAK_DROP:g} % below the peak "
-              "(PAST_PEAK_DROP), otherwise the curve is still rising or flat and the peak is only the largest load "
-              "reached so far."]
+    window = "" if args.peak_up_to is None else (f" up to {args.peak_up_to:g} mm of control displacement "
+                                                  "(--peak-up-to: the rest of the curve is not measured)")
+    if args.peak == "first":
+        L += ["", f"Peak = first peak (--peak first) of |load| on the case's curve in its last stage{window}: the "
+                  f"largest load reached before the load first falls {100 * FIRST_PEAK_DROP:g} % below it "
+                  f"(FIRST_PEAK_DROP), counting maxima of at least {100 * FIRST_PEAK_FLOOR:g} % of the curve's "
+                  "largest load (FIRST_PEAK_FLOOR); past peak = yes when it did, otherwise the curve never fell that far and the "
+                  "peak is its largest load; load at end = its last history row."]
+        later = [r for r in rows if r["largest_load_kN"] is not None and r["peak_load_kN"] is not None
+                 and r["largest_load_kN"] > r["peak_load_kN"]]
+        if later:
+            L += ["", "Larger loads after the first peak (kN at mm): "
+                      + "; ".join(f"{r['case']} {fmt(r['largest_load_kN'])} at {fmt(r['largest_at_mm'])}"
+                                  for r in later) + "."]
+    else:
+        L += ["", f"Peak = largest |load| of the case's curve in its last stage{window}; load at end = its last "
+                  f"history row; past peak = yes when the load at the end is at least {100 * PAST_PEAK_DROP:g} % "
+                  "below the peak (PAST_PEAK_DROP), otherwise the curve is still rising or flat and the peak is only "
+                  "the largest load reached so far."]
     not_past = [r["case"] for r in rows if r["past_peak"] is not None and r["past_peak"] != "yes"]
     if not_past:
         L += ["", f"Not past the peak: {', '.join(not_past)}."]
@@ -612,6 +681,8 @@ def report_markdown(family, rows, qs_rows, trend, fixed, args, elapsed) -> str:
 def cmd_validate(args):
     if not args.smooth >= 0:
         raise ToolError(f"--smooth must be a window >= 0 mm, got {args.smooth}")
+    if args.peak_up_to is not None and not args.peak_up_to > 0:
+        raise ToolError(f"--peak-up-to must be a displacement > 0 mm, got {args.peak_up_to}")
     if args.jobs is None:
         args.jobs = default_jobs(args.threads)
     return run_family(args)
@@ -647,4 +718,12 @@ def add_parser(sub):
     p.add_argument("--smooth", type=float, default=0.0, metavar="MM",
                    help="take peaks on the load averaged over MM mm of control displacement (default 0: raw); the "
                         "raw largest load and the oscillation are reported beside them")
+    p.add_argument("--peak", choices=PEAK_RULES, default="largest",
+                   help="which peak: the largest load (default) or the first one, the largest load before the load "
+                        f"first falls {100 * FIRST_PEAK_DROP:g} %% below it (maxima under "
+                        f"{100 * FIRST_PEAK_FLOOR:g} %% of the largest load do not count); the largest load is "
+                        "reported beside it")
+    p.add_argument("--peak-up-to", type=float, metavar="MM",
+                   help="measure every curve only up to MM mm of control displacement (peak, load at the end, EEEP, "
+                        "half-rate check)")
     p.set_defaults(func=cmd_validate)

@@ -2,7 +2,8 @@
 stand-in fdem whose curve shape comes from a [fake] table in the case file (no physics).
 
 Fake curve (control displacement u, load F, 41 history rows from u = 0 to u_end):
-  F = P u / u_peak up to u_peak, then F = P (1 - softening (u - u_peak) / 1 mm), with
+  F = P u / u_peak up to u_peak, then F = P (1 - softening (u - u_peak) / 1 mm), and past u_rise (when given)
+  F = F(u_rise) + P rise (u - u_rise) / 1 mm (a second branch), with
   P = peak_kN (1 + rate_sens vx) and vx the prescribed velocity (from --set stages.0.supports.0.vx, else the case);
   u_end = vx duration when [fake] gives a duration (the stage ends by time), else u_end.
 """
@@ -11,6 +12,7 @@ import json
 import os
 import stat
 
+import numpy as np
 import pytest
 
 from fdemtools import validate
@@ -38,11 +40,14 @@ def main(argv):
     P = fk.get("peak_kN", 10.0) * 1e3 * (1 + fk.get("rate_sens", 0.0) * vx)
     u_end = vx * fk["duration"] if "duration" in fk else fk.get("u_end", 1e-3)
     u_peak, soft = fk.get("u_peak", 0.5e-3), fk.get("softening", 0.0)
+    u_rise = fk.get("u_rise", float("inf"))
     os.makedirs(out, exist_ok=True)
     rows, n = [], 41
     for k in range(n):
         u = u_end * k / (n - 1)
-        F = P * u / u_peak if u <= u_peak else P * (1 - soft * (u - u_peak) / 1e-3)
+        F = P * u / u_peak if u <= u_peak else P * (1 - soft * (min(u, u_rise) - u_peak) / 1e-3)
+        if u > u_rise:
+            F += P * fk.get("rise", 0.0) * (u - u_rise) / 1e-3
         rows.append((u, F))
     with open(os.path.join(out, "history.csv"), "w") as f:
         f.write("time,step,stage,u,F\n")
@@ -299,3 +304,85 @@ def test_lourenco_reference_has_the_axial_column():
         pytest.skip("wall cases not present")
     rows = read_csv(p)
     assert "N_kN" in rows[0] and [float(r["N_kN"]) for r in rows] == [30, 100, 200, 250]
+
+
+# peak 10 kN at 0.3 mm, -20 %/mm to 0.6 mm (9.4 kN, 6 % down), then +50 %/mm to 1.2 mm (12.4 kN): a second branch
+TWO_BRANCHES = "u_end = 1.2e-3\nu_peak = 0.3e-3\nsoftening = 0.2\nu_rise = 0.6e-3\nrise = 0.5"
+# the same with a 3 % dip (-10 %/mm): no first peak by the 5 % rule
+SHALLOW = "u_end = 1.2e-3\nu_peak = 0.3e-3\nsoftening = 0.1\nu_rise = 0.6e-3\nrise = 0.5"
+
+
+def test_first_peak_rule_reports_the_first_capacity_and_the_larger_later_load(tmp_path, cli, fake):
+    fam = make_family(tmp_path, {"two": TWO_BRANCHES, "shallow": SHALLOW})
+    out = tmp_path / "out"
+    env = {"FAKE_FDEM_LOG": str(tmp_path / "calls.log")}
+    rc, o, err = cli("validate", fam, "--fdem", fake, "--out-dir", out, "--no-rate-check", env=env)
+    assert rc == 0, err
+    rep = {r["case"]: r for r in read_csv(out / "report.csv")}
+    # default rule: the largest load, at the end of the second branch
+    assert float(rep["two"]["peak_load_kN"]) == pytest.approx(12.4, rel=1e-9)
+    assert float(rep["two"]["disp_at_peak_mm"]) == pytest.approx(1.2, rel=1e-9)
+    assert rep["two"]["peak_rule"] == "largest" and rep["two"]["peak_up_to_mm"] == ""
+    rc, o, err = cli("validate", fam, "--fdem", fake, "--out-dir", out, "--no-rate-check", "--peak", "first", env=env)
+    assert rc == 0, err
+    rep = {r["case"]: r for r in read_csv(out / "report.csv")}
+    two, shallow = rep["two"], rep["shallow"]
+    assert float(two["peak_load_kN"]) == pytest.approx(10.0, rel=1e-9)
+    assert float(two["disp_at_peak_mm"]) == pytest.approx(0.3, rel=1e-9)
+    assert two["past_peak"] == "yes" and two["peak_rule"] == "first"
+    assert float(two["largest_load_kN"]) == pytest.approx(12.4, rel=1e-9)
+    assert float(two["largest_at_mm"]) == pytest.approx(1.2, rel=1e-9)
+    # EEEP of the run's curve up to the first peak (its first 11 rows), not of the whole curve
+    from fdemtools.eeep import eeep
+    h = read_csv(out / "two" / "runs" / "run" / "history.csv")
+    u, F = np.array([float(r["u"]) for r in h]), np.array([float(r["F"]) for r in h])
+    first, whole = eeep(u[:11], F[:11])["ductility"], eeep(u, F)["ductility"]
+    assert float(two["ductility_eeep"]) == pytest.approx(first, rel=1e-12)
+    assert abs(whole - first) > 0.5
+    # a 3 % dip is not a peak: the largest load, and not past it
+    assert float(shallow["peak_load_kN"]) == pytest.approx(float(shallow["largest_load_kN"]), rel=1e-12)
+    assert float(shallow["disp_at_peak_mm"]) == pytest.approx(1.2, rel=1e-9)
+    assert shallow["past_peak"] == "no (still rising / flat)"
+    md = (out / "report.md").read_text()
+    assert "Peak = first peak (--peak first)" in md
+    assert "Larger loads after the first peak (kN at mm): two 12.4 at 1.2." in md
+
+
+def test_peak_up_to_cuts_every_curve_and_the_half_rate_check(tmp_path, cli, fake):
+    fam = make_family(tmp_path, {"two": TWO_BRANCHES + "\nrate_sens = 10.0"})
+    out = tmp_path / "out"
+    env = {"FAKE_FDEM_LOG": str(tmp_path / "calls.log")}
+    rc, o, err = cli("validate", fam, "--fdem", fake, "--out-dir", out, "--peak-up-to", "0.9", env=env)
+    assert rc == 0, err
+    r = read_csv(out / "report.csv")[0]
+    P = 10.0 * (1 + 10.0 * 0.01)  # 11 kN at the full rate
+    # up to 0.9 mm the largest load is at 0.9 mm: 0.94 P + 0.5 P 0.3 = 1.09 P, also the load at the end
+    assert float(r["peak_load_kN"]) == pytest.approx(1.09 * P, rel=1e-9)
+    assert float(r["disp_at_peak_mm"]) == pytest.approx(0.9, rel=1e-9)
+    assert float(r["load_at_end_kN"]) == pytest.approx(1.09 * P, rel=1e-9)
+    assert float(r["peak_up_to_mm"]) == 0.9
+    q = read_csv(out / "quasi_static.csv")[0]
+    Ph = 10.0 * (1 + 10.0 * 0.005)
+    assert float(q["peak_full_rate_kN"]) == pytest.approx(1.09 * P, rel=1e-9)
+    assert float(q["peak_half_rate_kN"]) == pytest.approx(1.09 * Ph, rel=1e-9)
+    assert "up to 0.9 mm of control displacement (--peak-up-to" in (out / "report.md").read_text()
+    rc, o, err = cli("validate", fam, "--fdem", fake, "--out-dir", out, "--peak-up-to", "0", env=env)
+    assert rc == 1 and "--peak-up-to must be a displacement > 0 mm, got 0" in err
+
+
+def test_peak_index_rules_and_peak_up_to():
+    y = np.array([0.0, 5.0, 10.0, 9.6, 9.4, 11.0, 12.0])
+    assert validate.peak_index(y, "largest") == (6, False)
+    assert validate.peak_index(y, "first") == (2, True)  # 9.4 <= 0.95 x 10
+    y2 = np.array([0.0, 5.0, 10.0, 9.6, 11.0, 8.0])
+    assert validate.peak_index(y2, "first") == (4, True)  # 9.6 is a 4 % dip; 8 is 27 % below 11
+    assert validate.peak_index(y2, "largest") == (4, True)  # the end is 27 % below
+    m = {"x": np.arange(7) * 0.1e-3, "y": y, "rule": "first"}
+    assert validate.peak_up_to(m, 0.25e-3) == 10.0  # rows 0-3 (0.3 mm is the first to reach 0.25 mm)
+    assert validate.peak_up_to(m, 0.15e-3) == 10.0  # rows 0-2: never 5 % down, the largest
+    assert validate.peak_up_to(m, 0.6e-3) == 10.0
+    assert validate.peak_up_to(dict(m, rule="largest"), 0.6e-3) == 12.0
+    # a start spike (3 of 12, then back to 1) is under half the largest load: not a peak
+    y3 = np.array([0.0, 3.0, 1.0, 6.0, 12.0, 11.0, 10.0])
+    assert validate.peak_index(y3, "first") == (4, True)
+    assert validate.peak_index(y3[:5], "first") == (4, False)  # never falls past it: the largest, not past
