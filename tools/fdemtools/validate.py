@@ -22,13 +22,13 @@ says so.
 Which peak (--peak, default largest): `largest` takes the largest load of the curve; `first` takes the first
 peak, the largest load reached before the load first falls FIRST_PEAK_DROP (5 %) below the largest value so far,
 once that value is at least FIRST_PEAK_FLOOR (half) of the curve's largest load (the start of a loading stage can
-carry an inertia spike of a few per cent of the capacity, which is not a peak); a curve that never falls that far has
-no first peak: its largest load is taken and past_peak says so. A wall
-that softens and then rises again on a second mechanism (a growing vertical force, re-seated blocks) reports its
-first capacity, which does not depend on which branch the later response takes. `--peak-up-to MM` cuts every
-curve at MM mm of control displacement before anything is measured (peak, load at the end, EEEP, half-rate check):
-a stated window, for runs that go further than the test did. The largest load of the whole curve stays in the
-report (largest_load_kN, largest_at_mm), so a chosen peak never hides a larger one.
+carry an inertia spike of a few per cent of the capacity, which is not a peak); a curve that never falls that far
+has no first peak: its largest load is taken and past_peak says so. A wall that softens and then rises again on a
+second mechanism (a growing vertical force, re-seated blocks) so reports its first capacity, which does not depend
+on the branch the later response takes. `--peak-up-to MM` cuts every curve at MM mm of control displacement before
+anything is measured (peak, load at the end, EEEP, half-rate check): a stated window, for runs that go further
+than the test did. The largest load of the (cut) curve stays in the report (largest_load_kN, largest_at_mm), so a
+chosen peak never hides a larger one.
 
 Smoothing (--smooth MM, default 0 = off): the peak, the displacement at peak, the load at the end and the
 quasi-static comparison are then taken on the load averaged over a window of MM millimetres of control displacement
@@ -211,7 +211,7 @@ def peak_index(y: np.ndarray, rule: str = "largest") -> tuple:
     value, past when the last row is PAST_PEAK_DROP below it. first: the running maximum at the first row that lies
     FIRST_PEAK_DROP below it, counting only maxima of at least FIRST_PEAK_FLOOR times the curve's largest value (so
     the inertia spike when an actuator starts is not a peak); then past by construction. A curve that never falls
-    that far gives its largest value and past = False."""
+    that far gives its largest value and past = False (None when that value is not positive)."""
     y = np.asarray(y, float)
     if rule == "first" and len(y):
         floor = FIRST_PEAK_FLOOR * float(np.max(y))
@@ -225,7 +225,7 @@ def peak_index(y: np.ndarray, rule: str = "largest") -> tuple:
     if rule != "largest":
         raise ToolError(f"--peak must be one of {', '.join(PEAK_RULES)}, got '{rule}'")
     i = int(np.argmax(y))
-    return i, bool(y[i] > 0 and (y[i] - y[-1]) / y[i] >= PAST_PEAK_DROP)
+    return i, (None if not y[i] > 0 else bool((y[i] - y[-1]) / y[i] >= PAST_PEAK_DROP))
 
 
 def cut_at(x: np.ndarray, d: float) -> int:
@@ -616,8 +616,8 @@ def report_markdown(family, rows, qs_rows, trend, fixed, args, elapsed) -> str:
         L += ["", f"Peak = first peak (--peak first) of |load| on the case's curve in its last stage{window}: the "
                   f"largest load reached before the load first falls {100 * FIRST_PEAK_DROP:g} % below it "
                   f"(FIRST_PEAK_DROP), counting maxima of at least {100 * FIRST_PEAK_FLOOR:g} % of the curve's "
-                  "largest load (FIRST_PEAK_FLOOR); past peak = yes when it did, otherwise the curve never fell that far and the "
-                  "peak is its largest load; load at end = its last history row."]
+                  "largest load (FIRST_PEAK_FLOOR); past peak = yes when it did, otherwise the curve never fell that "
+                  "far and the peak is its largest load; load at end = its last history row."]
         later = [r for r in rows if r["largest_load_kN"] is not None and r["peak_load_kN"] is not None
                  and r["largest_load_kN"] > r["peak_load_kN"]]
         if later:
