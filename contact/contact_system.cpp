@@ -176,27 +176,28 @@ double ContactSystem::stable_dt(const double* x, const double* node_mass) const 
     return dt;
 }
 
+double ContactSystem::effective_buffer(const double* x) const {
+    if (buffer_ > 0.0) return buffer_;
+    if (opt_.buffer > 0.0) return opt_.buffer;
+    double lmin = std::numeric_limits<double>::infinity();
+    for (int t = 0; t < n_tri_; ++t) {
+        double T[6];
+        gather(x, tri_ + 3 * t, T);
+        for (int k = 0; k < 3; ++k) {
+            const int j = (k + 1) % 3;
+            lmin = std::min(lmin, std::hypot(T[2 * j] - T[2 * k], T[2 * j + 1] - T[2 * k + 1]));
+        }
+    }
+    return std::isfinite(lmin) ? lmin / 5.0 : 0.0;  // FORMULATION §5 default
+}
+
 void ContactSystem::detect(const double* x) {
     const double t0 = omp_get_wtime();
     items_.clear();
     for (int t = 0; t < n_tri_; ++t)
         if (capable_[t]) items_.push_back(t);
     const int n = static_cast<int>(items_.size());
-    if (buffer_ <= 0.0) {
-        buffer_ = opt_.buffer;
-        if (buffer_ <= 0.0) {
-            double lmin = std::numeric_limits<double>::infinity();
-            for (int t = 0; t < n_tri_; ++t) {
-                double T[6];
-                gather(x, tri_ + 3 * t, T);
-                for (int k = 0; k < 3; ++k) {
-                    const int j = (k + 1) % 3;
-                    lmin = std::min(lmin, std::hypot(T[2 * j] - T[2 * k], T[2 * j + 1] - T[2 * k + 1]));
-                }
-            }
-            buffer_ = std::isfinite(lmin) ? lmin / 5.0 : 0.0;  // FORMULATION §5 default
-        }
-    }
+    if (buffer_ <= 0.0) buffer_ = effective_buffer(x);
     // scratch kept between detections: no allocation, no page faults on the hot path
     std::vector<double>& icx = cx_;
     std::vector<double>& icy = cy_;
@@ -299,6 +300,7 @@ void ContactSystem::detect(const double* x) {
     pair_e_.resize(4 * static_cast<size_t>(np));
     pair_on_.resize(np);
     box_.resize(4 * static_cast<size_t>(n_tri_));
+    geom_.resize(n_tri_);
     dirty_ = false;
     travel_ = 0.0;
     ++stats_.detections;
@@ -317,19 +319,20 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f)
     travel_ += dt * vmax;
 
     const double t0 = omp_get_wtime();
-    // Bounding boxes of the capable triangles, once per step: most candidate pairs are apart and are rejected
-    // from two contiguous boxes instead of gathering twelve coordinates.
+    // Bounding boxes and pair-kernel geometry of the capable triangles, once per step: most candidate pairs are
+    // apart and are rejected from two contiguous boxes, and a triangle met by several overlapping pairs has its
+    // area coordinates and altitudes computed once.
     const int n_items = static_cast<int>(items_.size());
 #pragma omp parallel for schedule(static) if (n_items > kParallelMin)
     for (int i = 0; i < n_items; ++i) {
-        const int* q = tri_ + 3 * items_[i];
+        double T[6];
+        gather(x, tri_ + 3 * items_[i], T);
         double* bx = &box_[4 * static_cast<size_t>(items_[i])];
-        const double x0 = x[2 * q[0]], x1 = x[2 * q[1]], x2 = x[2 * q[2]];
-        const double y0 = x[2 * q[0] + 1], y1 = x[2 * q[1] + 1], y2 = x[2 * q[2] + 1];
-        bx[0] = std::min(x0, std::min(x1, x2));
-        bx[1] = std::max(x0, std::max(x1, x2));
-        bx[2] = std::min(y0, std::min(y1, y2));
-        bx[3] = std::max(y0, std::max(y1, y2));
+        bx[0] = std::min(T[0], std::min(T[2], T[4]));
+        bx[1] = std::max(T[0], std::max(T[2], T[4]));
+        bx[2] = std::min(T[1], std::min(T[3], T[5]));
+        bx[3] = std::max(T[1], std::max(T[3], T[5]));
+        triangle_geometry(T, geom_[items_[i]]);
     }
     const int np = static_cast<int>(pair_a_.size());
     const bool want_energy = opt_.compute_energy;
@@ -343,9 +346,6 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f)
             forget(&hist_[6 * static_cast<size_t>(p)]);
             continue;
         }
-        double xa[6], xb[6];
-        gather(x, tri_ + 3 * a, xa);
-        gather(x, tri_ + 3 * b, xb);
         double va[6], vb[6];
         gather(v, tri_ + 3 * a, va);
         gather(v, tri_ + 3 * b, vb);
@@ -366,7 +366,7 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f)
             else prm.p_n = L.normal;
         }
         PairResult r;
-        if (pair_contact(xa, xb, va, vb, prm, want_energy, &hist_[6 * static_cast<size_t>(p)], r)) {
+        if (pair_contact(geom_[a], geom_[b], va, vb, prm, want_energy, &hist_[6 * static_cast<size_t>(p)], r)) {
             pair_on_[p] = 1;
             double* pf = &pair_f_[12 * static_cast<size_t>(p)];
             for (int s = 0; s < 6; ++s) {

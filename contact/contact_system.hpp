@@ -31,11 +31,12 @@
 
 #include "contact/contact_law.hpp"
 #include "contact/nbs.hpp"
+#include "contact/potential.hpp"
 
 namespace fdem::contact {
 
 struct ContactOptions {
-    double buffer = 0.0;  // NBS buffer (m); 0 = smallest edge of the contact-capable triangles / 5 at first use
+    double buffer = 0.0;  // NBS buffer (m); 0 = smallest edge of all triangles / 5 at first use
     // Evaluate the normal contact energy each step (one polygon clip per loaded pair, ~15 % of the force time).
     // The engine may switch it on only for the steps it reports energies (set_compute_energy); the friction
     // dissipation and tangential energy are always accumulated.
@@ -106,6 +107,9 @@ public:
     double friction_dissipation() const { return dissipation_; }                   // J, cumulative
     const ContactStats& stats() const { return stats_; }
     double buffer() const { return buffer_; }
+    // The buffer the next detection uses for positions x (m): the one in use, else the option, else the default
+    // (smallest edge of all triangles / 5). For the log before the first step; changes nothing.
+    double effective_buffer(const double* x) const;
 
     // Read access for monitors and tests.
     const std::vector<int>& pair_a() const { return pair_a_; }
@@ -148,6 +152,7 @@ private:
     std::vector<double> pair_e_;   // 4 per pair: normal energy, tangential energy, friction dissipation, dashpot work
     std::vector<char> pair_on_;
     std::vector<double> box_;      // 4 per triangle: xmin, xmax, ymin, ymax (m), capable ones, this step
+    std::vector<TriangleGeometry> geom_;  // per triangle, capable ones, this step: what the pair kernel needs
 
     double energy_normal_ = 0.0, energy_tangential_ = 0.0, dissipation_ = 0.0, damping_ = 0.0;
     double beta_ = 0.0;  // s

@@ -294,18 +294,35 @@ double pair_energy(const double* xa, const double* xb, const PairParams& p) {
     return p.thickness * p.c * (ia + ib);
 }
 
+void triangle_geometry(const double* x, TriangleGeometry& t) {
+    for (int i = 0; i < 6; ++i) t.x[i] = x[i];
+    area_coordinates(x, t.g);
+    potential_weights(x, true, t.h);
+    // smallest_altitude(x) = area2 / sqrt(longest edge^2) = min_k h_k exactly: the same rounded squares, and sqrt
+    // and the division by it are monotone.
+    t.inv_h_min = 1.0 / std::min(t.h[0], std::min(t.h[1], t.h[2]));
+}
+
 bool pair_contact(const double* xa, const double* xb, const double* va, const double* vb, const PairParams& params,
                   bool want_energy, double* hist, PairResult& r) {
+    TriangleGeometry a, b;
+    triangle_geometry(xa, a);
+    triangle_geometry(xb, b);
+    return pair_contact(a, b, va, vb, params, want_energy, hist, r);
+}
+
+bool pair_contact(const TriangleGeometry& A, const TriangleGeometry& B, const double* va, const double* vb,
+                  const PairParams& params, bool want_energy, double* hist, PairResult& r) {
     for (int i = 0; i < 6; ++i) r.fa[i] = r.fb[i] = 0.0;
     r.energy_normal = r.energy_tangential = r.dissipation = r.damping = 0.0;
     r.active_edges = 0;
-    double ga[9], gb[9], a_in_b[9], b_in_a[9];
-    area_coordinates(xb, gb);
-    vertex_coordinates(gb, xa, a_in_b);
+    const double* xa = A.x;
+    const double* xb = B.x;
+    double a_in_b[9], b_in_a[9];
+    vertex_coordinates(B.g, xa, a_in_b);
     bool apart = separated(a_in_b);
     if (!apart) {
-        area_coordinates(xa, ga);
-        vertex_coordinates(ga, xb, b_in_a);
+        vertex_coordinates(A.g, xb, b_in_a);
         apart = separated(b_in_a);
     }
     if (apart) {
@@ -314,13 +331,13 @@ bool pair_contact(const double* xa, const double* xb, const double* va, const do
     }
     PairParams p = params;
     if (p.p_t > 0.0 || (p.beta > 0.0 && p.p_n > 0.0)) {
-        const double inv_h = 1.0 / smallest_altitude(xa) + 1.0 / smallest_altitude(xb);  // 1/m
+        const double inv_h = A.inv_h_min + B.inv_h_min;  // 1/m
         if (p.p_t > 0.0) p.k_s = 3.0 * p.p_t * inv_h;
         if (p.beta > 0.0 && p.p_n > 0.0) p.k_n_area = 3.0 * p.p_n * inv_h;
     }
-    double wa[3], wb[3];
-    potential_weights(xa, p.distance_potential, wa);
-    potential_weights(xb, p.distance_potential, wb);
+    static constexpr double kThree[3] = {3.0, 3.0, 3.0};
+    const double* wa = p.distance_potential ? A.h : kThree;
+    const double* wb = p.distance_potential ? B.h : kThree;
     double I[6], len;
     for (int e = 0; e < 3; ++e) {
         const int e1 = (e + 1) % 3;

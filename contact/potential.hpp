@@ -66,10 +66,23 @@ double smallest_altitude(const double* x);
 // Potential weights w_k of a triangle (see THE POTENTIAL).
 void potential_weights(const double* x, bool distance_potential, double* w);
 
+// What the pair kernel needs of one triangle, for a triangle met by several pairs in one step: computed once by
+// triangle_geometry instead of once per pair (the same arithmetic, so the same bits either way).
+struct TriangleGeometry {
+    double x[6];       // coordinates (m), as in DATA LAYOUT
+    double g[9];       // area coordinates as affine functions: L_k(P) = g[3k] + g[3k+1] P.x + g[3k+2] P.y
+    double h[3];       // altitude from each vertex onto the opposite edge (m): the distance-potential weights
+    double inv_h_min;  // 1 / smallest altitude (1/m)
+};
+void triangle_geometry(const double* x, TriangleGeometry& out);
+
 // The force, friction and energies of the pair (A, B). hist[6] (m) is read and updated. Returns true when the
 // triangles interact (some edge carries load); false leaves fa = fb = 0 and resets hist to 0.
 bool pair_contact(const double* xa, const double* xb, const double* va, const double* vb, const PairParams& p,
                   bool want_energy, double* hist, PairResult& out);
+// The same from precomputed triangle geometry.
+bool pair_contact(const TriangleGeometry& a, const TriangleGeometry& b, const double* va, const double* vb,
+                  const PairParams& p, bool want_energy, double* hist, PairResult& out);
 
 // t INT_{A∩B} (c phi_A + c phi_B) dA (J): the pair's normal contact energy, by polygon clipping.
 double pair_energy(const double* xa, const double* xb, const PairParams& p);

@@ -932,7 +932,7 @@ void Simulation::run() {
         log("dry joint record: " + std::to_string(inter_.dry_joint_count()) + " segments, recorded in cracks.csv when an end opens by more than " +
             sci(inter_.open_threshold()) + " m or the segment slips by more than " + sci(inter_.slip_threshold()) + " m");
     if (inter_.has_contact())
-        log("contact: " + std::to_string(model_.contact_capable.size()) + " contact-capable triangles, buffer " + sci(inter_.contact()->buffer()) + " m");
+        log("contact: " + std::to_string(model_.contact_capable.size()) + " contact-capable triangles, buffer " + sci(inter_.contact()->effective_buffer(model_.x.data())) + " m");
     log("threads: " + std::to_string(omp_get_max_threads()));
     if (spec_.mass_scale != 1)
         log("mass scaling: inertial mass x " + sci(spec_.mass_scale) + " (time step x " + sci(std::sqrt(spec_.mass_scale)) +
