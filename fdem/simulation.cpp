@@ -983,7 +983,8 @@ void Simulation::run() {
         std::string why = "undamped contacts chattering at the time step's frequency do this (stage key contact_damping)";
         if (e.fracture > 0.0)
             why += "; so do damaged cohesive joints with friction that vibrate, whose Mohr-Coulomb strength follows the "
-                   "compression without a potential (stage key local_damping, or materials.NAME.viscous_damping of the units; cases/vermeltfoort/RESULTS.md)";
+                   "compression without a potential (stage key local_damping, or materials.NAME.viscous_damping of the "
+                   "units; cases/vermeltfoort/RESULTS.md)";
         log("warning: the energy balance error " + sci(100 * e.balance_error(), 3) + " % exceeds " + sci(100 * kBalanceWarning) +
             " %: the dissipation records are not reliable; " + why);
     }
