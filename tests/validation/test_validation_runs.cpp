@@ -98,6 +98,25 @@ TEST_CASE("mortared wall, 0.30 MPa (Vermeltfoort J4D/J5D): peak within 15 % of t
     check_peak_against_test("vermeltfoort/vermeltfoort_030.toml", "vermeltfoort_030", 0.15);
 }
 
+// The engine's energy balance W_ext = K + E_el + E_joint + E_contact + D_damp + D_visc + D_frac + D_fric, read from the
+// "energy" object of summary.json. Damaged mortar joints that vibrate pump energy (the [K25] law's Mohr-Coulomb
+// coupling has no potential, fracture/README.md): the 1.21 MPa wall with only local damping 0.05 against the moving
+// mean closes its books to 16 %; with the committed element viscous damping of the bricks to 2.3 % (2.26 % measured,
+// vermeltfoort/RESULTS.md). The engine warns above 5 %, the limit checked here. About 50 s on 1 thread.
+TEST_CASE("mortared wall, 1.21 MPa (Vermeltfoort J6D): the energy balance closes within 5 % through the cracking",
+          "[regression]") {
+    const std::string s = run_case("vermeltfoort/vermeltfoort_121.toml", "vermeltfoort_121");
+    const auto e = s.find("\"energy\"");
+    REQUIRE(e != std::string::npos);
+    const auto k = s.find("\"balance_error\"", e);
+    REQUIRE(k != std::string::npos);
+    const double balance = std::stod(s.substr(s.find(':', k) + 1));
+    const double fracture = std::stod(s.substr(s.find(':', s.find("\"fracture\"", e)) + 1));
+    INFO("balance error " << 100 * balance << " %, fracture dissipation " << fracture << " J");
+    CHECK(fracture > 10.0);  // the joints did crack (78.6 J), so the check covers the damaged joints
+    CHECK(balance < 0.05);
+}
+
 // Issue 5 item 3 and CASES.md §C: on a tilting table the whole wall cannot stay on its dry base joint once
 // tan(alpha) > mu (friction 32 deg): some mechanism must have started by then. The committed case (filtered local
 // damping 0.05) starts a stepped wedge tipping about the toe at 28-29 deg (u_top_right > 1 mm at 28.95 deg; 28.85 at
