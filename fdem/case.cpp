@@ -440,6 +440,9 @@ void read_joint(Reader& r, JointSpec& j, bool allow_stiffness) {
     // the friction is kept (fracture/law.hpp).
     j.keep_friction = r.string("shear_softening", false, "what softens in shear", {"strength", "cohesion"})
                           .value_or("strength") == "cohesion";
+    // Compressive cap f_c (fracture/law.hpp): optional; without it the compression is an unbounded penalty.
+    j.compressive_strength = r.number("compressive_strength", false, "a compressive strength f_c > 0 in Pa", positive)
+                                 .value_or(std::nan(""));
     if (allow_stiffness) {
         j.normal_stiffness = r.number("normal_stiffness", false, "a normal stiffness k_n > 0 in Pa/m", positive).value_or(std::nan(""));
         j.shear_stiffness = r.number("shear_stiffness", false, "a shear stiffness k_s > 0 in Pa/m", positive).value_or(std::nan(""));

@@ -29,6 +29,7 @@ fracture::CohesiveProps to_props(const JointSpec& j) {
     p.k_n = j.normal_stiffness;
     p.k_s = j.shear_stiffness;
     p.keep_friction = j.keep_friction;
+    p.compressive_strength = j.compressive_strength;
     return p;
 }
 

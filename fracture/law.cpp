@@ -59,7 +59,7 @@ double cohesion_softening_range(const JointLaw& law, double slip_peak) {
 
 PointHistory initial_history(const JointLaw& law) {
   const double dI = -law.opening_peak * law.inv_opening_range, dII = -law.slip_peak0 * law.inv_slip_range0;
-  return PointHistory{0.0, dI > dII ? dI : dII, 0.0, 0.0};
+  return PointHistory{0.0, dI > dII ? dI : dII, 0.0, 0.0, 0.0};
 }
 
 JointLaw make_joint_law(double K_n, double K_s, double f_t, double G_I, double cohesion, double tan_friction,

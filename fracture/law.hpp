@@ -35,6 +35,15 @@
 // Energies: recoverable E = z E_0 + (1 - z) tau_f^2 / (2 K_s) (+ the compressive part); friction dissipation
 // (1 - z) f_f |ds_f| (PointResponse::friction_dissipated); damage dissipation -dz (E_0 - tau_f^2 / (2 K_s)), which
 // is >= 0 because D only grows past s_p, where E_0 >= (4/3) f_s^2 / K_s. Work = dE + both dissipations (tested).
+//
+// Option compressive cap (case key compressive_strength = f_c, Pa; off by default, then the law above is unchanged):
+// the compressive stress is bounded by f_c, as the cap of the interface models of Lourenco & Rots (1997) [LR97] and
+// the compressive strength the DEM reproductions give the mortar joints (CASES.md §B), here perfectly plastic (no
+// compressive softening or hardening: no compressive fracture energy is given). Past f_c the joint closes plastically:
+// a closure o_c <= 0 (history) is kept, every branch of the law then reads the elastic separation o - o_c, so an
+// unloaded crushed joint is open by -o_c at o = 0. Crushing dissipates f_c |d o_c|, booked with the damage
+// dissipation (PointResponse::dissipated). When such an element breaks, contact sees the whole overlap -o, the plastic
+// part included (fracture/README.md, "Known limitation").
 #pragma once
 
 #include <cmath>
@@ -93,6 +102,7 @@ struct JointLaw {
   double inv_slip_peak0;       // 1/s_p at zero normal stress, 1/m
   double inv_slip_range0;      // 1/s_t at zero normal stress, 1/m
   bool keep_friction = false;  // only the cohesion softens (see the header); set by make_law from CohesiveProps
+  double compressive_strength = 0.0;  // f_c, Pa: compressive cap (see the header); 0 = none; set by make_law
 };
 
 // Law constants from stiffnesses K_n, K_s (Pa/m), strengths f_t, c (Pa), tan(phi) and fracture energies (J/m^2).
@@ -106,6 +116,7 @@ struct PointHistory {
   double trial;             // signed trial damage at the last evaluation (< 0 below both thresholds), -
   double undamaged_energy;  // E_0 = e_n0 + e_s0 at the last evaluation (minus the slider's energy with keep_friction), J/m^2
   double slip_friction;     // s_f, plastic slip of the friction slider (keep_friction only; else 0), m
+  double closure;           // o_c <= 0, plastic closure of the compressive cap (compressive_strength only; else 0), m
 };
 
 // History of an untouched point (o = s = 0): the signed trial damage there is max(-o_p/o_t, -s_p/s_t).
@@ -118,7 +129,7 @@ struct PointResponse {
   double damage_I;       // D_I at this state (>= 0)
   double damage_II;      // D_II at this state (>= 0)
   double energy;         // recoverable elastic energy at the new state, J/m^2
-  double dissipated;     // energy dissipated by the damage increment of this evaluation, J/m^2 (>= 0)
+  double dissipated;     // energy dissipated by the damage increment (and the cap's crushing) of this evaluation, J/m^2 (>= 0)
   double friction_dissipated;  // keep_friction: work of the friction slider's slip in this evaluation, J/m^2 (>= 0)
   PointHistory history;  // new history; history.damage >= the old damage
 };
@@ -140,13 +151,26 @@ double shear_softening_range(const JointLaw& law, double shear_strength_now, dou
 //   dissipated = (z(D_old) - z(D_new)) (E_0,a + E_0,new) / 2.
 // For a monotonic mode I path the sum is (2/3) f_t o_p + kappa f_t o_t = G_I to second order in the increment
 // (tested), so the engine's energy balance closes even when a joint breaks in a few tens of steps.
-inline PointResponse evaluate_point(const JointLaw& L, double o, double s, const PointHistory& old) {
+inline PointResponse evaluate_point(const JointLaw& L, double o_geo, double s, const PointHistory& old) {
   PointResponse r;
+  // Elastic normal separation: the geometric one less the cap's plastic closure (0 without a cap: o == o_geo).
+  double closure = old.closure;
+  double o = o_geo - closure;
+  double crushing = 0.0;  // J/m^2 dissipated by the cap in this evaluation
   // Compression is an undamaged linear penalty: crack faces in contact carry pressure whatever D is, and it raises
   // the shear strength (Mohr-Coulomb), hence s_p and s_t.
   double sigma_c = 0.0, f_s = L.cohesion, s_p = L.slip_peak0, inv_s_p = L.inv_slip_peak0;
   if (o < 0.0) {
     sigma_c = L.normal_stiffness * o;
+    if (L.compressive_strength > 0.0 && sigma_c < -L.compressive_strength) {
+      // Crushing: sigma stays at -f_c and the closure takes the rest of the compression (perfectly plastic).
+      const double f_c = L.compressive_strength;
+      const double new_closure = o_geo + f_c / L.normal_stiffness;
+      crushing = f_c * (closure - new_closure);
+      closure = new_closure;
+      o = o_geo - closure;
+      sigma_c = -f_c;
+    }
     f_s = shear_strength(sigma_c, L.cohesion, L.tan_friction);
     s_p = 2.0 * f_s * L.inv_shear_stiffness;
     inv_s_p = 1.0 / s_p;
@@ -232,7 +256,8 @@ inline PointResponse evaluate_point(const JointLaw& L, double o, double s, const
     const double E0_a = old.undamaged_energy + phi * (E0 - old.undamaged_energy);
     r.dissipated = (softening(D_old) - z) * 0.5 * (E0_a + E0);
   }
-  r.history = PointHistory{D, trial, E0, s_f};
+  r.dissipated += crushing;
+  r.history = PointHistory{D, trial, E0, s_f, closure};
   return r;
 }
 

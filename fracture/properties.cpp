@@ -54,6 +54,7 @@ std::vector<std::string> check(const CohesiveProps& p, double h_max, double sigm
   need_angle(out, "residual friction angle", p.residual_friction_deg);
   need_positive(out, "mode I fracture energy G_I", "J/m^2", p.G_I);
   need_positive(out, "mode II fracture energy G_II", "J/m^2", p.G_II);
+  if (!std::isnan(p.compressive_strength)) need_positive(out, "compressive strength f_c", "Pa", p.compressive_strength);
 
   const bool has_penalty = !std::isnan(p.penalty);
   const bool has_kn = !std::isnan(p.k_n), has_ks = !std::isnan(p.k_s);
@@ -72,6 +73,9 @@ std::vector<std::string> check(const CohesiveProps& p, double h_max, double sigm
   }
   if (!(sigma_c >= 0.0) || !std::isfinite(sigma_c)) {
     out.push_back("expected compression sigma_c = " + fmt(sigma_c) + " Pa must be finite and >= 0");
+  } else if (p.compressive_strength > 0.0 && sigma_c >= p.compressive_strength) {
+    out.push_back("expected compression sigma_c = " + fmt(sigma_c) + " Pa reaches the compressive strength f_c = " +
+                  fmt(p.compressive_strength) + " Pa: the joints would crush under the load alone");
   }
   if (!out.empty()) return out;  // the energy checks need every value above
 
@@ -106,6 +110,7 @@ JointLaw make_law(const CohesiveProps& p, double h) {
   JointLaw L = make_joint_law(K_n, K_s, p.tensile_strength, p.G_I, p.cohesion,
                               std::tan(p.friction_deg * kPi / 180.0), p.G_II);
   L.keep_friction = p.keep_friction;
+  L.compressive_strength = std::isnan(p.compressive_strength) ? 0.0 : p.compressive_strength;
   return L;
 }
 

@@ -26,6 +26,7 @@ struct CohesiveProps {
   double k_n = unset;                    // normal stiffness of a zero-thickness interface, Pa/m (> 0)
   double k_s = unset;                    // shear stiffness of a zero-thickness interface, Pa/m (> 0)
   bool keep_friction = false;            // only the cohesion softens, friction is kept (law.hpp; [LR97])
+  double compressive_strength = unset;   // f_c, Pa (> 0): compressive cap (law.hpp); unset = no cap
 };
 
 // Problems with one class, one line each (empty when fine), for the engine to report against the case file.

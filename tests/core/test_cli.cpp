@@ -117,6 +117,23 @@ TEST_CASE("bad command lines give exit code 1", "[unit]") {
     CHECK(testing::run_fdem("--help", dir).code == 0);
 }
 
+TEST_CASE("joint keys of a shipped case: a bad compressive_strength or shear_softening is refused naming the key",
+          "[unit]") {
+    const auto dir = testing::tmp_dir("cli_joint_keys");
+    const std::string path = std::string(FDEM_CASES_DIR) + "/vermeltfoort/checks/joint_panel_121.toml";
+    const auto ok = testing::run_fdem("check \"" + path + "\" --set interfaces.0.compressive_strength=1.15e7", dir);
+    INFO(ok.err);
+    CHECK(ok.code == 0);
+    for (const std::string set : {"interfaces.0.compressive_strength=-1", "interfaces.1.compressive_strength=0",
+                                  "materials.brick.fracture.compressive_strength=\"high\"",
+                                  "interfaces.2.shear_softening=\"friction\""}) {
+        const auto r = testing::run_fdem("check \"" + path + "\" --set " + set, dir);
+        INFO(set << ": " << r.err);
+        CHECK(r.code == 1);
+        CHECK(r.err.find(set.substr(0, set.find('='))) != std::string::npos);
+    }
+}
+
 TEST_CASE("a run writes history and summary and snapshots and a pvd collection", "[unit]") {
     const auto dir = testing::tmp_dir("cli_run");
     const auto path = testing::write_text(dir / "case.toml", kGood);

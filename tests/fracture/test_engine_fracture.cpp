@@ -572,6 +572,86 @@ TEST_CASE("engine mode II with shear_softening = cohesion: the softening ends on
 }
 
 // ---------------------------------------------------------------------------------------------------------------
+// 4b. The compressive cap (compressive_strength, fracture/law.hpp) through the engine, on the same joint pressed by
+//     1 MPa: a cap above the pressure changes no bit; a cap of 0.5 MPa lets the joint close plastically (the upper
+//     block sinks into the lower one, no damage) and books f_c A |plastic closure| as fracture dissipation.
+// ---------------------------------------------------------------------------------------------------------------
+TEST_CASE("engine compressive cap: none reached changes nothing, reached the joint crushes at f_c and books f_c A |o_c|",
+          "[engine][regression]") {
+    const std::string geo = testing::read_text(cases_dir() / "mode2_shear.geo");
+    const std::string toml = testing::read_text(cases_dir() / "mode2_shear.toml");
+    REQUIRE(!geo.empty());
+    const double A = 0.1 * 0.1, k_n = 1.0e11, f_c = 0.5e6;  // m^2, Pa/m, Pa
+    auto press = [&](const std::string& tag, const std::vector<std::string>& overrides) {
+        auto sim = make_fracture_sim("fracture_engine_cap_" + tag, toml, {{"mode2_shear.geo", geo}}, overrides);
+        sim.begin_stage(0);
+        EnergyAudit audit;
+        audit.start(sim);
+        while (!sim.stage_finished()) audit.step(sim);  // (audit.step advances the simulation by one step)
+        sim.energy_every_step(true);
+        audit.step(sim);
+        const auto& m = sim.model();
+        // Mean vertical displacement of the interface nodes (reference y = 0) of each block: the joint's closure.
+        double up = 0, lo = 0;
+        int nu = 0, nl = 0;
+        std::vector<char> side(m.n_nodes(), 0);
+        for (const auto& tr : m.tris) {
+            double cy = 0;
+            for (int q = 0; q < 3; ++q) cy += m.X[2 * tr.n[q] + 1];
+            for (int q = 0; q < 3; ++q) side[tr.n[q]] = cy > 0 ? 1 : 2;
+        }
+        for (int k = 0; k < m.n_nodes(); ++k) {
+            if (std::abs(m.X[2 * k + 1]) > 1e-12) continue;
+            const double uy = m.x[2 * k + 1] - m.X[2 * k + 1];
+            if (side[k] == 1) up += uy, ++nu;
+            if (side[k] == 2) lo += uy, ++nl;
+        }
+        REQUIRE(nu > 0);
+        REQUIRE(nl > 0);
+        struct Out {
+            std::vector<double> x;
+            fdem::Energies e;
+            EnergyAudit::Report m;
+            double closure;
+            long long broken;
+        };
+        const fdem::Energies e = sim.energies();
+        return Out{sim.model().x, e, audit.mismatch(e), up / nu - lo / nl, broken_count(sim)};
+    };
+    const auto none = press("none", {});
+    const auto high = press("high", {"interfaces.0.compressive_strength=2.0e6"});
+    const auto low = press("low", {"interfaces.0.compressive_strength=" + std::to_string(f_c)});
+    // Not reached (the joint carries 1 MPa): every position is the same bit.
+    CHECK(high.x == none.x);
+    CHECK(high.e.fracture == 0.0);
+    // Reached: the joint closes far past its elastic closure f_c / k_n (5 um) and dissipates f_c A per metre of
+    // plastic closure; it is not damaged by it. The pressure keeps pushing (perfectly plastic: no hardening), so
+    // the upper block is still sinking at the end of the stage; what is checked is the bookkeeping along the way.
+    const double plastic = -low.closure - f_c / k_n;  // m, mean plastic closure
+    std::printf("cap: closure none %.4g um, cap 2 MPa %.4g um, cap 0.5 MPa %.4g um; D_frac %.6g J against f_c A |o_c| "
+                "%.6g J; balance %.3g; mismatches (J): joints %.3g, triangles %.3g, contact %.3g; E_contact %.4g J "
+                "(no cap: %.3g J); W_ext %.4g J, D_damp %.4g J\n",
+                -none.closure * 1e6, -high.closure * 1e6, -low.closure * 1e6, low.e.fracture, f_c * A * plastic,
+                low.e.balance_error(), low.m.joint, low.m.tri, low.m.contact, low.e.contact, none.e.contact,
+                low.e.external, low.e.damping);
+    CHECK(-none.closure == Approx(1.0e6 / k_n).epsilon(0.02));  // 10 um: the elastic closure sigma / k_n
+    CHECK(plastic > 10.0 * f_c / k_n);
+    CHECK(low.broken == 0);
+    // The law books f_c |d o_c| per unit area at each point; against the mean closure of the interface nodes: 2 %
+    // (measured 1.06 % over: the closure is not quite uniform, see the contact below).
+    CHECK(low.e.fracture / (f_c * A * plastic) == Approx(1.0).epsilon(0.02));
+    // The joints' own books close: their work = stored energy + crushing.
+    CHECK(std::abs(low.m.joint) < 1e-3 * low.e.external);
+    // Known limit (fracture/README.md): the blocks now overlap by 0.3 mm, and pairs of triangles of the two blocks
+    // that meet only at a corner of the joint (no cohesive element between them) are contact pairs, so contact
+    // carries part of the load across a crushed joint (E_contact 0.76 J here against 3e-5 J without the cap) and its
+    // slight non-conservation is the balance error (0.56 %, all of it the contact class's mismatch).
+    CHECK(none.e.contact < 1e-3 * none.e.joint);
+    CHECK(low.e.contact > 0.1 * low.e.external);
+    CHECK(std::abs(low.m.total - low.m.contact) < 1e-3 * low.e.external);
+}
+
+// ---------------------------------------------------------------------------------------------------------------
 // 5. The run folder through the command line: history.csv has the broken_* columns, cracks.csv one row per broken
 //    element, the same elements as the same case run in-process.
 // ---------------------------------------------------------------------------------------------------------------

@@ -82,7 +82,7 @@ TEST_CASE("point law: branches and continuity at o_p and undamaged compression a
   CHECK(L.opening_range == Approx(softening_range(100.0, 3e6, opening_at_peak(3e6, 4e12))));
   const double o_p = L.opening_peak;
   // History with damage D and no path information (trial = D: a new increment starts from this state).
-  auto H = [](double D) { return PointHistory{D, D, 0.0, 0.0}; };
+  auto H = [](double D) { return PointHistory{D, D, 0.0, 0.0, 0.0}; };
 
   auto r = evaluate_point(L, 0.5 * o_p, 0.0, H(0.0));
   CHECK(r.sigma == Approx(0.75 * 3e6));
@@ -301,4 +301,92 @@ TEST_CASE("check(): with keep_friction G_II pays only for the cohesion", "[unit]
   p.keep_friction = true;
   CHECK(check(p, 0.0, 2.12e6).empty());
   CHECK(make_law(p, 0.03).keep_friction);
+}
+
+// ---------------------------------------------------------------------------------------------------------------
+// Compressive cap (law.hpp, option compressive_strength; CASES.md §B gives f_c = 11.5 MPa for the 1.21 MPa walls):
+// perfectly plastic closure past f_c, elastic unloading from the crushed state, dissipation f_c |d o_c|.
+// ---------------------------------------------------------------------------------------------------------------
+TEST_CASE("compressive cap: sigma stops at -f_c, unloads at K_n from the plastic closure, dissipates f_c |o_c|", "[unit]") {
+  JointLaw L = mortar(false);
+  const double f_c = 11.5e6, K_n = 82e9;
+  L.compressive_strength = f_c;
+  const double o_y = -f_c / K_n;  // closure at which crushing starts
+  const double o_max = 3.0 * o_y;
+  PointHistory h = initial_history(L);
+  double work = 0.0, diss = 0.0, sig_prev = 0.0, o_prev = 0.0, sig_min = 0.0;
+  const int n = 3000;
+  auto go = [&](double from, double to) {
+    for (int i = 1; i <= n; ++i) {
+      const double o = from + (to - from) * i / n;
+      const PointResponse r = evaluate_point(L, o, 0.0, h);
+      h = r.history;
+      work += 0.5 * (sig_prev + r.sigma) * (o - o_prev);
+      diss += r.dissipated;
+      sig_min = std::min(sig_min, r.sigma);
+      sig_prev = r.sigma;
+      o_prev = o;
+    }
+  };
+  go(0.0, o_max);
+  CHECK(sig_min == Approx(-f_c).epsilon(1e-12));     // never below the cap
+  CHECK(sig_prev == Approx(-f_c).epsilon(1e-12));
+  CHECK(h.closure == Approx(o_max - o_y).epsilon(1e-9));  // the plastic part of the closure
+  CHECK(diss == Approx(f_c * (o_y - o_max)).epsilon(1e-9));
+  CHECK(h.damage == 0.0);                                 // crushing is not damage
+  // Unloading: elastic at K_n from the crushed state; stress-free at the plastic closure, not at o = 0.
+  const PointResponse at_oc = evaluate_point(L, h.closure, 0.0, h);
+  CHECK(at_oc.sigma == Approx(0.0).margin(1e-6 * f_c));
+  const PointResponse half = evaluate_point(L, h.closure + 0.5 * o_y, 0.0, h);
+  CHECK(half.sigma == Approx(-0.5 * f_c).epsilon(1e-9));
+  CHECK(half.history.closure == h.closure);               // no new crushing below the cap
+  // Work along the path = stored energy + crushing: 0.5 f_c^2 / K_n + f_c |o_c| at the end of the loading.
+  CHECK(work == Approx(0.5 * f_c * f_c / K_n + diss).epsilon(1e-6));
+  // Tension follows the elastic separation o - o_c: half-way to o_p past the closure it is (2 x - x^2) f_t, x = 1/2;
+  // back at o = 0 the crushed joint is open by -o_c = 2 f_c / K_n, far past o_p + o_t: fully separated.
+  const PointResponse reopen = evaluate_point(L, h.closure + 0.5 * L.opening_peak, 0.0, h);
+  CHECK(reopen.sigma == Approx(0.75 * 0.16e6).epsilon(1e-6));
+  const PointResponse back = evaluate_point(L, 0.0, 0.0, h);
+  CHECK(back.damage_I > 1.0);
+  CHECK(back.sigma == 0.0);
+  // The shear strength sees the capped compression: f_s = c + f_c tan(phi), not c + K_n |o| tan(phi).
+  PointHistory h0 = initial_history(L);
+  const PointResponse crushed = evaluate_point(L, o_max, 0.0, h0);
+  const double f_s = 0.224e6 + f_c * L.tan_friction;
+  const double s_p = 2.0 * f_s / 36e9;
+  const PointResponse peak = evaluate_point(L, o_max, s_p, crushed.history);
+  CHECK(peak.tau == Approx(f_s).epsilon(1e-9));
+}
+
+TEST_CASE("compressive cap off (default): the law is unchanged bit for bit, on: check() wants f_c > 0 above the load",
+          "[unit]") {
+  JointLaw A = mortar(false), B = mortar(false);
+  B.compressive_strength = 1e12;  // a cap nothing reaches
+  for (double o : {-1e-3, -2e-5, -1e-7, 0.0, 1e-7, 3e-6}) {
+    for (double s : {0.0, 1e-6, -4e-5, 2e-4}) {
+      const PointResponse a = evaluate_point(A, o, s, initial_history(A));
+      const PointResponse b = evaluate_point(B, o, s, initial_history(B));
+      CHECK(a.sigma == b.sigma);
+      CHECK(a.tau == b.tau);
+      CHECK(a.energy == b.energy);
+      CHECK(a.history.closure == 0.0);
+    }
+  }
+  CohesiveProps p;
+  p.tensile_strength = 0.16e6;
+  p.cohesion = 0.224e6;
+  p.friction_deg = 35.0;
+  p.residual_friction_deg = 35.0;
+  p.G_I = 12.0;
+  p.G_II = 50.0;
+  p.k_n = 82e9;
+  p.k_s = 36e9;
+  p.keep_friction = true;
+  CHECK(make_law(p, 0.03).compressive_strength == 0.0);  // unset: no cap
+  p.compressive_strength = 11.5e6;
+  CHECK(check(p, 0.0, 2.12e6).empty());
+  CHECK(make_law(p, 0.03).compressive_strength == 11.5e6);
+  CHECK(any_contains(check(p, 0.0, 12e6), "would crush under the load alone"));
+  p.compressive_strength = -1.0;
+  CHECK(any_contains(check(p, 0.0), "compressive strength f_c = -1 Pa is not physical"));
 }
