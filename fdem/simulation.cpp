@@ -820,28 +820,33 @@ void Simulation::write_snapshot() {
     std::vector<int> lines;
     VtuArray kind{"cell_kind", 1, {}, {}, true}, damage{"joint_damage", 1, {}, {}, false}, state{"joint_state", 1, {}, {}, true};
     VtuArray opening{"joint_opening", 1, {}, {}, false}, slip{"joint_slip", 1, {}, {}, false};
+    // With a compressive cap (fracture/law.hpp): joint_crushing, the plastic closure of each cohesive element (m,
+    // Simpson mean over its points; NaN on triangles and dry joints).
+    VtuArray crushing{"joint_crushing", 1, {}, {}, false};
     kind.i32.assign(nt, 0), damage.f64.assign(nt, -1.0), state.i32.assign(nt, -1);
-    opening.f64.assign(nt, std::nan("")), slip.f64.assign(nt, std::nan(""));
-    auto add_line = [&](const int* n, int cell_kind, double dmg, int st) {
+    opening.f64.assign(nt, std::nan("")), slip.f64.assign(nt, std::nan("")), crushing.f64.assign(nt, std::nan(""));
+    auto add_line = [&](const int* n, int cell_kind, double dmg, int st, double crush) {
         lines.push_back(n[0]), lines.push_back(n[1]);
         kind.i32.push_back(cell_kind);
         damage.f64.push_back(dmg);
         state.i32.push_back(st);
         double o, sl;
         Interactions::joint_motion(n, model_.x.data(), o, sl);
-        opening.f64.push_back(o), slip.f64.push_back(sl);
+        opening.f64.push_back(o), slip.f64.push_back(sl), crushing.f64.push_back(crush);
         for (int c = 0; c < 3; ++c) stress.f64.push_back(std::nan(""));
         mat.i32.push_back(-1), region.i32.push_back(-1), body.i32.push_back(-1);
     };
     if (const fracture::CohesiveSystem* j = inter_.joints())
-        for (int e = 0; e < j->size(); ++e) add_line(j->element(e).n, 1, j->damage(e), static_cast<int>(j->state(e)));
+        for (int e = 0; e < j->size(); ++e)
+            add_line(j->element(e).n, 1, j->damage(e), static_cast<int>(j->state(e)), j->crushing(e));
     for (int e = 0; e < inter_.dry_joint_count(); ++e)
-        add_line(inter_.dry_joints()[e].n.data(), 2, -1.0, inter_.dry_recorded(e) ? 1 : 0);
+        add_line(inter_.dry_joints()[e].n.data(), 2, -1.0, inter_.dry_recorded(e) ? 1 : 0, std::nan(""));
     char name[64];
     std::snprintf(name, sizeof name, "snapshots/step_%09ld.vtu", steps_);
     std::vector<VtuArray> cells{stress, mat, region, body};
     if (!lines.empty())
         for (const auto* a : {&kind, &damage, &state, &opening, &slip}) cells.push_back(*a);
+    if (inter_.joints() && inter_.joints()->has_cap()) cells.push_back(crushing);
     write_file_atomic((std::filesystem::path(opt_.out_dir) / name).string(), vtu_document(model_.X, tri, lines, {disp, vel}, cells));
     snapshots_.emplace_back(time_, name);
     write_file_atomic((std::filesystem::path(opt_.out_dir) / "run.pvd").string(), pvd_document(snapshots_));

@@ -142,7 +142,10 @@ CohesiveSystem::CohesiveSystem(std::vector<CohesiveElement> elems, std::vector<C
   }
 
   law_.resize(ne);
-  for (int e = 0; e < ne; ++e) law_[e] = make_law(props_[elems_[e].props], length_[e]);
+  for (int e = 0; e < ne; ++e) {
+    law_[e] = make_law(props_[elems_[e].props], length_[e]);
+    has_cap_ = has_cap_ || law_[e].compressive_strength > 0.0;
+  }
   history_.resize(3 * std::size_t(ne));
   for (int e = 0; e < ne; ++e)
     for (int i = 0; i < 3; ++i) history_[3 * e + i] = initial_history(law_[e]);
@@ -362,6 +365,11 @@ double CohesiveSystem::dissipated_energy() const {
 double CohesiveSystem::damage(int e) const {
   const PointHistory* h = &history_[3 * std::size_t(e)];
   return std::max(h[0].damage, std::max(h[1].damage, h[2].damage));
+}
+
+double CohesiveSystem::crushing(int e) const {
+  const PointHistory* h = &history_[3 * std::size_t(e)];
+  return -(kSimpson[0] * h[0].closure + kSimpson[1] * h[1].closure + kSimpson[2] * h[2].closure);
 }
 
 JointState CohesiveSystem::state(int e) const {

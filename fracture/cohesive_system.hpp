@@ -113,6 +113,10 @@ class CohesiveSystem {
   double damage(int e) const;
   double point_damage(int e, int point) const { return history_[3 * e + point].damage; }
   JointState state(int e) const;
+  // Compressive cap (law.hpp): the plastic closure of element e, Simpson mean of -o_c over its points (m, >= 0; 0
+  // without a cap), and whether any class has a cap.
+  double crushing(int e) const;
+  bool has_cap() const { return has_cap_; }
   void damage_per_element(double* out) const;
   void state_per_element(std::uint8_t* out) const;
   const BreakCounts& counts() const { return counts_; }
@@ -121,6 +125,7 @@ class CohesiveSystem {
  private:
   std::vector<CohesiveElement> elems_;
   std::vector<CohesiveProps> props_;
+  bool has_cap_ = false;  // some class has a compressive cap (output of crushing)
   double thickness_;
   int num_nodes_;
   // Hot, per element (index e): law constants (AoS: the kernel reads them all together), reference length,
