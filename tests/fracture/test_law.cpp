@@ -186,6 +186,20 @@ TEST_CASE("check() reports a penalty too soft for the fracture energy", "[unit]"
 }
 
 namespace {
+// The 1.21 MPa mortar interface of CASES.md §B as properties, with the mode II energy G_II (J/m^2) to test.
+CohesiveProps mortar_props(double G_II) {
+  CohesiveProps p;
+  p.tensile_strength = 0.16e6;
+  p.cohesion = 0.224e6;
+  p.friction_deg = 35.0;
+  p.residual_friction_deg = 35.0;
+  p.G_I = 12.0;
+  p.G_II = G_II;
+  p.k_n = 82e9;
+  p.k_s = 36e9;
+  return p;
+}
+
 // The 1.21 MPa mortar interface of CASES.md §B with keep_friction; sigma the precompression (Pa).
 JointLaw mortar(bool keep_friction) {
   JointLaw L = make_joint_law(82e9, 36e9, 0.16e6, 12.0, 0.224e6, std::tan(35.0 * 3.14159265358979323846 / 180.0), 50.0);
@@ -287,15 +301,7 @@ TEST_CASE("keep_friction: after full damage a slip cycle is a rectangular Coulom
 }
 
 TEST_CASE("check(): with keep_friction G_II pays only for the cohesion", "[unit]") {
-  CohesiveProps p;
-  p.tensile_strength = 0.16e6;
-  p.cohesion = 0.224e6;
-  p.friction_deg = 35.0;
-  p.residual_friction_deg = 35.0;
-  p.G_I = 12.0;
-  p.G_II = 30.0;
-  p.k_n = 82e9;
-  p.k_s = 36e9;
+  CohesiveProps p = mortar_props(30.0);
   // At 2.12 MPa: (2/3) f_s s_p = 4 f_s^2 / (3 k_s) = 108 J/m^2 > 30, but (2/3) c s_p = 14.2 J/m^2 < 30.
   CHECK(any_contains(check(p, 0.0, 2.12e6), "too soft for its mode II fracture energy"));
   p.keep_friction = true;
@@ -372,15 +378,7 @@ TEST_CASE("compressive cap off (default): the law is unchanged bit for bit, on: 
       CHECK(a.history.closure == 0.0);
     }
   }
-  CohesiveProps p;
-  p.tensile_strength = 0.16e6;
-  p.cohesion = 0.224e6;
-  p.friction_deg = 35.0;
-  p.residual_friction_deg = 35.0;
-  p.G_I = 12.0;
-  p.G_II = 50.0;
-  p.k_n = 82e9;
-  p.k_s = 36e9;
+  CohesiveProps p = mortar_props(50.0);
   p.keep_friction = true;
   CHECK(make_law(p, 0.03).compressive_strength == 0.0);  // unset: no cap
   p.compressive_strength = 11.5e6;
