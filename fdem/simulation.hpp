@@ -106,6 +106,7 @@ private:
     double protocol_position(const ActiveSupport& s, double tau) const;
     void fail(const std::string& what);
     void check_energy(const Energies& e);
+    std::string crushed_broken_note() const;  // "" or why contact may push crushed, broken joints apart
     void write_history_row();
     double control_displacement() const;  // m (or the control monitor's unit): the curve's x monitor, 0 without one
     void record_dry_joints();

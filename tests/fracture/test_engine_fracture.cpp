@@ -661,6 +661,29 @@ TEST_CASE("engine compressive cap: none reached changes nothing, reached the joi
     CHECK(std::abs(low.m.total - low.m.contact) < 1e-3 * low.e.external);
 }
 
+// Known limit of the cap, checked so that it stays reported: the same joint crushed by a prescribed closure of the
+// upper block (0.01 m/s for 4 ms against f_c = 0.2 MPa) and then sheared until it breaks. The broken elements hand
+// their overlap, plastic closure included, to contact, which pushes the blocks apart with energy nobody put in; the
+// engine's energy guard stops the run (exit code 2) and its message names the crushed, broken elements.
+TEST_CASE("engine compressive cap: joints that break while crushed are named when the energy guard stops the run",
+          "[engine][regression]") {
+    const std::string toml = replace_once(testing::read_text(cases_dir() / "mode2_shear.toml"),
+                                          "  fix = \"x\"\n  [[stages.loads]]\n  group = \"upper_top\"\n"
+                                          "  pressure = 1.0e6       # Pa\n  ramp = 0.001           # s",
+                                          "  fix = \"x\"\n  vy = -0.01\n  ramp = 0.0002");
+    const auto dir = testing::tmp_dir("fracture_engine_cap_crushed_break");
+    testing::write_text(dir / "mode2_shear.geo", testing::read_text(cases_dir() / "mode2_shear.geo"));
+    testing::write_text(dir / "case.toml", toml);
+    const auto r = testing::run_fdem("run \"" + (dir / "case.toml").string() + "\" --out \"" + (dir / "run").string() +
+                                         "\" --quiet --threads 1 --set interfaces.0.compressive_strength=2e5"
+                                         " --set stages.1.duration=0.1",
+                                     dir);
+    INFO(r.out << r.err);
+    CHECK(r.code == 2);
+    CHECK(r.err.find("energy grew without work") != std::string::npos);
+    CHECK(r.err.find("broke while crushed") != std::string::npos);
+}
+
 // ---------------------------------------------------------------------------------------------------------------
 // 5. The run folder through the command line: history.csv has the broken_* columns, cracks.csv one row per broken
 //    element, the same elements as the same case run in-process.
