@@ -43,7 +43,7 @@
 // a closure o_c <= 0 (history) is kept, every branch of the law then reads the elastic separation o - o_c, so an
 // unloaded crushed joint is open by -o_c at o = 0. Crushing dissipates f_c |d o_c|, booked with the damage
 // dissipation (PointResponse::dissipated). When such an element breaks, contact sees the whole overlap -o, the plastic
-// part included (fracture/README.md, "Known limitation").
+// part included (fracture/README.md, "Compressive cap").
 #pragma once
 
 #include <cmath>
