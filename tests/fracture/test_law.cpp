@@ -202,9 +202,9 @@ CohesiveProps mortar_props(double G_II) {
 
 // The 1.21 MPa mortar interface of CASES.md §B with keep_friction; sigma the precompression (Pa).
 JointLaw mortar(bool keep_friction) {
-  JointLaw L = make_joint_law(82e9, 36e9, 0.16e6, 12.0, 0.224e6, std::tan(35.0 * 3.14159265358979323846 / 180.0), 50.0);
-  L.keep_friction = keep_friction;
-  return L;
+  CohesiveProps p = mortar_props(50.0);
+  p.keep_friction = keep_friction;
+  return make_law(p, 0.03);  // k_n, k_s given: the length does not enter
 }
 
 struct SlipPath {
