@@ -111,9 +111,18 @@ void load_edge(const double* xo, const double* vo, double* fo, const double* vq,
         const double vqy = lq[0] * vq[1] + lq[1] * vq[3] + lq[2] * vq[5];
         const double vrx = vox - vqx, vry = voy - vqy;  // owner relative to other, at the centre of pressure
         const double vt = vrx * tx + vry * ty;
+        // Normal dashpot (PairParams::beta) along n_O: > 0 pulls the faces together. It never pulls beyond the
+        // elastic push fn, so the faces are pressed together with fn - fdn >= 0, and that whole normal force is
+        // what friction reads: a sliding edge carries mu (fn - fdn), so the dashpots change the normal force's
+        // history (they damp its chatter) but never the ratio of friction to normal force ([C79] Coulomb slip on
+        // the contact force; issue "dry contact that holds": with the cap on fn alone, the one-sided clamp left
+        // chattering contacts a mean net push outside the cap, mu_eff 0.765 for mu 0.8 at beta = 0.5 dt_c).
+        const double vn = vrx * nx + vry * ny;  // > 0: the owner's edge moves into the other triangle
+        const double fdn =
+            p.beta > 0.0 ? std::min(-p.beta * 0.5 * p.k_n_area * p.thickness * I[5] * vn, fn) : 0.0;  // N
         bool sticks = false;
         double ft = 0.0;  // along t_O on the owner (N)
-        const double cap = p.mu * fn;
+        const double cap = p.mu * (fn - fdn);
         if (friction) {
             // [K25] Eq. 4: delta_s += v_rel,t dt; Eq. 5: F_t = min(k_t |delta_s|, mu |F_n|), opposing the slip.
             const double trial = hist + vt * p.dt;
@@ -128,13 +137,10 @@ void load_edge(const double* xo, const double* vo, double* fo, const double* vq,
             hist = kept;
             r.energy_tangential += 0.5 * k_t * kept * kept;
         }
-        double fdn = 0.0, fdt = 0.0;
+        double fdt = 0.0;
         if (p.beta > 0.0) {
-            // Dashpots (PairParams::beta). The normal one never pulls the faces together: its pull is at most the
-            // elastic push fn. The tangential one acts only while the edge sticks and keeps the sum within the
-            // Coulomb limit, so a sliding edge carries mu fn whatever the rate.
-            const double vn = vrx * nx + vry * ny;  // > 0: the owner's edge moves into the other triangle
-            fdn = std::min(-p.beta * 0.5 * p.k_n_area * p.thickness * I[5] * vn, fn);  // along n_O
+            // The tangential dashpot acts only while the edge sticks and keeps the sum within the Coulomb limit,
+            // so a sliding edge carries mu (fn - fdn) whatever the rate.
             fdt = sticks ? std::clamp(-p.beta * k_t * vt, -cap - ft, cap - ft) : 0.0;  // along t_O
             r.damping -= (fdn * vn + fdt * vt) * p.dt;
         }
