@@ -22,8 +22,10 @@ constexpr int kParallelMin = 4096;
 // A separated pair forgets its sliding history; written only when there is something to forget (most pairs
 // are apart and this keeps their history lines clean in cache).
 inline void forget(double* h) {
-    if (h[0] != 0.0 || h[1] != 0.0 || h[2] != 0.0 || h[3] != 0.0 || h[4] != 0.0 || h[5] != 0.0)
-        for (int s = 0; s < 6; ++s) h[s] = 0.0;
+    bool any = false;
+    for (int s = 0; s < kHistPerPair; ++s) any = any || h[s] != 0.0;
+    if (any)
+        for (int s = 0; s < kHistPerPair; ++s) h[s] = 0.0;
 }
 
 inline void gather(const double* x, const int* t, double* out) {
@@ -267,7 +269,7 @@ void ContactSystem::detect(const double* x) {
     // Carry the sliding history of pairs that persist ([K25] Eq. 4 needs the accumulated delta_s): old pairs
     // bucketed by their first triangle (counting sort, O(P)), each new pair looks in its bucket.
     std::vector<double>& nh = new_hist_;
-    nh.assign(6 * static_cast<size_t>(np), 0.0);
+    nh.assign(kHistPerPair * static_cast<size_t>(np), 0.0);
     const int op = static_cast<int>(pair_a_.size());
     if (op > 0) {
         std::vector<int>& start = csr_start_;
@@ -285,7 +287,8 @@ void ContactSystem::detect(const double* x) {
             for (int q = start[a]; q < start[a + 1]; ++q) {
                 const int o = order[q];
                 if (pair_b_[o] == b) {
-                    for (int s = 0; s < 6; ++s) nh[6 * static_cast<size_t>(p) + s] = hist_[6 * static_cast<size_t>(o) + s];
+                    for (int s = 0; s < kHistPerPair; ++s)
+                        nh[kHistPerPair * static_cast<size_t>(p) + s] = hist_[kHistPerPair * static_cast<size_t>(o) + s];
                     break;
                 }
             }
@@ -343,7 +346,7 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f)
         const double* ba = &box_[4 * static_cast<size_t>(a)];
         const double* bb = &box_[4 * static_cast<size_t>(b)];
         if (ba[1] <= bb[0] || bb[1] <= ba[0] || ba[3] <= bb[2] || bb[3] <= ba[2]) {  // disjoint boxes
-            forget(&hist_[6 * static_cast<size_t>(p)]);
+            forget(&hist_[kHistPerPair * static_cast<size_t>(p)]);
             continue;
         }
         double va[6], vb[6];
@@ -366,7 +369,7 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f)
             else prm.p_n = L.normal;
         }
         PairResult r;
-        if (pair_contact(geom_[a], geom_[b], va, vb, prm, want_energy, &hist_[6 * static_cast<size_t>(p)], r)) {
+        if (pair_contact(geom_[a], geom_[b], va, vb, prm, want_energy, &hist_[kHistPerPair * static_cast<size_t>(p)], r)) {
             pair_on_[p] = 1;
             double* pf = &pair_f_[12 * static_cast<size_t>(p)];
             for (int s = 0; s < 6; ++s) {

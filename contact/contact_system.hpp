@@ -6,7 +6,7 @@
 //   State passed in each step (owned by the engine): x[2 n_nodes] positions (m), v[2 n_nodes] velocities (m/s),
 //   f[2 n_nodes] forces (N) to which contact forces are ADDED; node k at (2k, 2k+1).
 //   Pairs (structure of arrays, index p): pair_a[p] < pair_b[p] triangle indices, pair_law[p] index into the
-//   resolved law table, hist[6 p] sliding distances (m) (slots as in potential.hpp). Per-pair scratch
+//   resolved law table, hist[kHistPerPair p] friction state (slots as in potential.hpp). Per-pair scratch
 //   (forces 12 p, energies) is written by one thread per pair in parallel and then added serially in pair order,
 //   so the result has the same bits for any thread count.
 //   "No index" is -1.
@@ -114,7 +114,7 @@ public:
     // Read access for monitors and tests.
     const std::vector<int>& pair_a() const { return pair_a_; }
     const std::vector<int>& pair_b() const { return pair_b_; }
-    const std::vector<double>& sliding_history() const { return hist_; }  // 6 per pair (m)
+    const std::vector<double>& sliding_history() const { return hist_; }  // kHistPerPair per pair
 
 private:
     void detect(const double* x);
@@ -139,7 +139,7 @@ private:
     double travel_ = 0.0;        // m, sum of dt max|v| since the last detection
 
     std::vector<int> pair_a_, pair_b_, pair_law_;
-    std::vector<double> hist_;  // 6 per pair
+    std::vector<double> hist_;  // kHistPerPair per pair
     // scratch
     std::vector<int> items_;
     std::vector<double> cx_, cy_, cr_;  // per capable triangle at the last detection: bounding circles (m)

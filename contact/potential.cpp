@@ -84,19 +84,19 @@ double integrate_potential(const double* omega, int n, const double* T, const do
 
 // One loaded edge: the edge (nodes e, e+1) of triangle O ("owner") lies partly inside triangle Q ("other").
 // Normal load c * phi_Q on the owner's edge along -n_O; the reaction on Q through its area coordinates.
-// Friction: one tangential spring per edge at the centre of pressure ([K25] Eqs. 4-5, FORMULATION §5).
-// len: the owner's edge length (m), as edge_integrals computed it.
+// Friction: one tangential spring per edge ([K25] Eqs. 4-5) between two material points, the stick anchors.
+// len: the owner's edge length (m), as edge_integrals computed it. h: the edge's friction state (kHistPerEdge).
 void load_edge(const double* xo, const double* vo, double* fo, const double* vq, double* fq, int e, double len,
-               const double* I, const PairParams& p, double& hist, PairResult& r) {
+               const double* I, const PairParams& p, double* h, PairResult& r) {
     const int e1 = (e + 1) % 3;
     const double dx = xo[2 * e1] - xo[2 * e], dy = xo[2 * e1 + 1] - xo[2 * e + 1];
     const double nx = dy / len, ny = -dx / len, tx = dx / len, ty = dy / len;
     const double total = I[0] + I[1];
     const double fn = p.c * p.thickness * total;  // N
     // Centre of pressure: along the edge s = I1 / (I0 + I1); in the other triangle the area coordinates
-    // I[2 + k] / (I0 + I1). The normal load c t INT N_a phi on the edge's nodes is fn at that point, and so is its
-    // reaction on the other triangle; friction and dashpots act at the same point, so one force vector (gx, gy) on
-    // the owner, the opposite on the other, carries all of it.
+    // I[2 + k] / (I0 + I1) (>= 0, summing to 1). The normal load c t INT N_a phi on the edge's nodes is fn at that
+    // point, and so is its reaction on the other triangle; the normal dashpot acts at the same point, so one force
+    // vector (gx, gy) on the owner, the opposite on the other, carries both.
     const double inv_total = 1.0 / total;
     const double s = I[1] * inv_total;
     double lq[3];
@@ -104,48 +104,75 @@ void load_edge(const double* xo, const double* vo, double* fo, const double* vq,
     double gx = -fn * nx, gy = -fn * ny;
     const double k_t = 0.5 * p.k_s * p.thickness * I[5];  // N/m; each of the two faces carries half the contact
     const bool friction = p.mu > 0.0 && k_t > 0.0;
-    if (!friction) hist = 0.0;
+    if (!friction)
+        for (int i = 0; i < kHistPerEdge; ++i) h[i] = 0.0;
     if (friction || p.beta > 0.0) {
         const double vox = (1.0 - s) * vo[2 * e] + s * vo[2 * e1], voy = (1.0 - s) * vo[2 * e + 1] + s * vo[2 * e1 + 1];
         const double vqx = lq[0] * vq[0] + lq[1] * vq[2] + lq[2] * vq[4];
         const double vqy = lq[0] * vq[1] + lq[1] * vq[3] + lq[2] * vq[5];
         const double vrx = vox - vqx, vry = voy - vqy;  // owner relative to other, at the centre of pressure
-        const double vt = vrx * tx + vry * ty;
         // Normal dashpot (PairParams::beta) along n_O: > 0 pulls the faces together. It never pulls beyond the
         // elastic push fn, so the faces are pressed together with fn - fdn >= 0, and that whole normal force is
         // what friction reads: a sliding edge carries mu (fn - fdn), so the dashpots change the normal force's
         // history (they damp its chatter) but never the ratio of friction to normal force ([C79] Coulomb slip on
-        // the contact force; issue "dry contact that holds": with the cap on fn alone, the one-sided clamp left
-        // chattering contacts a mean net push outside the cap, mu_eff 0.765 for mu 0.8 at beta = 0.5 dt_c).
+        // the contact force; with the cap on fn alone, the one-sided clamp left chattering contacts a mean net
+        // push outside the cap: mu_eff 0.775 for mu 0.8 at contact_damping 0.5, 0.8001 now).
         const double vn = vrx * nx + vry * ny;  // > 0: the owner's edge moves into the other triangle
         const double fdn =
             p.beta > 0.0 ? std::min(-p.beta * 0.5 * p.k_n_area * p.thickness * I[5] * vn, fn) : 0.0;  // N
-        bool sticks = false;
-        double ft = 0.0;  // along t_O on the owner (N)
-        const double cap = p.mu * (fn - fdn);
+        gx += fdn * nx;
+        gy += fdn * ny;
+        double vt = 0.0;
         if (friction) {
-            // [K25] Eq. 4: delta_s += v_rel,t dt; Eq. 5: F_t = min(k_t |delta_s|, mu |F_n|), opposing the slip.
-            const double trial = hist + vt * p.dt;
-            ft = -k_t * trial;
+            // The stick anchors: the owner's material point at s0 = h[1] along its edge and the other's material
+            // point at area coordinates h[2..4], both taken at the centre of pressure when the edge first touches
+            // (all zero: not yet) and again whenever it slips. h[0] = delta_s, the elastic tangential displacement
+            // of the two anchors (m). [K25] Eq. 4, delta_s += v_rel,t dt, is integrated on the anchors'
+            // velocities and the force acts on the anchors, so a sticking edge is a spring between two material
+            // points: it stores and returns work, however the pressure moves along the edge. (Taken at the
+            // moving centre of pressure, the stuck spring was not conservative: a rocking stack that statics says
+            // stands gained energy from its sticking springs, started to slip and crept away.)
+            if (h[2] == 0.0 && h[3] == 0.0 && h[4] == 0.0) {
+                h[1] = s;
+                h[2] = lq[0], h[3] = lq[1], h[4] = lq[2];
+            }
+            const double s0 = h[1];
+            const double vax = (1.0 - s0) * vo[2 * e] + s0 * vo[2 * e1], vay = (1.0 - s0) * vo[2 * e + 1] + s0 * vo[2 * e1 + 1];
+            const double vbx = h[2] * vq[0] + h[3] * vq[2] + h[4] * vq[4];
+            const double vby = h[2] * vq[1] + h[3] * vq[3] + h[4] * vq[5];
+            vt = (vax - vbx) * tx + (vay - vby) * ty;
+            // [K25] Eq. 5: F_t = min(k_t |delta_s|, mu |F_n|), opposing the slip.
+            const double cap = p.mu * (fn - fdn);
+            const double trial = h[0] + vt * p.dt;
+            double ft = -k_t * trial;  // along t_O on the owner (N)
             double kept = trial;
-            sticks = std::fabs(ft) <= cap;
+            const bool sticks = std::fabs(ft) <= cap;
             if (!sticks) {
                 kept = (trial > 0.0 ? 1.0 : -1.0) * cap / k_t;
                 ft = -k_t * kept;
                 r.dissipation += cap * std::fabs(trial - kept);
+                // The faces slid: the anchors move to the centre of pressure, keeping the spring's stretch.
+                h[1] = s;
+                h[2] = lq[0], h[3] = lq[1], h[4] = lq[2];
             }
-            hist = kept;
+            h[0] = kept;
             r.energy_tangential += 0.5 * k_t * kept * kept;
-        }
-        double fdt = 0.0;
-        if (p.beta > 0.0) {
             // The tangential dashpot acts only while the edge sticks and keeps the sum within the Coulomb limit,
             // so a sliding edge carries mu (fn - fdn) whatever the rate.
-            fdt = sticks ? std::clamp(-p.beta * k_t * vt, -cap - ft, cap - ft) : 0.0;  // along t_O
-            r.damping -= (fdn * vn + fdt * vt) * p.dt;
+            const double fdt = (p.beta > 0.0 && sticks) ? std::clamp(-p.beta * k_t * vt, -cap - ft, cap - ft) : 0.0;
+            r.damping -= fdt * vt * p.dt;
+            const double fx = (ft + fdt) * tx, fy = (ft + fdt) * ty;
+            const double sa = h[1];
+            fo[2 * e] += (1.0 - sa) * fx;
+            fo[2 * e + 1] += (1.0 - sa) * fy;
+            fo[2 * e1] += sa * fx;
+            fo[2 * e1 + 1] += sa * fy;
+            for (int k = 0; k < 3; ++k) {
+                fq[2 * k] -= h[2 + k] * fx;
+                fq[2 * k + 1] -= h[2 + k] * fy;
+            }
         }
-        gx += fdn * nx + (ft + fdt) * tx;
-        gy += fdn * ny + (ft + fdt) * ty;
+        if (p.beta > 0.0) r.damping -= fdn * vn * p.dt;
     }
     fo[2 * e] += (1.0 - s) * gx;
     fo[2 * e + 1] += (1.0 - s) * gy;
@@ -332,7 +359,7 @@ bool pair_contact(const TriangleGeometry& A, const TriangleGeometry& B, const do
         apart = separated(b_in_a);
     }
     if (apart) {
-        for (int s = 0; s < 6; ++s) hist[s] = 0.0;
+        for (int s = 0; s < kHistPerPair; ++s) hist[s] = 0.0;
         return false;
     }
     PairParams p = params;
@@ -348,16 +375,16 @@ bool pair_contact(const TriangleGeometry& A, const TriangleGeometry& B, const do
     for (int e = 0; e < 3; ++e) {
         const int e1 = (e + 1) % 3;
         if (edge_integrals(a_in_b + 3 * e, a_in_b + 3 * e1, xa + 2 * e, xa + 2 * e1, wb, I, &len)) {
-            load_edge(xa, va, r.fa, vb, r.fb, e, len, I, p, hist[e], r);
+            load_edge(xa, va, r.fa, vb, r.fb, e, len, I, p, hist + kHistPerEdge * e, r);
             ++r.active_edges;
         } else {
-            hist[e] = 0.0;
+            for (int i = 0; i < kHistPerEdge; ++i) hist[kHistPerEdge * e + i] = 0.0;
         }
         if (edge_integrals(b_in_a + 3 * e, b_in_a + 3 * e1, xb + 2 * e, xb + 2 * e1, wa, I, &len)) {
-            load_edge(xb, vb, r.fb, va, r.fa, e, len, I, p, hist[3 + e], r);
+            load_edge(xb, vb, r.fb, va, r.fa, e, len, I, p, hist + kHistPerEdge * (3 + e), r);
             ++r.active_edges;
         } else {
-            hist[3 + e] = 0.0;
+            for (int i = 0; i < kHistPerEdge; ++i) hist[kHistPerEdge * (3 + e) + i] = 0.0;
         }
     }
     if (r.active_edges == 0) return false;

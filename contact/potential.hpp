@@ -4,8 +4,10 @@
 // DATA LAYOUT
 //   A triangle is 6 doubles (x0, y0, x1, y1, x2, y2), counter-clockwise, current configuration (m).
 //   Velocities likewise (m/s). Forces out: 6 doubles per triangle, node-ordered like the coordinates (N, whole
-//   thickness). Friction history: 6 sliding distances (m) per pair, slot e = edge e of A (nodes e, e+1) inside B
-//   for e = 0..2, slot 3 + e = edge e of B inside A.
+//   thickness). Friction state: kHistPerPair doubles per pair, kHistPerEdge per slot, slot e = edge e of A (nodes
+//   e, e+1) inside B for e = 0..2, slot 3 + e = edge e of B inside A; in a slot: [0] the elastic tangential
+//   displacement delta_s (m) of its two stick anchors, [1] the owner's anchor s0 along its edge (0..1), [2..4] the
+//   other triangle's anchor in its area coordinates (all zero: no anchor yet).
 //
 // THE POTENTIAL
 //   [MA00] phi(P) = 3 min_i A_i(P) / A = 3 min_k L_k(P): L_k is the area coordinate of vertex k, i.e. A_i / A for the
@@ -29,6 +31,9 @@
 #pragma once
 
 namespace fdem::contact {
+
+constexpr int kHistPerEdge = 5;                  // doubles of friction state per loaded-edge slot
+constexpr int kHistPerPair = 6 * kHistPerEdge;  // per pair (six slots)
 
 struct PairParams {
     double thickness = 0.0;  // out-of-plane thickness t (m)
@@ -76,7 +81,7 @@ struct TriangleGeometry {
 };
 void triangle_geometry(const double* x, TriangleGeometry& out);
 
-// The force, friction and energies of the pair (A, B). hist[6] (m) is read and updated. Returns true when the
+// The force, friction and energies of the pair (A, B). hist[kHistPerPair] is read and updated. Returns true when the
 // triangles interact (some edge carries load); false leaves fa = fb = 0 and resets hist to 0.
 bool pair_contact(const double* xa, const double* xb, const double* va, const double* vb, const PairParams& p,
                   bool want_energy, double* hist, PairResult& out);

@@ -137,7 +137,7 @@ TEST_CASE("Contact force is minus the gradient of the contact energy for rigid m
         p.thickness = 0.2;
         p.c = dist ? 5e9 : 1e9;
         p.distance_potential = dist;
-        double hist[6] = {0, 0, 0, 0, 0, 0};
+        double hist[kHistPerPair] = {};
         PairResult r;
         REQUIRE(pair_contact(xa, xb0, kZero, kZero, p, true, hist, r));
         REQUIRE(r.energy_normal > 0.0);
@@ -217,12 +217,16 @@ TEST_CASE("Action equals reaction: forces and moments of a pair sum to zero and 
         p.k_s = 1e9;
         p.mu = 0.6;
         p.dt = 1e-3;
-        double h1[6] = {1e-4, -2e-4, 0, 3e-5, 0, 1e-4}, h2[6];
+        // sliding distances delta_s per slot; no anchors yet (they are taken at the centres of pressure)
+        const double d1[6] = {1e-4, -2e-4, 0, 3e-5, 0, 1e-4};
+        double h1[kHistPerPair] = {}, h2[kHistPerPair] = {};
+        for (int s = 0; s < 6; ++s) h1[kHistPerEdge * s] = d1[s];
         // B as A: swap roles, slots swap halves
-        for (int s = 0; s < 3; ++s) {
-            h2[s] = h1[3 + s];
-            h2[3 + s] = h1[s];
-        }
+        for (int s = 0; s < 3; ++s)
+            for (int i = 0; i < kHistPerEdge; ++i) {
+                h2[kHistPerEdge * s + i] = h1[kHistPerEdge * (3 + s) + i];
+                h2[kHistPerEdge * (3 + s) + i] = h1[kHistPerEdge * s + i];
+            }
         PairResult r1, r2;
         const bool on1 = pair_contact(xa, xb, va, vb, p, true, h1, r1);
         const bool on2 = pair_contact(xb, xa, vb, va, p, true, h2, r2);
@@ -258,14 +262,15 @@ TEST_CASE("No force without overlap, including touching triangles", "[unit]") {
     p.thickness = 1;
     p.c = 1e9;
     for (const double* xb : {far, touching}) {
-        double hist[6] = {1, 1, 1, 1, 1, 1};
+        double hist[kHistPerPair];
+        std::fill(hist, hist + kHistPerPair, 1.0);
         PairResult r;
         CHECK_FALSE(pair_contact(xa, xb, kZero, kZero, p, true, hist, r));
         for (int s = 0; s < 6; ++s) {
             CHECK(r.fa[s] == 0.0);
             CHECK(r.fb[s] == 0.0);
-            CHECK(hist[s] == 0.0);  // history of a separated pair is forgotten
         }
+        for (int s = 0; s < kHistPerPair; ++s) CHECK(hist[s] == 0.0);  // history of a separated pair is forgotten
         CHECK(pair_energy(xa, xb, p) == 0.0);
     }
 }
@@ -279,7 +284,7 @@ TEST_CASE("Flat overlap: pressure equals k_n times overlap for the distance pote
     p.thickness = t;
     p.c = 0.5 * kn;
     p.distance_potential = true;
-    double hist[6] = {0, 0, 0, 0, 0, 0};
+    double hist[kHistPerPair] = {};
     PairResult r;
     REQUIRE(pair_contact(xa, xb, kZero, kZero, p, true, hist, r));
     const double fy = r.fa[1] + r.fa[3] + r.fa[5];
@@ -294,7 +299,7 @@ TEST_CASE("Friction on one contacting edge: stick below mu F_n, slip at mu F_n w
     const double xa[6] = {0.0, -d, 1.0, -d, 0.5, 0.6};
     const PairParams p = stiffness_pair(kn, ks, t, mu, dt);
     double va[6] = {0.01, 0, 0.01, 0, 0.01, 0};  // A slides to +x at 1 cm/s
-    double hist[6] = {0, 0, 0, 0, 0, 0};
+    double hist[kHistPerPair] = {};
     PairResult r;
     REQUIRE(pair_contact(xa, xb, va, kZero, p, true, hist, r));
     const double fn = r.fa[1] + r.fa[3] + r.fa[5];
@@ -496,7 +501,8 @@ TEST_CASE("Capable set, excluded pairs and history that survives re-detection", 
     for (int p = 0; p < static_cast<int>(cs.pair_a().size()); ++p)
         if (cs.pair_a()[p] == 0 && cs.pair_b()[p] == 1) p01 = p;
     REQUIRE(p01 >= 0);
-    const std::vector<double> h(cs.sliding_history().begin() + 6 * p01, cs.sliding_history().begin() + 6 * p01 + 6);
+    const std::vector<double> h(cs.sliding_history().begin() + kHistPerPair * p01,
+                                 cs.sliding_history().begin() + kHistPerPair * (p01 + 1));
     CHECK(h[0] != 0.0);
     for (int k = 0; k < 3; ++k) v[2 * k] = 0.0;
     const long long detections = cs.stats().detections;
@@ -507,7 +513,8 @@ TEST_CASE("Capable set, excluded pairs and history that survives re-detection", 
     for (int p = 0; p < static_cast<int>(cs.pair_a().size()); ++p)
         if (cs.pair_a()[p] == 0 && cs.pair_b()[p] == 1) p01 = p;
     REQUIRE(p01 >= 0);
-    CHECK(std::vector<double>(cs.sliding_history().begin() + 6 * p01, cs.sliding_history().begin() + 6 * p01 + 6) == h);
+    CHECK(std::vector<double>(cs.sliding_history().begin() + kHistPerPair * p01,
+                                 cs.sliding_history().begin() + kHistPerPair * (p01 + 1)) == h);
     cs.set_capable(1, false);
     CHECK(fy0() == 0.0);
 }
@@ -653,7 +660,7 @@ TEST_CASE("Flat overlap with Munjiza's potential: pressure slope 3 p_n (1/H_A + 
     PairParams p;
     p.thickness = t;
     p.c = pn;
-    double hist[6] = {0, 0, 0, 0, 0, 0};
+    double hist[kHistPerPair] = {};
     PairResult r;
     REQUIRE(pair_contact(xa, xb, kZero, kZero, p, true, hist, r));
     // altitude of B onto its top edge (y = 0): the distance of vertex (-1, -0.7) from it, 0.7 m
@@ -776,7 +783,7 @@ TEST_CASE("Contact dashpots: normal c = beta k_n t L, no pull beyond the elastic
     SECTION("closing at w: push fn + beta k_n t L w, dissipation c w^2 dt, action = reaction") {
         const double w = 0.01;  // m/s, A moves down into B
         const double va[6] = {0, -w, 0, -w, 0, -w};
-        double hist[6] = {0, 0, 0, 0, 0, 0};
+        double hist[kHistPerPair] = {};
         PairResult r;
         REQUIRE(pair_contact(xa, xb, va, kZero, p, false, hist, r));
         CHECK(total(r.fa, 1) == Approx(fn + beta * kn * t * 1.0 * w).epsilon(1e-3));
@@ -789,7 +796,7 @@ TEST_CASE("Contact dashpots: normal c = beta k_n t L, no pull beyond the elastic
         const double w = 200.0;  // m/s upward: the dashpot's pull beta k_n t L w is 20 x the push fn; clamped
         const double va[6] = {0, w, 0, w, 0, w};
         p.mu = 0.0;  // the corners' slanted edges would add friction along y
-        double hist[6] = {0, 0, 0, 0, 0, 0};
+        double hist[kHistPerPair] = {};
         PairResult r;
         REQUIRE(pair_contact(xa, xb, va, kZero, p, false, hist, r));
         REQUIRE(beta * kn * t * w > 10 * fn);
@@ -800,7 +807,7 @@ TEST_CASE("Contact dashpots: normal c = beta k_n t L, no pull beyond the elastic
     SECTION("sliding: the tangential force stays mu fn (no dashpot on a slipping edge); sticking: -k_t s - beta k_t v") {
         const double v = 0.01;  // m/s along +x
         const double va[6] = {v, 0, v, 0, v, 0};
-        double hist[6] = {0, 0, 0, 0, 0, 0};
+        double hist[kHistPerPair] = {};
         PairResult r;
         REQUIRE(pair_contact(xa, xb, va, kZero, p, false, hist, r));
         // first step sticks: spring k_s t L v dt plus dashpot beta k_s t L v (k_t per edge = k_s t L / 2, two edges)
@@ -811,8 +818,8 @@ TEST_CASE("Contact dashpots: normal c = beta k_n t L, no pull beyond the elastic
         CHECK(total(r.fa, 0) == Approx(-mu * fn).epsilon(2e-3));
         p.beta = 0;
         PairResult r0;
-        double hist0[6];
-        std::copy(hist, hist + 6, hist0);
+        double hist0[kHistPerPair];
+        std::copy(hist, hist + kHistPerPair, hist0);
         pair_contact(xa, xb, va, kZero, p, false, hist0, r0);
         CHECK(total(r.fa, 0) == Approx(total(r0.fa, 0)).epsilon(1e-6));
     }
