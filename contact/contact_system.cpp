@@ -21,11 +21,14 @@ constexpr int kParallelMin = 4096;
 
 // A separated pair forgets its sliding history; written only when there is something to forget (most pairs
 // are apart and this keeps their history lines clean in cache).
-inline void forget(double* h) {
+// Returns the energy its friction springs held (J), which the caller books as dissipated.
+inline double forget(double* h) {
     bool any = false;
     for (int s = 0; s < kHistPerPair; ++s) any = any || h[s] != 0.0;
+    double released = 0.0;
     if (any)
-        for (int s = 0; s < kHistPerPair; ++s) h[s] = 0.0;
+        for (int s = 0; s < 6; ++s) released += release_slot(h + kHistPerEdge * s);
+    return released;
 }
 
 inline void gather(const double* x, const int* t, double* out) {
@@ -346,7 +349,13 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f)
         const double* ba = &box_[4 * static_cast<size_t>(a)];
         const double* bb = &box_[4 * static_cast<size_t>(b)];
         if (ba[1] <= bb[0] || bb[1] <= ba[0] || ba[3] <= bb[2] || bb[3] <= ba[2]) {  // disjoint boxes
-            forget(&hist_[kHistPerPair * static_cast<size_t>(p)]);
+            const double released = forget(&hist_[kHistPerPair * static_cast<size_t>(p)]);
+            if (released != 0.0) {  // booked in the serial sum below, no forces
+                pair_on_[p] = 2;
+                double* pe = &pair_e_[4 * static_cast<size_t>(p)];
+                pe[0] = pe[1] = pe[3] = 0.0;
+                pe[2] = released;
+            }
             continue;
         }
         double va[6], vb[6];
@@ -381,6 +390,11 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f)
             pe[1] = r.energy_tangential;
             pe[2] = r.dissipation;
             pe[3] = r.damping;
+        } else if (r.dissipation != 0.0) {  // apart now: only the released friction springs to book
+            pair_on_[p] = 2;
+            double* pe = &pair_e_[4 * static_cast<size_t>(p)];
+            pe[0] = pe[1] = pe[3] = 0.0;
+            pe[2] = r.dissipation;
         }
     }
     // Serial scatter and sums in pair order: the same bits for any thread count.
@@ -389,6 +403,10 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f)
     int active = 0;
     for (int p = 0; p < np; ++p) {
         if (!pair_on_[p]) continue;
+        if (pair_on_[p] == 2) {
+            ed += pair_e_[4 * static_cast<size_t>(p) + 2];
+            continue;
+        }
         ++active;
         const int* ta = tri_ + 3 * pair_a_[p];
         const int* tb = tri_ + 3 * pair_b_[p];

@@ -7,7 +7,8 @@
 //   thickness). Friction state: kHistPerPair doubles per pair, kHistPerEdge per slot, slot e = edge e of A (nodes
 //   e, e+1) inside B for e = 0..2, slot 3 + e = edge e of B inside A; in a slot: [0] the elastic tangential
 //   displacement delta_s (m) of its two stick anchors, [1] the owner's anchor s0 along its edge (0..1), [2..4] the
-//   other triangle's anchor in its area coordinates (all zero: no anchor yet).
+//   other triangle's anchor in its area coordinates (all zero: no anchor yet), [5] the slot's tangential stiffness
+//   k_t (N/m) at its last step, so that its stored energy k_t delta_s^2 / 2 is known when it lets go.
 //
 // THE POTENTIAL
 //   [MA00] phi(P) = 3 min_i A_i(P) / A = 3 min_k L_k(P): L_k is the area coordinate of vertex k, i.e. A_i / A for the
@@ -32,7 +33,7 @@
 
 namespace fdem::contact {
 
-constexpr int kHistPerEdge = 5;                  // doubles of friction state per loaded-edge slot
+constexpr int kHistPerEdge = 6;                  // doubles of friction state per loaded-edge slot
 constexpr int kHistPerPair = 6 * kHistPerEdge;  // per pair (six slots)
 
 struct PairParams {
@@ -81,8 +82,13 @@ struct TriangleGeometry {
 };
 void triangle_geometry(const double* x, TriangleGeometry& out);
 
+// Clears one friction slot (kHistPerEdge doubles) and returns the energy its spring held (J), which the caller
+// books as dissipated: a stretched tangential spring that loses its contact lets its energy go.
+double release_slot(double* h);
+
 // The force, friction and energies of the pair (A, B). hist[kHistPerPair] is read and updated. Returns true when the
-// triangles interact (some edge carries load); false leaves fa = fb = 0 and resets hist to 0.
+// triangles interact (some edge carries load); false leaves fa = fb = 0 and resets hist to 0. Either way
+// out.dissipation includes the energy of friction springs that let go (release_slot).
 bool pair_contact(const double* xa, const double* xb, const double* va, const double* vb, const PairParams& p,
                   bool want_energy, double* hist, PairResult& out);
 // The same from precomputed triangle geometry.
