@@ -253,6 +253,43 @@ void read_dof_set(Ctx& ctx, Reader& r, const std::string& key, DofMode mode, Sup
         }
 }
 
+// key = { type = "sin", amplitude, omega, phase, offset } or { type = "table", points = [[t, f], ...] }.
+TimeFunction read_function(Ctx& ctx, Reader& r, const std::string& key) {
+    TimeFunction fn;
+    const toml::table* p = r.table(key, false, "a table { type = \"sin\", amplitude, omega (rad/s), phase (rad), offset } or "
+                                               "{ type = \"table\", points = [[t (s), factor], ...] }");
+    if (!p) return fn;
+    Reader fr(ctx, *p, r.key_path(key));
+    fn.type = fr.string("type", true, "\"sin\" or \"table\"", {"sin", "table"}).value_or("");
+    if (fn.type == "sin") {
+        fn.amplitude = fr.number("amplitude", false, "an amplitude factor").value_or(1.0);
+        fn.omega = fr.number("omega", true, "an angular frequency in rad/s").value_or(0.0);
+        fn.phase = fr.number("phase", false, "a phase in rad").value_or(0.0);
+        fn.offset = fr.number("offset", false, "a constant factor added").value_or(0.0);
+    } else if (fn.type == "table") {
+        const toml::node* pts = fr.node("points", true, "an array of [time s, factor] pairs");
+        bool ok = pts && pts->is_array() && !pts->as_array()->empty();
+        if (ok)
+            for (const auto& e : *pts->as_array()) {
+                const toml::array* pair = e.as_array();
+                if (!pair || pair->size() != 2 || !(*pair)[0].is_number() || !(*pair)[1].is_number() ||
+                    !std::isfinite(*(*pair)[0].value<double>()) || !std::isfinite(*(*pair)[1].value<double>())) {
+                    ok = false;
+                    break;
+                }
+                fn.t.push_back(*(*pair)[0].value<double>());
+                fn.f.push_back(*(*pair)[1].value<double>());
+            }
+        for (std::size_t i = 1; ok && i < fn.t.size(); ++i)
+            if (!(fn.t[i] > fn.t[i - 1])) ok = false;
+        if (pts && !ok)
+            ctx.error(fr.key_path("points"), line_of(pts), "expected [time s, factor] pairs with strictly increasing times");
+        if (!ok) fn.type.clear();
+    }
+    fr.finish();
+    return fn;
+}
+
 SupportSpec read_support(Ctx& ctx, const toml::table& t, const std::string& path) {
     Reader r(ctx, t, path);
     SupportSpec s;
@@ -271,6 +308,9 @@ SupportSpec read_support(Ctx& ctx, const toml::table& t, const std::string& path
         }
     }
     s.ramp = r.number("ramp", false, "a ramp-up time >= 0 in s", [](double v) { return v >= 0; }).value_or(0.0);
+    s.function = read_function(ctx, r, "function");
+    if (s.function.present() && s.mode[0] != DofMode::velocity && s.mode[1] != DofMode::velocity)
+        ctx.error(r.key_path("function"), r.line(), "a time function multiplies a prescribed velocity: give vx or vy");
     auto add_protocol = [&](int comp, std::vector<double> t_pts, std::vector<double> u_pts, const std::string& key, int line) {
         if (s.mode[comp] != DofMode::inherit) {
             ctx.error(r.key_path(key), line, "component " + kComponents[comp] + " already has a support in this block");
@@ -356,6 +396,9 @@ LoadSpec read_load(Ctx& ctx, const toml::table& t, const std::string& path) {
     if (force) l.force = *force;
     if (pressure) l.is_pressure = true, l.pressure = *pressure;
     l.ramp = r.number("ramp", false, "a ramp time >= 0 in s", [](double v) { return v >= 0; }).value_or(0.0);
+    l.function = read_function(ctx, r, "function");
+    if (l.function.present() && l.is_spring)
+        ctx.error(r.key_path("function"), r.line(), "a time function multiplies a force or pressure, not a spring");
     r.finish();
     return l;
 }
@@ -451,10 +494,21 @@ void read_joint(Reader& r, JointSpec& j, bool allow_stiffness) {
 
 }  // namespace
 
+double TimeFunction::operator()(double tau) const {
+    if (type == "sin") return offset + amplitude * std::sin(omega * tau + phase);
+    if (type == "table") {
+        if (tau <= t.front()) return f.front();
+        if (tau >= t.back()) return f.back();
+        const std::size_t i = static_cast<std::size_t>(std::upper_bound(t.begin(), t.end(), tau) - t.begin());
+        return f[i - 1] + (tau - t[i - 1]) / (t[i] - t[i - 1]) * (f[i] - f[i - 1]);
+    }
+    return 1.0;
+}
+
 std::string MonitorSpec::unit() const {
     if (type == "displacement") return "m";
     if (type == "velocity") return "m/s";
-    if (type == "tilt") return "deg";
+    if (type == "tilt" || type == "rotation") return "deg";
     return "N";
 }
 
@@ -660,11 +714,11 @@ CaseSpec load_case(const std::string& path, const std::vector<std::string>& over
         MonitorSpec m;
         m.line = r.line();
         m.name = r.string("name", true, "a column name for history.csv").value_or("");
-        m.type = r.string("type", true, "the monitored quantity", {"displacement", "velocity", "reaction", "load", "tilt"}).value_or("displacement");
-        if (m.type != "tilt") {
-            m.group = r.string("group", true, "the name of a group").value_or("");
+        m.type = r.string("type", true, "the monitored quantity",
+                          {"displacement", "velocity", "reaction", "load", "tilt", "rotation"}).value_or("displacement");
+        if (m.type != "tilt") m.group = r.string("group", true, "the name of a group").value_or("");
+        if (m.type != "tilt" && m.type != "rotation")
             m.component = component_index(r.string("component", true, "\"x\" or \"y\"", kComponents).value_or("x"));
-        }
         r.finish();
         static const std::set<std::string> reserved{"time", "step", "stage", "E_kin", "E_el", "E_joint", "E_contact",
                                                     "W_ext", "D_damp", "D_visc", "D_frac", "D_fric", "E_balance"};
@@ -673,6 +727,26 @@ CaseSpec load_case(const std::string& path, const std::vector<std::string>& over
         if (!m.name.empty() && m.name.find_first_of(", \"\n") != std::string::npos)
             ctx.error(p + ".name", m.line, "expected a name without commas, spaces or quotes");
         spec.monitors.push_back(m);
+    }
+
+    for (const toml::table* t : top.tables("initial", false, "[[initial]] blocks")) {
+        const std::string p = "initial." + std::to_string(spec.initial.size());
+        Reader r(ctx, *t, p);
+        InitialSpec in;
+        in.line = r.line();
+        in.group = r.string("group", true, "the name of a group or region").value_or("");
+        in.velocity = r.vec2("velocity", false, "[vx, vy] in m/s").value_or(std::array<double, 2>{0, 0});
+        const auto w = r.number("angular_velocity", false, "an angular velocity in rad/s (counter-clockwise)");
+        const auto rot = r.number("rotation", false, "a rotation of the placement in deg (counter-clockwise)",
+                                  [](double v) { return std::fabs(v) <= 360; });
+        const auto c = r.vec2("center", w || rot, "[x, y] in m, the centre of the rotation");
+        if (!w && !rot && !r.has("velocity"))
+            ctx.error(p, in.line, "give velocity, angular_velocity or rotation");
+        in.angular_velocity = w.value_or(0.0);
+        in.rotation = rot.value_or(0.0);
+        if (c) in.center = *c;
+        r.finish();
+        spec.initial.push_back(in);
     }
 
     if (const toml::table* t = top.table("numerics", false, "a [numerics] table")) {
@@ -741,6 +815,7 @@ CaseSpec load_case(const std::string& path, const std::vector<std::string>& over
         s.gravity = r.vec2("gravity", false, "[gx, gy] in m/s^2");
         s.gravity_ramp = r.number("gravity_ramp", false, "a ramp time >= 0 in s", [](double v) { return v >= 0; }).value_or(0);
         s.tilt_rate = r.number("tilt_rate", false, "a rotation rate of gravity in deg/s").value_or(0);
+        s.gravity_function = read_function(ctx, r, "gravity_function");
         s.local_damping = r.number("local_damping", false, "a local damping coefficient in [0, 1)", [](double v) { return v >= 0 && v < 1; });
         s.local_damping_filter = r.number("local_damping_filter", false, "a filter time constant >= 0 in s (0: absolute velocity)",
                                           [](double v) { return v >= 0 && std::isfinite(v); });
@@ -813,6 +888,9 @@ void check_against_mesh(const CaseSpec& spec, const MeshNames& names) {
         const auto& m = spec.monitors[i];
         if (m.type != "tilt" && !has_group(m.group)) missing("monitors." + std::to_string(i) + ".group", m.line, m.group);
     }
+    for (std::size_t i = 0; i < spec.initial.size(); ++i)
+        if (!has_group(spec.initial[i].group))
+            missing("initial." + std::to_string(i) + ".group", spec.initial[i].line, spec.initial[i].group);
     for (std::size_t i = 0; i < spec.interfaces.size(); ++i)
         for (const auto* r : {&spec.interfaces[i].region_a, &spec.interfaces[i].region_b})
             if (std::find(names.regions.begin(), names.regions.end(), *r) == names.regions.end())

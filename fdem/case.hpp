@@ -83,6 +83,18 @@ struct GeometrySpec {
     int line = 0;
 };
 
+// A factor that varies in time, tau (s) counted from the start of the stage whose block sets it:
+//   "sin":   offset + amplitude sin(omega tau + phase)   (amplitude, offset: -; omega: rad/s; phase: rad)
+//   "table": points [[tau, factor], ...], linear between points, held at the first / last factor outside them.
+// type "" = none: the factor is 1.
+struct TimeFunction {
+    std::string type;
+    double amplitude = 1, omega = 0, phase = 0, offset = 0;
+    std::vector<double> t, f;  // table: times (s, increasing) and factors (-)
+    bool present() const { return !type.empty(); }
+    double operator()(double tau) const;
+};
+
 // A force or pressure on a group, kept (and ramped from its previous value) in later stages until changed.
 struct LoadSpec {
     std::string group;
@@ -98,6 +110,7 @@ struct LoadSpec {
     int spring_component = 0;
     double spring_stiffness = 0;         // N/m
     double spring_velocity = 0;          // m/s
+    TimeFunction function;               // multiplies the force or pressure (after its ramp); not for springs
     int line = 0;
 };
 
@@ -115,6 +128,20 @@ struct SupportSpec {
                                            // or cyclic support: the corner-smoothing time (see Simulation)
     // protocol for one component: times (s, from the stage start) and displacements (m, relative to the stage start)
     std::vector<double> protocol_t, protocol_u;
+    TimeFunction function;  // multiplies the prescribed velocities vx, vy (after their ramp)
+    int line = 0;
+};
+
+// Initial conditions of a group's nodes (a region is a group too), applied in this order before the first stage:
+// a rigid rotation of their placement by `rotation` (deg, counter-clockwise) about `center` (stress-free: the
+// triangles only turn; displacements are then measured from the unrotated mesh), then the velocity
+// v = velocity + omega x (x - center) with `angular_velocity` omega (rad/s, counter-clockwise).
+struct InitialSpec {
+    std::string group;
+    std::array<double, 2> velocity{0, 0};  // m/s
+    double angular_velocity = 0;           // rad/s
+    double rotation = 0;                   // deg
+    std::array<double, 2> center{0, 0};    // m
     int line = 0;
 };
 
@@ -130,7 +157,7 @@ struct GroupSpec {
 
 struct MonitorSpec {
     std::string name;
-    std::string type;  // "displacement" | "velocity" | "reaction" | "load" | "tilt"
+    std::string type;  // "displacement" | "velocity" | "reaction" | "load" | "tilt" | "rotation"
     std::string group;
     int component = 0;  // 0 = x, 1 = y
     std::string unit() const;
@@ -150,6 +177,7 @@ struct StageSpec {
     std::optional<std::array<double, 2>> gravity;
     double gravity_ramp = 0;
     double tilt_rate = 0;
+    TimeFunction gravity_function;  // multiplies gravity from this stage's start; kept until a stage sets gravity
     std::optional<double> local_damping;  // alpha of FORMULATION §4, 0 <= alpha < 1
     // Time constant tau (s) of the moving mean each DOF's velocity is measured against for the sign of the local
     // damping force: -alpha |f| sign(v - vbar_tau). 0 (default): the absolute velocity, as in [C79]. A steady motion
@@ -191,6 +219,7 @@ struct CaseSpec {
     std::vector<InterfaceSpec> interfaces;
     double contact_buffer = 0;  // m, NBS buffer; 0 = smallest contact edge / 5
     std::vector<MonitorSpec> monitors;
+    std::vector<InitialSpec> initial;  // [[initial]] blocks
     std::vector<StageSpec> stages;
     double safety = 0.8;  // fraction of the stable time step used, -
     // Inertial mass multiplier for quasi-static runs (density scaling, as UDEC/3DEC do): the time step grows by

@@ -219,8 +219,52 @@ double Simulation::protocol_position(const ActiveSupport& s, double tau) const {
     return (protocol_integral(s, tau) - protocol_integral(s, tau - s.ramp)) / s.ramp;
 }
 
+// [[initial]]: rigid rotation of the placement about the centre (x only: the triangles turn, stress-free by the
+// objectivity of the neo-Hookean law), then v = v0 + omega x (x - c). Blocks apply in order.
+void Simulation::apply_initial_conditions() {
+    for (const InitialSpec& in : spec_.initial) {
+        const auto& grp = model_.group(in.group);
+        const double a = in.rotation * kPi / 180, ca = std::cos(a), sa = std::sin(a);
+        for (int k : grp.nodes) {
+            double* xk = &model_.x[2 * k];
+            if (in.rotation != 0) {
+                const double rx = xk[0] - in.center[0], ry = xk[1] - in.center[1];
+                xk[0] = in.center[0] + ca * rx - sa * ry;
+                xk[1] = in.center[1] + sa * rx + ca * ry;
+            }
+            model_.v[2 * k] = in.velocity[0] - in.angular_velocity * (xk[1] - in.center[1]);
+            model_.v[2 * k + 1] = in.velocity[1] + in.angular_velocity * (xk[0] - in.center[0]);
+        }
+        log("initial conditions on '" + in.group + "': " + std::to_string(grp.nodes.size()) + " nodes" +
+            (in.rotation != 0 ? ", placement turned by " + sci(in.rotation) + " deg" : std::string()) +
+            ", velocity [" + sci(in.velocity[0]) + ", " + sci(in.velocity[1]) + "] m/s" +
+            (in.angular_velocity != 0 ? " + " + sci(in.angular_velocity) + " rad/s about the centre" : std::string()));
+    }
+}
+
+// Mean rigid rotation (deg, counter-clockwise) of a set of nodes from their reference placement: the angle of the
+// least-squares rotation between the reference and current positions taken about their centroids (2D Kabsch:
+// theta = atan2(sum X' x y', sum X' . x'), X' and x' relative to the centroids).
+double Simulation::rotation_deg(const std::vector<int>& nodes, double lag) const {
+    if (nodes.size() < 2) return 0.0;
+    auto xn = [&](int d) { return model_.x[d] - lag * model_.v[d]; };  // positions at t^n, as the other monitors
+    double cX = 0, cY = 0, cx = 0, cy = 0;
+    for (int k : nodes) cX += model_.X[2 * k], cY += model_.X[2 * k + 1], cx += xn(2 * k), cy += xn(2 * k + 1);
+    const double n = static_cast<double>(nodes.size());
+    cX /= n, cY /= n, cx /= n, cy /= n;
+    double dot = 0, cross = 0;
+    for (int k : nodes) {
+        const double X = model_.X[2 * k] - cX, Y = model_.X[2 * k + 1] - cY;
+        const double x = xn(2 * k) - cx, y = xn(2 * k + 1) - cy;
+        dot += X * x + Y * y;
+        cross += X * y - Y * x;
+    }
+    return std::atan2(cross, dot) * 180 / kPi;
+}
+
 void Simulation::begin_stage(int s) {
     const StageSpec& st = spec_.stages[s];
+    if (s == 0) apply_initial_conditions();
     stage_ = s;
     stage_t0_ = time_;
     stage_steps0_ = steps_;
@@ -252,6 +296,12 @@ void Simulation::begin_stage(int s) {
         gravity_ramp_ = 0;
     }
     tilt_rate_ = st.tilt_rate;
+    if (st.gravity_function.present()) {
+        gravity_fn_ = st.gravity_function;
+        gravity_fn_t0_ = time_;
+    } else if (st.gravity) {
+        gravity_fn_ = TimeFunction{};
+    }
 
     // Supports: a new block takes over the DOFs it names; the others keep their previous support.
     for (const SupportSpec& sp : st.supports) {
@@ -265,6 +315,7 @@ void Simulation::begin_stage(int s) {
             a.group = sp.group;
             a.t0 = time_;
             a.ramp = sp.ramp;
+            if (sp.mode[c] == DofMode::velocity) a.fn = sp.function;
             if (a.mode == DofMode::velocity) {
                 // Smooth ramp from the group's current prescribed velocity (0 if it was fixed or free).
                 const int d0 = 2 * a.nodes.front() + c;
@@ -318,6 +369,7 @@ void Simulation::begin_stage(int s) {
         l.is_pressure = ls.is_pressure;
         l.t0 = time_;
         l.ramp = ls.ramp;
+        l.fn = ls.function;
         l.target = ls.is_pressure ? std::array<double, 2>{ls.pressure, 0} : ls.force;
         l.is_spring = ls.is_spring;
         for (auto it = loads_.begin(); it != loads_.end(); ++it)
@@ -401,7 +453,9 @@ void Simulation::apply_time_dependent(double t) {
         gravity_ = {gravity_start_[0] + w * (gravity_target_[0] - gravity_start_[0]),
                     gravity_start_[1] + w * (gravity_target_[1] - gravity_start_[1])};
         const double a = tilt_deg_ * kPi / 180;
-        applied_gravity_ = {std::cos(a) * gravity_[0] - std::sin(a) * gravity_[1], std::sin(a) * gravity_[0] + std::cos(a) * gravity_[1]};
+        const double gf = gravity_fn_.present() ? gravity_fn_(t - gravity_fn_t0_) : 1.0;
+        applied_gravity_ = {gf * (std::cos(a) * gravity_[0] - std::sin(a) * gravity_[1]),
+                            gf * (std::sin(a) * gravity_[0] + std::cos(a) * gravity_[1])};
     }
     // Loads.
     for (int d : loaded_dofs_) f_ext_[d] = 0;
@@ -423,8 +477,9 @@ void Simulation::apply_time_dependent(double t) {
             continue;
         }
         const double w = l.ramp > 0 ? std::min(1.0, (t - l.t0) / l.ramp) : 1.0;
-        const double v0 = l.start[0] + w * (l.target[0] - l.start[0]);
-        const double v1 = l.start[1] + w * (l.target[1] - l.start[1]);
+        const double fac = l.fn.present() ? l.fn(t - l.t0) : 1.0;
+        const double v0 = fac * (l.start[0] + w * (l.target[0] - l.start[0]));
+        const double v1 = fac * (l.start[1] + w * (l.target[1] - l.start[1]));
         if (l.is_pressure) {
             // Pressure p on edge a->b (body on its left): force -p t L n_out = -p t (dy, -dx), half to each node.
             for (auto ed : l.edges) {
@@ -452,6 +507,7 @@ void Simulation::apply_time_dependent(double t) {
         if (s.mode == DofMode::velocity) {
             const double tau = th - s.t0;
             v = s.ramp > 0 && tau < s.ramp ? s.v_start + (s.v_target - s.v_start) * 0.5 * (1 - std::cos(kPi * tau / s.ramp)) : s.v_target;
+            if (s.fn.present()) v *= s.fn(tau);
         } else {
             // Displacement protocol: the velocity that lands exactly on u(t + dt) from u(t) (corner-smoothed
             // when the support has a ramp).
@@ -726,6 +782,7 @@ double Simulation::monitor_value(int i) const {
     const double lag = steps_ > 0 ? dt_ : 0.0;
     if (m.type == "tilt") return tilt_deg_ - tilt_rate_ * lag;
     const auto& grp = model_.group(m.group);
+    if (m.type == "rotation") return rotation_deg(grp.nodes, lag);
     const int c = m.component;
     double s = 0;
     if (m.type == "displacement" || m.type == "velocity") {

@@ -61,6 +61,7 @@ public:
     const Model& model() const { return model_; }
     Model& model() { return model_; }
     double dt() const { return dt_; }
+    const CaseSpec& spec() const { return spec_; }
     double time() const { return time_; }
     long steps() const { return steps_; }
     double monitor_value(int i) const;
@@ -85,6 +86,7 @@ private:
         double k = 0, v = 0, anchor0 = 0;
         std::array<double, 2> start{0, 0}, target{0, 0};  // force N or pressure Pa (component 0)
         double ramp = 0, t0 = 0;
+        TimeFunction fn;                             // factor on the force / pressure, of t - t0
         std::string group;
     };
     struct ActiveSupport {
@@ -96,8 +98,11 @@ private:
         double v_ref = 0;            // rigid: its moving mean for the filtered local damping (m/s)
         std::vector<double> pt, pu;  // protocol: times (s, from t0) and displacements (m)
         std::vector<double> pI;      // protocol: INT_pt[0]^pt[i] u dt at each knot (m s), for the corner smoothing
+        TimeFunction fn;             // velocity: factor on the prescribed velocity, of t - t0
         std::string group;
     };
+    void apply_initial_conditions();
+    double rotation_deg(const std::vector<int>& nodes, double lag) const;  // deg, positions x - lag v
 
     void compute_dt();
     void apply_time_dependent(double t);
@@ -149,6 +154,8 @@ private:
     std::array<double, 2> gravity_{0, 0}, gravity_start_{0, 0}, gravity_target_{0, 0};
     std::array<double, 2> applied_gravity_{0, 0};  // m/s^2, after the tilt rotation
     double gravity_ramp_ = 0, tilt_rate_ = 0, tilt_deg_ = 0;
+    TimeFunction gravity_fn_;    // factor on the applied gravity, of t - gravity_fn_t0_
+    double gravity_fn_t0_ = 0;   // s
     double alpha_ = 0;  // local damping
     double tau_ld_ = 0;  // s, local damping filter time constant (0: sign of the absolute velocity)
     std::vector<double> v_ref_;  // m/s, per DOF: moving mean of the velocity over tau_ld_ (empty while tau_ld_ = 0)

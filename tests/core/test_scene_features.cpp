@@ -1,0 +1,250 @@
+// tests/core/test_scene_features.cpp: time functions on loads, supports and gravity; initial conditions
+// ([[initial]]); the rotation monitor. Each checked against its closed form on a free elastic square.
+//
+// CLOSED FORMS (a body of mass M, no support unless said; leap-frog from rest, v^{-1/2} = 0):
+//   sin force   F(t) = F0 sin(omega t): v(t) = F0 / (M omega) (1 - cos omega t).
+//   table force F(t) = F0 f(t), f piecewise linear: the momentum at t is F0 INT_0^t f dt.
+//   gravity function: g(t) = g f(t): the mean velocity is g INT_0^t f dt.
+//   support velocity v(t) = v0 sin(omega t): displacement v0 / omega (1 - cos omega t).
+//   rigid spin: a body given v = omega x (x - c), free of loads, turns at omega: rotation monitor omega t (deg);
+//   its kinetic energy stays 1/2 I omega^2 (the neo-Hookean triangles are stress-free under rotation).
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <string>
+
+#include "core/engine_helpers.hpp"
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+// A 0.2 x 0.2 m square (t = 0.1 m, steel-like E so it moves almost rigidly, 2000 kg/m^3: M = 8 kg), groups of
+// the rectangle generator (body, left, right, top, bottom, corners); monitors: mean x velocity and displacement of
+// the body, its rotation, and of the right edge's x displacement.
+std::string square_head(const std::string& name) {
+    return "[case]\nname = \"" + name + R"("
+thickness = 0.1
+[geometry]
+type = "rectangle"
+width = 0.2
+height = 0.2
+mesh_size = 0.05
+[materials.m]
+E = 2.0e11
+nu = 0.3
+density = 2000.0
+[regions]
+body = "m"
+[[monitors]]
+name = "vx"
+type = "velocity"
+group = "body"
+component = "x"
+[[monitors]]
+name = "vy"
+type = "velocity"
+group = "body"
+component = "y"
+[[monitors]]
+name = "rot"
+type = "rotation"
+group = "body"
+[[monitors]]
+name = "ux_right"
+type = "displacement"
+group = "right"
+component = "x"
+)";
+}
+
+// Mass-weighted mean x velocity (m/s).
+double mean_vx(const fdem::Simulation& sim) {
+    const auto& md = sim.model();
+    double p = 0, m = 0;
+    for (int k = 0; k < md.n_nodes(); ++k) p += md.mass[k] * md.v[2 * k], m += md.mass[k];
+    return p / m;
+}
+
+double total_mass(const fdem::Simulation& sim) {
+    double m = 0;
+    for (int k = 0; k < sim.model().n_nodes(); ++k) m += sim.model().mass[k];
+    return m;
+}
+
+}  // namespace
+
+TEST_CASE("time function: a force F0 sin(omega t) gives the body v = F0 / (M omega) (1 - cos omega t)", "[unit][scene]") {
+    const double F0 = 80.0, omega = 2 * kPi * 5.0;  // N, rad/s
+    auto sim = testing::make_simulation(square_head("tf_sin") + R"(
+[[stages]]
+name = "shake"
+duration = 0.13
+local_damping = 0.0
+  [[stages.loads]]
+  group = "body"
+  force = [80.0, 0.0]
+  function = { type = "sin", amplitude = 1.0, omega = 31.41592653589793 }
+)",
+                                        "tf_sin");
+    sim.run();
+    const double M = total_mass(sim), t = sim.time();
+    // v^{n-1/2}: the velocity half a step before the run's end time t^n.
+    const double th = t - 0.5 * sim.dt();
+    const double expected = F0 / (M * omega) * (1 - std::cos(omega * th));
+    std::printf("[scene] sin force: M %.4f kg, mean vx %.8f m/s, closed form %.8f m/s at t %.5f s\n", M, mean_vx(sim),
+                expected, th);
+    CHECK(mean_vx(sim) == Approx(expected).epsilon(1e-3));
+}
+
+TEST_CASE("time function: a table factor interpolates linearly and the momentum is F0 INT f dt", "[unit][scene]") {
+    // f: 0 at 0, 1 at 0.02 s, 1 at 0.04 s, 0 at 0.06 s, then held at 0: INT f = 0.04 s.
+    auto sim = testing::make_simulation(square_head("tf_table") + R"(
+[[stages]]
+name = "pulse"
+duration = 0.08
+local_damping = 0.0
+  [[stages.loads]]
+  group = "body"
+  force = [100.0, 0.0]
+  function = { type = "table", points = [[0.0, 0.0], [0.02, 1.0], [0.04, 1.0], [0.06, 0.0]] }
+)",
+                                        "tf_table");
+    sim.run();
+    const double M = total_mass(sim);
+    std::printf("[scene] table pulse: mean vx %.8f m/s, F0 INT f / M %.8f m/s\n", mean_vx(sim), 100.0 * 0.04 / M);
+    CHECK(mean_vx(sim) == Approx(100.0 * 0.04 / M).epsilon(2e-3));
+}
+
+TEST_CASE("time function: gravity switched off by a table after 0.05 s leaves the body at -g 0.05 m/s",
+          "[unit][scene]") {
+    auto sim = testing::make_simulation(square_head("tf_gravity") + R"(
+[[stages]]
+name = "drop"
+duration = 0.1
+local_damping = 0.0
+gravity = [0.0, -9.81]
+gravity_function = { type = "table", points = [[0.0, 1.0], [0.05, 1.0], [0.0500001, 0.0]] }
+)",
+                                        "tf_gravity");
+    sim.run();
+    const auto& md = sim.model();
+    double p = 0, m = 0;
+    for (int k = 0; k < md.n_nodes(); ++k) p += md.mass[k] * md.v[2 * k + 1], m += md.mass[k];
+    std::printf("[scene] gravity function: mean vy %.8f m/s, closed form %.8f m/s\n", p / m, -9.81 * 0.05);
+    CHECK(p / m == Approx(-9.81 * 0.05).epsilon(2e-3));
+}
+
+TEST_CASE("time function: a support velocity v0 sin(omega t) moves its edge by v0 / omega (1 - cos omega t)",
+          "[unit][scene]") {
+    const double v0 = 0.01, omega = 2 * kPi * 2.0;
+    auto sim = testing::make_simulation(square_head("tf_support") + R"(
+[[stages]]
+name = "drive"
+duration = 0.2
+local_damping = 0.0
+  [[stages.supports]]
+  group = "right"
+  vx = 0.01
+  function = { type = "sin", omega = 12.566370614359172 }
+)",
+                                        "tf_support");
+    sim.run();
+    const double t = sim.time();
+    const double expected = v0 / omega * (1 - std::cos(omega * t));
+    double ux = 0;
+    const auto& md = sim.model();
+    for (int k : md.group("right").nodes) ux += md.x[2 * k] - md.X[2 * k];
+    ux /= static_cast<double>(md.group("right").nodes.size());
+    std::printf("[scene] support function: edge displacement %.8e m, closed form %.8e m\n", ux, expected);
+    CHECK(ux == Approx(expected).epsilon(1e-3));
+}
+
+TEST_CASE("initial conditions: a body spun about its centre turns at omega (rotation monitor omega t) and keeps "
+          "its kinetic energy",
+          "[unit][scene]") {
+    const double omega = 2.0;  // rad/s
+    auto sim = testing::make_simulation(square_head("ic_spin") + R"(
+[[initial]]
+group = "body"
+angular_velocity = 2.0
+center = [0.1, 0.1]
+[[stages]]
+name = "spin"
+duration = 0.3
+local_damping = 0.0
+)",
+                                        "ic_spin");
+    const double I = 8.0 * (0.2 * 0.2 + 0.2 * 0.2) / 12.0;  // kg m^2, square about its centre (lumped: close)
+    sim.run();
+    const double t = sim.time();
+    int rot = -1;
+    for (std::size_t i = 0; i < sim.spec().monitors.size(); ++i)
+        if (sim.spec().monitors[i].name == "rot") rot = static_cast<int>(i);
+    REQUIRE(rot >= 0);
+    const double theta = sim.monitor_value(rot);
+    const fdem::Energies e = sim.energies();
+    std::printf("[scene] spin: rotation %.6f deg at t %.5f s, omega t %.6f deg; kinetic %.6e J (1/2 I omega^2 of "
+                "the continuous square %.6e J), balance %.2e\n",
+                theta, t, omega * t * 180 / kPi, e.kinetic, 0.5 * I * omega * omega, e.balance_error());
+    CHECK(theta == Approx(omega * t * 180 / kPi).epsilon(2e-3));
+    CHECK(e.balance_error() < 1e-3);
+}
+
+TEST_CASE("initial conditions: a placement turned by 30 deg reads 30 deg on the rotation monitor and holds no "
+          "strain energy",
+          "[unit][scene]") {
+    auto sim = testing::make_simulation(square_head("ic_rotate") + R"(
+[[initial]]
+group = "body"
+rotation = 30.0
+center = [0.0, 0.0]
+[[stages]]
+name = "rest"
+duration = 0.01
+local_damping = 0.0
+)",
+                                        "ic_rotate");
+    sim.run();
+    int rot = -1;
+    for (std::size_t i = 0; i < sim.spec().monitors.size(); ++i)
+        if (sim.spec().monitors[i].name == "rot") rot = static_cast<int>(i);
+    const double theta = sim.monitor_value(rot);
+    const fdem::Energies e = sim.energies();
+    std::printf("[scene] turned placement: rotation %.10f deg, elastic energy %.3e J, kinetic %.3e J\n", theta,
+                e.elastic, e.kinetic);
+    CHECK(theta == Approx(30.0).epsilon(1e-9));
+    // Stress-free: what is left is the round-off of the energy formula near F = R, about 1e-17 E V here.
+    CHECK(e.elastic < 1e-15 * 2.0e11 * 0.2 * 0.2 * 0.1);
+    CHECK(e.kinetic < 1e-9);
+}
+
+TEST_CASE("scene features: bad time functions and initial conditions are exit 1 naming the key", "[unit][scene]") {
+    const auto dir = testing::tmp_dir("scene_bad");
+    const std::string stage = "[[stages]]\nname = \"s\"\nduration = 0.01\n";
+    struct Bad {
+        std::string text, key;
+    };
+    const Bad cases[] = {
+        {stage + "  [[stages.loads]]\n  group = \"body\"\n  force = [1.0, 0.0]\n  function = { type = \"cos\", omega = 1.0 }\n",
+         "stages.0.loads.0.function.type"},
+        {stage + "  [[stages.loads]]\n  group = \"body\"\n  force = [1.0, 0.0]\n  function = { type = \"sin\" }\n",
+         "stages.0.loads.0.function.omega"},
+        {stage + "  [[stages.loads]]\n  group = \"body\"\n  force = [1.0, 0.0]\n  function = { type = \"table\", points = [[0.1, 1.0], [0.0, 0.0]] }\n",
+         "stages.0.loads.0.function.points"},
+        {stage + "  [[stages.supports]]\n  group = \"left\"\n  fix = \"x\"\n  function = { type = \"sin\", omega = 1.0 }\n",
+         "stages.0.supports.0.function"},
+        {"[[initial]]\ngroup = \"body\"\nrotation = 10.0\n" + stage, "initial.0.center"},
+        {"[[initial]]\ngroup = \"nowhere\"\nvelocity = [1.0, 0.0]\n" + stage, "initial.0.group"},
+        {"[[initial]]\ngroup = \"body\"\nspin = 1.0\n" + stage, "initial.0.spin"},
+    };
+    int i = 0;
+    for (const Bad& b : cases) {
+        const auto path = testing::write_text(dir / ("case" + std::to_string(i++) + ".toml"), square_head("bad") + b.text);
+        const auto r = testing::run_fdem("check \"" + path + "\"", dir);
+        INFO(b.key << "\n" << r.err);
+        CHECK(r.code == 1);
+        CHECK(r.err.find(b.key) != std::string::npos);
+    }
+}
