@@ -67,6 +67,14 @@ double mean_vx(const fdem::Simulation& sim) {
     return p / m;
 }
 
+// The value of the monitor named `name` now.
+double monitor(const fdem::Simulation& sim, const std::string& name) {
+    for (std::size_t i = 0; i < sim.spec().monitors.size(); ++i)
+        if (sim.spec().monitors[i].name == name) return sim.monitor_value(static_cast<int>(i));
+    FAIL("no monitor " << name);
+    return 0.0;
+}
+
 double total_mass(const fdem::Simulation& sim) {
     double m = 0;
     for (int k = 0; k < sim.model().n_nodes(); ++k) m += sim.model().mass[k];
@@ -179,11 +187,7 @@ local_damping = 0.0
     const double I = 8.0 * (0.2 * 0.2 + 0.2 * 0.2) / 12.0;  // kg m^2, square about its centre (lumped: close)
     sim.run();
     const double t = sim.time();
-    int rot = -1;
-    for (std::size_t i = 0; i < sim.spec().monitors.size(); ++i)
-        if (sim.spec().monitors[i].name == "rot") rot = static_cast<int>(i);
-    REQUIRE(rot >= 0);
-    const double theta = sim.monitor_value(rot);
+    const double theta = monitor(sim, "rot");
     const fdem::Energies e = sim.energies();
     std::printf("[scene] spin: rotation %.6f deg at t %.5f s, omega t %.6f deg; kinetic %.6e J (1/2 I omega^2 of "
                 "the continuous square %.6e J), balance %.2e\n",
@@ -207,10 +211,7 @@ local_damping = 0.0
 )",
                                         "ic_rotate");
     sim.run();
-    int rot = -1;
-    for (std::size_t i = 0; i < sim.spec().monitors.size(); ++i)
-        if (sim.spec().monitors[i].name == "rot") rot = static_cast<int>(i);
-    const double theta = sim.monitor_value(rot);
+    const double theta = monitor(sim, "rot");
     const fdem::Energies e = sim.energies();
     std::printf("[scene] turned placement: rotation %.10f deg, elastic energy %.3e J, kinetic %.3e J\n", theta,
                 e.elastic, e.kinetic);
