@@ -26,6 +26,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <iostream>
+#include <limits>
 #include <map>
 #include <set>
 #include <sstream>
@@ -673,12 +674,35 @@ void Simulation::step() {
 
 // A run whose energy grows with no work put in has gone unstable even if no triangle has inverted yet
 // (e.g. contact springs stepped beyond their limit, which damping can hide for a while).
+// Tolerance: 10 |W_ext| + 1e-9 J, plus the round-off of the energies summed: W_ext and the dissipations are running
+// sums over the steps (each addition rounds by eps relative) and the held energies are sums over the elements, so
+// their round-off is bounded by about (steps + 16) eps times the sum of the magnitudes.
+// Before it stops the run, the row of the failing step is written to history.csv.
 void Simulation::check_energy(const Energies& e) {
     const double held = e.kinetic + e.elastic + e.joint + e.contact + e.damping + e.viscous + e.fracture + e.friction;
-    if (held > 10 * std::abs(e.external) + 1e-9) {
+    double mag = std::abs(e.external);
+    for (double v : {e.kinetic, e.elastic, e.joint, e.contact, e.damping, e.viscous, e.fracture, e.friction}) mag += std::abs(v);
+    const double roundoff = (static_cast<double>(steps_) + 16.0) * std::numeric_limits<double>::epsilon() * mag;
+    if (held > 10 * std::abs(e.external) + 1e-9 + roundoff) {
+        if (!opt_.out_dir.empty() && last_row_step_ != steps_) append_history(history_row(e));
+        // Name the largest holder: it points at the part that went unstable.
+        const std::pair<const char*, double> parts[] = {{"kinetic", e.kinetic}, {"elastic (triangles)", e.elastic},
+                                                        {"cohesive joints", e.joint}, {"contact", e.contact}};
+        std::size_t big = 0;
+        for (std::size_t i = 1; i < 4; ++i)
+            if (parts[i].second > parts[big].second) big = i;
+        std::string cause = "most of it " + std::string(parts[big].first) + " energy (" + sci(parts[big].second) + " J)";
+        if (!spec_.dt_override && spec_.safety > 1)
+            cause += "; numerics.safety = " + sci(spec_.safety) + " > 1 puts the time step beyond the stability limit: reduce numerics.safety below 1";
+        else if (spec_.dt_override)
+            cause += "; numerics.dt fixes the step at " + sci(dt_) + " s against a stable limit of " + sci(dt_limit_) + " s";
+        else if (big == 3)
+            cause += "; contact springs beyond their stable step: reduce numerics.safety or the contact penalty";
+        else
+            cause += "; unstable; reduce numerics.safety";
         const std::string crushed = crushed_broken_note();
         fail("energy grew without work: " + sci(held) + " J held or dissipated against " + sci(e.external) +
-             " J put in (" + (crushed.empty() ? "" : crushed + "; otherwise ") + "unstable; reduce numerics.safety)");
+             " J put in (" + (crushed.empty() ? "" : crushed + "; otherwise ") + cause + ")");
     }
 }
 
@@ -790,7 +814,11 @@ Energies Simulation::energies() const {
 
 void Simulation::write_history_row() {
     const Energies e = energies();
+    append_history(history_row(e));
     if (steps_ > 0) check_energy(e);
+}
+
+std::string Simulation::history_row(const Energies& e) {
     // The row describes t^n, the time of the last force evaluation (see monitor_value).
     std::string row = format_double(steps_ > 0 ? time_ - dt_ : time_) + "," + std::to_string(steps_) + "," + std::to_string(stage_ + 1);
     for (std::size_t i = 0; i < spec_.monitors.size(); ++i) {
@@ -808,7 +836,27 @@ void Simulation::write_history_row() {
             for (auto mode : {fracture::FractureMode::mode_I, fracture::FractureMode::mode_II, fracture::FractureMode::mixed})
                 row += "," + std::to_string(c->of(cls, mode));
     row += "\n";
-    history_ += row;
+    return row;
+}
+
+// history.csv grows by one appended, flushed row at a time (a killed run loses at most the row being written);
+// the file is created with its header on the first row.
+void Simulation::append_history(const std::string& row) {
+    last_row_step_ = steps_;
+    if (opt_.out_dir.empty()) return;
+    open_history();
+    history_out_ << row;
+    history_out_.flush();
+}
+
+void Simulation::open_history() {
+    if (opt_.out_dir.empty() || history_out_.is_open()) return;
+    const std::string path = (std::filesystem::path(opt_.out_dir) / "history.csv").string();
+    history_out_.open(path, std::ios::binary | std::ios::trunc);
+    if (!history_out_) throw RunError("cannot write " + path);
+    history_out_ << history_;
+    history_out_.flush();
+    history_.clear();
 }
 
 void Simulation::write_snapshot() {
@@ -874,7 +922,7 @@ void Simulation::flush_files() {
     if (opt_.out_dir.empty()) return;
     last_flush_ = wall_clock();
     const std::filesystem::path dir(opt_.out_dir);
-    write_file_atomic((dir / "history.csv").string(), history_);
+    open_history();
     if (inter_.has_joints() || inter_.has_dry_joints()) {
         std::ostringstream header;
         fracture::write_cracks_csv_header(header);
@@ -974,7 +1022,7 @@ void Simulation::run() {
             std::to_string(r.steps) + " steps");
         if (!opt_.out_dir.empty()) {
             record_dry_joints();
-            if (history_.empty() || history_.compare(history_.size() - 1, 1, "\n") == 0) write_history_row();
+            write_history_row();
             write_snapshot();
             flush_files();
         }
