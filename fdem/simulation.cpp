@@ -155,6 +155,14 @@ Simulation::Simulation(CaseSpec spec, Model model, RunOptions options)
     block_bad_.assign(nb, -1);
     mon_ext_.assign(spec_.monitors.size(), {0, 0, 0});
     compute_dt();
+    // Derived quantities must be finite (issue 26: a huge mass_scale gave dt = 1e148 s, NaN energies and "completed").
+    for (int k = 0; k < nn; ++k)
+        if (!(std::isfinite(model_.mass[k]) && model_.mass[k] > 0) && !model_.mass.empty())
+            throw InputError(spec_.file + ": node " + std::to_string(k) + " has a mass of " + sci(model_.mass[k]) +
+                             " kg: expected a finite mass > 0 (check case.thickness, materials.*.density, numerics.mass_scale)");
+    if (!(std::isfinite(dt_) && dt_ > 0 && dt_ < 1e3))
+        throw InputError(spec_.file + ": the time step comes out as " + sci(dt_) +
+                         " s: expected a finite step > 0 (check materials.*.E and density, case.thickness, numerics.mass_scale and numerics.dt)");
     wall_start_ = wall_clock();
     if (!opt_.out_dir.empty()) {
         std::filesystem::create_directories(std::filesystem::path(opt_.out_dir) / "snapshots");

@@ -128,3 +128,41 @@ TEST_CASE("the tilting wall with history rows every 1e-4 s passes its first 5 ms
     const std::string h = testing::read_text(dir / "run" / "history.csv");
     CHECK(std::count(h.begin(), h.end(), '\n') >= 50);
 }
+
+TEST_CASE("absurd geometry, denormal and huge values stop fdem check with exit code 1 naming the file and the key", "[engine]") {
+    const auto dir = testing::tmp_dir("reliab_bounds");
+    const std::string tilting = std::string(FDEM_CASES_DIR) + "/tilting/tilting_wall.toml";
+    const std::string mortar = std::string(FDEM_CASES_DIR) + "/vermeltfoort/vermeltfoort_121.toml";
+    const std::string cantilever = std::string(FDEM_CASES_DIR) + "/elastic/cantilever.toml";
+    struct Bad {
+        std::string file, set, key;
+    };
+    // Each of these aborted inside Gmsh, hung, ran past 1 GB, or ran with NaN and exit 0 before (issue 26).
+    const Bad bad[] = {
+        {tilting, "geometry.base_overhang=1e300", "geometry.base_overhang"},
+        {tilting, "geometry.base_overhang=1e20", "geometry.base_overhang"},
+        {tilting, "geometry.base_overhang=1e10", "geometry.base_overhang"},
+        {mortar, "geometry.joint_thickness=1.7976931348623157e308", "geometry.joint_thickness"},
+        {tilting, "geometry.unit_length=1e-6", "geometry.max_triangles"},
+        {tilting, "geometry.mesh_size=1e-5", "geometry.max_triangles"},
+        {cantilever, "geometry.width=1e4", "geometry.max_triangles"},
+        {cantilever, "case.thickness=5e-324", "case.thickness"},
+        {cantilever, "materials.steelish.density=5e-324", "materials.steelish.density"},
+        {cantilever, "numerics.mass_scale=1e308", "numerics.mass_scale"},
+    };
+    for (const Bad& b : bad) {
+        const auto r = testing::run_fdem("check \"" + b.file + "\" --set " + b.set, dir);
+        INFO(b.set << ": exit " << r.code << ", " << r.err);
+        CHECK(r.code == 1);
+        CHECK(r.err.find(b.key) != std::string::npos);
+        // A value given with --set is reported against the option, a derived one against the file's line.
+        const bool names_source = r.err.find(std::filesystem::path(b.file).filename().string()) != std::string::npos ||
+                                  r.err.find("--set " + b.key) != std::string::npos;
+        CHECK(names_source);
+    }
+    // The size guard's limit is a setting: raised, the same long rectangle passes the guard's count.
+    const auto r = testing::run_fdem("check \"" + cantilever + "\" --set geometry.width=1e4 --set geometry.mesh_size=1 "
+                                     "--set geometry.max_triangles=1e5", dir);
+    INFO(r.err);
+    CHECK(r.err.find("max_triangles") == std::string::npos);
+}
