@@ -19,6 +19,8 @@
 #include <omp.h>
 #include <unistd.h>
 
+#include <csignal>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -998,7 +1000,51 @@ bool Simulation::history_due(double t, long step) const {
     return hi > 0 ? t + 1e-9 * dt_ >= next_history_ : (step % history_every_steps_) == 0;
 }
 
+namespace {
+// SIGINT/SIGTERM: the handler only records the signal; the run loop finishes the step, writes its outputs with
+// status "interrupted" and run_case returns 128 + the signal number (130, 143), the shell's convention.
+volatile std::sig_atomic_t g_stop_signal = 0;
+extern "C" void fdem_stop_handler(int sig) { g_stop_signal = sig; }
+
+struct StopHandlers {
+    struct sigaction old_int {}, old_term {};
+    StopHandlers() {
+        g_stop_signal = 0;
+        struct sigaction sa {};
+        sa.sa_handler = fdem_stop_handler;
+        sigemptyset(&sa.sa_mask);
+        sigaction(SIGINT, &sa, &old_int);
+        sigaction(SIGTERM, &sa, &old_term);
+    }
+    ~StopHandlers() {
+        sigaction(SIGINT, &old_int, nullptr);
+        sigaction(SIGTERM, &old_term, nullptr);
+    }
+    StopHandlers(const StopHandlers&) = delete;
+    StopHandlers& operator=(const StopHandlers&) = delete;
+};
+}  // namespace
+
+// A stop asked for by a signal: the step is finished; history row, snapshot, files and summary are written.
+void Simulation::interrupt(int sig) {
+    interrupted_signal_ = sig;
+    wall_time_ = wall_clock() - wall_start_;
+    if (opt_.progress) progress_line(true);
+    const std::string msg = std::string("interrupted by ") + (sig == SIGINT ? "SIGINT" : sig == SIGTERM ? "SIGTERM" : "a signal") +
+                            " in stage " + std::to_string(stage_ + 1) + " '" + spec_.stages[stage_].name + "' at step " +
+                            std::to_string(steps_) + ", t = " + sci(time_, 6) + " s";
+    log(msg);
+    if (!opt_.out_dir.empty()) {
+        record_dry_joints();
+        if (last_row_step_ != steps_) append_history(history_row(energies()));
+        write_snapshot();
+        flush_files();
+        write_summary("interrupted", msg);
+    }
+}
+
 void Simulation::run() {
+    const StopHandlers stop_handlers;
     log("fdem " FDEM_VERSION ": case '" + spec_.name + "' (" + spec_.file + ")");
     log("mesh: " + std::to_string(model_.n_triangles()) + " triangles, " + std::to_string(model_.n_nodes()) + " nodes");
     log("time step: " + sci(dt_) + " s = " + (spec_.dt_override ? std::string("fixed by numerics.dt") : sci(spec_.safety) + " x stable limit") +
@@ -1021,7 +1067,10 @@ void Simulation::run() {
     if (!opt_.out_dir.empty()) write_summary("running", "");
     for (std::size_t s = 0; s < spec_.stages.size(); ++s) {
         begin_stage(static_cast<int>(s));
-        while (!stage_finished()) step();
+        while (!stage_finished()) {
+            step();
+            if (g_stop_signal) return interrupt(g_stop_signal);
+        }
         if (opt_.progress) progress_line(true);
         const StageResult& r = stage_results_.back();
         std::string how = r.ended_by;
@@ -1211,6 +1260,11 @@ int run_case(const std::string& case_file, const std::vector<std::string>& overr
     Model model = build_scene(spec);
     Simulation sim(spec, std::move(model), opt);
     sim.run();
+    if (sim.interrupted_signal()) {
+        std::cout << "run folder: " << opt.out_dir << std::endl;
+        std::cerr << "run interrupted: outputs written with status \"interrupted\" in " << opt.out_dir << std::endl;
+        return 128 + sim.interrupted_signal();
+    }
     // The result against the reference, on stdout.
     if (spec.reference.present) {
         const ReferenceSpec& ref = spec.reference;

@@ -70,6 +70,7 @@ public:
     void energy_every_step(bool on) { energy_every_step_ = on; }
     const std::vector<StageResult>& stage_results() const { return stage_results_; }
     double wall_time() const { return wall_time_; }
+    int interrupted_signal() const { return interrupted_signal_; }  // 0, or the signal that stopped run()
     const std::vector<double>& reactions() const { return reaction_; }
     const Interactions& interactions() const { return inter_; }
     // Largest |value| and final value of each monitor over the history rows written.
@@ -106,6 +107,8 @@ private:
     double protocol_integral(const ActiveSupport& s, double tau) const;
     double protocol_position(const ActiveSupport& s, double tau) const;
     void fail(const std::string& what);
+    void interrupt(int sig);
+    int interrupted_signal_ = 0;
     void check_energy(const Energies& e);
     std::string crushed_broken_note() const;  // "" or why contact may push crushed, broken joints apart
     void write_history_row();

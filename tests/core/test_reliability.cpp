@@ -166,3 +166,37 @@ TEST_CASE("absurd geometry, denormal and huge values stop fdem check with exit c
     INFO(r.err);
     CHECK(r.err.find("max_triangles") == std::string::npos);
 }
+
+TEST_CASE("SIGTERM and SIGINT finish the step and write history, snapshot and summary with status interrupted", "[engine]") {
+    for (const char* sig : {"TERM", "INT"}) {
+        const auto dir = testing::tmp_dir(std::string("reliab_signal_") + sig);
+        const auto run = dir / "run";
+        // Started in the background; the signal is sent once history.csv holds two rows (the handlers are installed
+        // before the first row), or after 30 s at most.
+        const std::string script = std::string("\"") + FDEM_BIN + "\" run \"" + FDEM_CASES_DIR +
+                                   "/elastic/cantilever.toml\" --threads 1 --quiet --set output.history_interval=1e-4 --out \"" +
+                                   run.string() + "\" >/dev/null 2>\"" + (dir / "err.txt").string() + "\" & p=$!; i=0; " +
+                                   "while [ \"$(cat \"" + (run / "history.csv").string() + "\" 2>/dev/null | wc -l)\" -lt 3 ] && [ $i -lt 300 ]; " +
+                                   "do sleep 0.1; i=$((i+1)); done; kill -" + sig + " $p; wait $p; echo $? >\"" +
+                                   (dir / "code.txt").string() + "\"";
+        const std::string cmd = "sh -c '" + script + "'";
+        REQUIRE(std::system(cmd.c_str()) == 0);
+        const int code = std::stoi(testing::read_text(dir / "code.txt"));
+        const std::string err = testing::read_text(dir / "err.txt");
+        INFO("SIG" << sig << ": exit " << code << ", " << err);
+        CHECK(code == (std::string(sig) == "TERM" ? 143 : 130));  // 128 + signal number
+        CHECK(err.find("interrupted") != std::string::npos);
+        CHECK(testing::read_text(run / "summary.json").find("\"interrupted\"") != std::string::npos);
+        CHECK(testing::read_text(run / "run.log").find("interrupted by SIG") != std::string::npos);
+        CHECK(std::filesystem::exists(run / "snapshots"));
+        CHECK(!std::filesystem::is_empty(run / "snapshots"));
+        // Every history row is whole: the last one ends with a newline and has as many fields as the header.
+        const std::string h = testing::read_text(run / "history.csv");
+        REQUIRE(!h.empty());
+        CHECK(h.back() == '\n');
+        const auto header_end = h.find('\n');
+        const auto last_begin = h.rfind('\n', h.size() - 2) + 1;
+        const std::string header = h.substr(0, header_end), last = h.substr(last_begin);
+        CHECK(std::count(header.begin(), header.end(), ',') == std::count(last.begin(), last.end(), ','));
+    }
+}
