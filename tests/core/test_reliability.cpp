@@ -173,11 +173,13 @@ TEST_CASE("SIGTERM and SIGINT finish the step and write history, snapshot and su
         const auto run = dir / "run";
         // Started in the background; the signal is sent once history.csv holds two rows (the handlers are installed
         // before the first row), or after 30 s at most.
-        const std::string script = std::string("\"") + FDEM_BIN + "\" run \"" + FDEM_CASES_DIR +
+        // Without a wait policy in the environment fdem re-executes itself to set one (fdem/omp_env.hpp): the
+        // process must still be named fdem (/proc/PID/comm), not exe.
+        const std::string script = std::string("env -u OMP_WAIT_POLICY -u GOMP_SPINCOUNT -u FDEM_NO_REEXEC \"") + FDEM_BIN + "\" run \"" + FDEM_CASES_DIR +
                                    "/elastic/cantilever.toml\" --threads 1 --quiet --set output.history_interval=1e-4 --out \"" +
                                    run.string() + "\" >/dev/null 2>\"" + (dir / "err.txt").string() + "\" & p=$!; i=0; " +
                                    "while [ \"$(cat \"" + (run / "history.csv").string() + "\" 2>/dev/null | wc -l)\" -lt 3 ] && [ $i -lt 300 ]; " +
-                                   "do sleep 0.1; i=$((i+1)); done; kill -" + sig + " $p; wait $p; echo $? >\"" +
+                                   "do sleep 0.1; i=$((i+1)); done; cat /proc/$p/comm >\"" + (dir / "comm.txt").string() + "\"; kill -" + sig + " $p; wait $p; echo $? >\"" +
                                    (dir / "code.txt").string() + "\"";
         const std::string cmd = "sh -c '" + script + "'";
         REQUIRE(std::system(cmd.c_str()) == 0);
@@ -186,6 +188,7 @@ TEST_CASE("SIGTERM and SIGINT finish the step and write history, snapshot and su
         INFO("SIG" << sig << ": exit " << code << ", " << err);
         CHECK(code == (std::string(sig) == "TERM" ? 143 : 130));  // 128 + signal number
         CHECK(err.find("interrupted") != std::string::npos);
+        CHECK(testing::read_text(dir / "comm.txt") == "fdem\n");
         CHECK(testing::read_text(run / "summary.json").find("\"interrupted\"") != std::string::npos);
         CHECK(testing::read_text(run / "run.log").find("interrupted by SIG") != std::string::npos);
         CHECK(std::filesystem::exists(run / "snapshots"));
