@@ -403,11 +403,42 @@ LoadSpec read_load(Ctx& ctx, const toml::table& t, const std::string& path) {
     return l;
 }
 
+constexpr double kMinLength = 1e-6, kMaxLength = 1e4;  // m: bounds of every generated geometry's lengths
+
+// Expected triangle count of a generated wall before meshing: area / (sqrt(3)/4 h^2) for each part meshed at size
+// h (equilateral triangles of edge h), and at least 2 triangles per unit. 0 when the sizes are not known here.
+double wall_triangle_estimate(const mesh::WallSpec& w) {
+    const double per = 4.0 / std::sqrt(3.0);
+    const double H = w.height > 0 ? w.height : w.courses * (w.unit_height + w.joint_thickness);
+    const double L = w.length;
+    if (!(L > 0) || !(H > 0) || !(w.mesh_size > 0)) return 0;
+    double n = per * L * H / (w.mesh_size * w.mesh_size);
+    if (w.unit_length > 0 && w.unit_height > 0) n = std::max(n, 2.0 * (L / w.unit_length + 1) * (H / w.unit_height + 1));
+    const double hb = w.mesh_size_base > 0 ? w.mesh_size_base : w.mesh_size;
+    const double hm = w.mesh_size_beam > 0 ? w.mesh_size_beam : w.mesh_size;
+    if (w.base == "slab") n += per * (L + 2 * w.base_overhang) * w.base_height / (hb * hb);
+    n += per * (L + 2 * w.beam_overhang) * w.beam_height / (hm * hm);
+    for (const auto& rf : w.refine)
+        if (rf.size > 0) n += per * rf.width * rf.height / (rf.size * rf.size);
+    return n;
+}
+
+// [geometry] max_triangles: the size guard of generated meshes (rectangle, wall), checked before meshing.
+void check_triangle_count(Ctx& ctx, Reader& r, int line, double expected) {
+    const double limit = r.number("max_triangles", false, "a triangle limit >= 1 for generated meshes",
+                                  [](double v) { return v >= 1; }).value_or(2e6);
+    if (!(expected <= limit))
+        ctx.error("geometry.max_triangles", line, "the generated mesh would have about " + fmt_num(expected) +
+                  " triangles, more than the limit of " + fmt_num(limit) +
+                  "; expected a coarser geometry.mesh_size (or larger units), or raise geometry.max_triangles");
+}
+
 // [geometry] type = "wall": keys named after mesh::WallSpec's fields; the generator's own check() runs later,
 // with the mesh, and its messages are reported against the [geometry] table.
 void read_wall(Ctx& ctx, Reader& r, mesh::WallSpec& w) {
-    auto nonneg = [](double v) { return v >= 0; };
-    auto positive = [](double v) { return v > 0; };
+    // Lengths are bounded to [1e-6, 1e4] m: beyond them Gmsh aborts or hangs (issue 26), and no masonry wall needs them.
+    auto nonneg = [](double v) { return v == 0 || (v >= kMinLength && v <= kMaxLength); };
+    auto positive = [](double v) { return v >= kMinLength && v <= kMaxLength; };
     w.length = r.number("length", false, "a wall length > 0 in m", positive).value_or(0);
     w.height = r.number("height", false, "a wall height > 0 in m", positive).value_or(0);
     w.courses = r.integer("courses", false, "a whole number of courses >= 1", [](long long v) { return v >= 1; }).value_or(0);
@@ -432,14 +463,14 @@ void read_wall(Ctx& ctx, Reader& r, mesh::WallSpec& w) {
         if (!ok) ctx.error(r.key_path("stones"), line_of(n), "expected an array of polygons, each at least 3 [x, y] points in m");
     }
     w.joint = r.string("joint", false, "the joint type", {"dry", "mortar"}).value_or("dry");
-    w.joint_thickness = r.number("joint_thickness", false, "a mortar joint thickness >= 0 in m", nonneg).value_or(0);
+    w.joint_thickness = r.number("joint_thickness", false, "a mortar joint thickness of 0 or in [1e-6, 1e4] m", nonneg).value_or(0);
     w.unit_cracks = r.string("unit_cracks", false, "where crackable units may crack",
                              {"anywhere", "middle"}).value_or("anywhere");
-    w.beam_height = r.number("beam_height", false, "a beam depth >= 0 in m", nonneg).value_or(0);
-    w.beam_overhang = r.number("beam_overhang", false, "a beam overhang >= 0 in m", nonneg).value_or(0);
+    w.beam_height = r.number("beam_height", false, "a beam depth of 0 or in [1e-6, 1e4] m", nonneg).value_or(0);
+    w.beam_overhang = r.number("beam_overhang", false, "a beam overhang of 0 or in [1e-6, 1e4] m", nonneg).value_or(0);
     w.base = r.string("base", false, "the base", {"none", "fixed", "slab"}).value_or("none");
-    w.base_height = r.number("base_height", false, "a base depth >= 0 in m", nonneg).value_or(0);
-    w.base_overhang = r.number("base_overhang", false, "a base overhang >= 0 in m", nonneg).value_or(0);
+    w.base_height = r.number("base_height", false, "a base depth of 0 or in [1e-6, 1e4] m", nonneg).value_or(0);
+    w.base_overhang = r.number("base_overhang", false, "a base overhang of 0 or in [1e-6, 1e4] m", nonneg).value_or(0);
     w.mesh_size = r.number("mesh_size", true, "a mesh size > 0 in m", positive).value_or(1);
     w.mesh_size_beam = r.number("mesh_size_beam", false, "a mesh size > 0 in m", positive).value_or(0);
     w.mesh_size_base = r.number("mesh_size_base", false, "a mesh size > 0 in m", positive).value_or(0);
@@ -552,7 +583,8 @@ CaseSpec load_case(const std::string& path, const std::vector<std::string>& over
         Reader r(ctx, *t, "case");
         spec.name = r.string("name", true, "a case name").value_or("");
         spec.description = r.string("description", false, "a text").value_or("");
-        spec.thickness = r.number("thickness", true, "an out-of-plane thickness > 0 in m", positive).value_or(1.0);
+        spec.thickness = r.number("thickness", true, "an out-of-plane thickness in [1e-6, 1e4] m",
+                                  [](double v) { return v >= kMinLength && v <= kMaxLength; }).value_or(1.0);
         spec.plane = r.string("plane", false, "\"stress\" or \"strain\"", {"stress", "strain"}).value_or("stress") == "strain"
                          ? Plane::strain
                          : Plane::stress;
@@ -570,6 +602,7 @@ CaseSpec load_case(const std::string& path, const std::vector<std::string>& over
             g.width = r.number("width", true, "a width > 0 in m", positive).value_or(1);
             g.height = r.number("height", true, "a height > 0 in m", positive).value_or(1);
             g.mesh_size = r.number("mesh_size", true, "a mesh size > 0 in m", positive).value_or(1);
+            check_triangle_count(ctx, r, g.line, 2.31 * g.width * g.height / (g.mesh_size * g.mesh_size));
             if (g.mesh_size > 0 && std::min(g.width, g.height) / g.mesh_size > 5000)
                 ctx.error("geometry.mesh_size", g.line, "a mesh size of " + fmt_num(g.mesh_size) +
                           " m gives more than 5000 elements across the rectangle; expected a coarser size");
@@ -584,6 +617,7 @@ CaseSpec load_case(const std::string& path, const std::vector<std::string>& over
                 g.size_factor = r.number("size_factor", false, "a factor > 0 on the script's mesh sizes", positive).value_or(1.0);
         } else if (g.type == "wall") {
             read_wall(ctx, r, g.wall);
+            check_triangle_count(ctx, r, g.line, wall_triangle_estimate(g.wall));
         }
         g.min_angle = r.number("min_angle", false, "a minimum triangle angle in [0, 60) deg (sliver check)",
                                [](double v) { return v >= 0 && v < 60; }).value_or(10.0);
@@ -612,7 +646,7 @@ CaseSpec load_case(const std::string& path, const std::vector<std::string>& over
             m.line = r.line();
             m.E = r.number("E", true, "Young's modulus > 0 in Pa", positive).value_or(1);
             m.nu = r.number("nu", true, "Poisson's ratio in (-1, 0.5)", [](double x) { return x > -1 && x < 0.5; }).value_or(0);
-            m.density = r.number("density", true, "a density > 0 in kg/m^3", positive).value_or(1);
+            m.density = r.number("density", true, "a density in [1e-3, 1e6] kg/m^3", [](double v) { return v >= 1e-3 && v <= 1e6; }).value_or(1);
             m.viscous_damping = r.number("viscous_damping", false, "a fraction of critical damping in [0, 1]",
                                          [](double x) { return x >= 0 && x <= 1; }).value_or(0);
             if (const toml::table* ft = r.table("fracture", false, "a [materials.NAME.fracture] table")) {
@@ -755,8 +789,8 @@ CaseSpec load_case(const std::string& path, const std::vector<std::string>& over
         spec.safety = r.number("safety", false, "a time-step safety factor in (0, 4] (above 1 the run is unstable)",
                                [](double v) { return v > 0 && v <= 4; }).value_or(0.8);
         if (auto dt = r.number("dt", false, "a fixed time step > 0 in s", positive)) spec.dt_override = dt;
-        spec.mass_scale = r.number("mass_scale", false, "an inertial mass multiplier >= 1 (quasi-static density scaling)",
-                                   [](double v) { return v >= 1; }).value_or(1.0);
+        spec.mass_scale = r.number("mass_scale", false, "an inertial mass multiplier in [1, 1e12] (quasi-static density scaling)",
+                                   [](double v) { return v >= 1 && v <= 1e12; }).value_or(1.0);
         r.finish();
     }
 

@@ -3,6 +3,7 @@
 
 #include <unistd.h>
 
+#include <cstddef>
 #include <cstdlib>
 
 namespace fdem {
@@ -20,6 +21,14 @@ inline void ensure_wait_policy(char** argv) {
     if (std::getenv("OMP_WAIT_POLICY") || std::getenv("GOMP_SPINCOUNT") || std::getenv("FDEM_NO_REEXEC")) return;
     setenv("GOMP_SPINCOUNT", "3000", 1);
     setenv("FDEM_NO_REEXEC", "1", 1);
+    // Exec the executable's real path, not /proc/self/exe: the kernel names the process after the path's last
+    // component, so it stays `fdem` for ps, pgrep, pkill and job monitors (issue 26); argv[0] is passed on as given.
+    char path[4096];
+    const ssize_t n = readlink("/proc/self/exe", path, sizeof path - 1);
+    if (n > 0 && static_cast<std::size_t>(n) < sizeof path - 1) {
+        path[n] = '\0';
+        execv(path, argv);
+    }
     execv("/proc/self/exe", argv);
     // exec failed: carry on with the default policy.
 }

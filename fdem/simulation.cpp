@@ -19,6 +19,8 @@
 #include <omp.h>
 #include <unistd.h>
 
+#include <csignal>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -26,6 +28,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <iostream>
+#include <limits>
 #include <map>
 #include <set>
 #include <sstream>
@@ -154,6 +157,14 @@ Simulation::Simulation(CaseSpec spec, Model model, RunOptions options)
     block_bad_.assign(nb, -1);
     mon_ext_.assign(spec_.monitors.size(), {0, 0, 0});
     compute_dt();
+    // Derived quantities must be finite (issue 26: a huge mass_scale gave dt = 1e148 s, NaN energies and "completed").
+    for (int k = 0; k < nn; ++k)
+        if (!(std::isfinite(model_.mass[k]) && model_.mass[k] > 0) && !model_.mass.empty())
+            throw InputError(spec_.file + ": node " + std::to_string(k) + " has a mass of " + sci(model_.mass[k]) +
+                             " kg: expected a finite mass > 0 (check case.thickness, materials.*.density, numerics.mass_scale)");
+    if (!(std::isfinite(dt_) && dt_ > 0 && dt_ < 1e3))
+        throw InputError(spec_.file + ": the time step comes out as " + sci(dt_) +
+                         " s: expected a finite step > 0 (check materials.*.E and density, case.thickness, numerics.mass_scale and numerics.dt)");
     wall_start_ = wall_clock();
     if (!opt_.out_dir.empty()) {
         std::filesystem::create_directories(std::filesystem::path(opt_.out_dir) / "snapshots");
@@ -729,12 +740,35 @@ void Simulation::step() {
 
 // A run whose energy grows with no work put in has gone unstable even if no triangle has inverted yet
 // (e.g. contact springs stepped beyond their limit, which damping can hide for a while).
+// Tolerance: 10 |W_ext| + 1e-9 J, plus the round-off of the energies summed: W_ext and the dissipations are running
+// sums over the steps (each addition rounds by eps relative) and the held energies are sums over the elements, so
+// their round-off is bounded by about (steps + 16) eps times the sum of the magnitudes.
+// Before it stops the run, the row of the failing step is written to history.csv.
 void Simulation::check_energy(const Energies& e) {
     const double held = e.kinetic + e.elastic + e.joint + e.contact + e.damping + e.viscous + e.fracture + e.friction;
-    if (held > 10 * std::abs(e.external) + 1e-9) {
+    double mag = std::abs(e.external);
+    for (double v : {e.kinetic, e.elastic, e.joint, e.contact, e.damping, e.viscous, e.fracture, e.friction}) mag += std::abs(v);
+    const double roundoff = (static_cast<double>(steps_) + 16.0) * std::numeric_limits<double>::epsilon() * mag;
+    if (held > 10 * std::abs(e.external) + 1e-9 + roundoff) {
+        if (!opt_.out_dir.empty() && last_row_step_ != steps_) append_history(history_row(e));
+        // Name the largest holder: it points at the part that went unstable.
+        const std::pair<const char*, double> parts[] = {{"kinetic", e.kinetic}, {"elastic (triangles)", e.elastic},
+                                                        {"cohesive joints", e.joint}, {"contact", e.contact}};
+        std::size_t big = 0;
+        for (std::size_t i = 1; i < 4; ++i)
+            if (parts[i].second > parts[big].second) big = i;
+        std::string cause = "most of it " + std::string(parts[big].first) + " energy (" + sci(parts[big].second) + " J)";
+        if (!spec_.dt_override && spec_.safety > 1)
+            cause += "; numerics.safety = " + sci(spec_.safety) + " > 1 puts the time step beyond the stability limit: reduce numerics.safety below 1";
+        else if (spec_.dt_override)
+            cause += "; numerics.dt fixes the step at " + sci(dt_) + " s against a stable limit of " + sci(dt_limit_) + " s";
+        else if (big == 3)
+            cause += "; contact springs beyond their stable step: reduce numerics.safety or the contact penalty";
+        else
+            cause += "; unstable; reduce numerics.safety";
         const std::string crushed = crushed_broken_note();
         fail("energy grew without work: " + sci(held) + " J held or dissipated against " + sci(e.external) +
-             " J put in (" + (crushed.empty() ? "" : crushed + "; otherwise ") + "unstable; reduce numerics.safety)");
+             " J put in (" + (crushed.empty() ? "" : crushed + "; otherwise ") + cause + ")");
     }
 }
 
@@ -847,7 +881,11 @@ Energies Simulation::energies() const {
 
 void Simulation::write_history_row() {
     const Energies e = energies();
+    append_history(history_row(e));
     if (steps_ > 0) check_energy(e);
+}
+
+std::string Simulation::history_row(const Energies& e) {
     // The row describes t^n, the time of the last force evaluation (see monitor_value).
     std::string row = format_double(steps_ > 0 ? time_ - dt_ : time_) + "," + std::to_string(steps_) + "," + std::to_string(stage_ + 1);
     for (std::size_t i = 0; i < spec_.monitors.size(); ++i) {
@@ -865,7 +903,27 @@ void Simulation::write_history_row() {
             for (auto mode : {fracture::FractureMode::mode_I, fracture::FractureMode::mode_II, fracture::FractureMode::mixed})
                 row += "," + std::to_string(c->of(cls, mode));
     row += "\n";
-    history_ += row;
+    return row;
+}
+
+// history.csv grows by one appended, flushed row at a time (a killed run loses at most the row being written);
+// the file is created with its header on the first row.
+void Simulation::append_history(const std::string& row) {
+    last_row_step_ = steps_;
+    if (opt_.out_dir.empty()) return;
+    open_history();
+    history_out_ << row;
+    history_out_.flush();
+}
+
+void Simulation::open_history() {
+    if (opt_.out_dir.empty() || history_out_.is_open()) return;
+    const std::string path = (std::filesystem::path(opt_.out_dir) / "history.csv").string();
+    history_out_.open(path, std::ios::binary | std::ios::trunc);
+    if (!history_out_) throw RunError("cannot write " + path);
+    history_out_ << history_;
+    history_out_.flush();
+    history_.clear();
 }
 
 void Simulation::write_snapshot() {
@@ -931,7 +989,7 @@ void Simulation::flush_files() {
     if (opt_.out_dir.empty()) return;
     last_flush_ = wall_clock();
     const std::filesystem::path dir(opt_.out_dir);
-    write_file_atomic((dir / "history.csv").string(), history_);
+    open_history();
     if (inter_.has_joints() || inter_.has_dry_joints()) {
         std::ostringstream header;
         fracture::write_cracks_csv_header(header);
@@ -999,7 +1057,51 @@ bool Simulation::history_due(double t, long step) const {
     return hi > 0 ? t + 1e-9 * dt_ >= next_history_ : (step % history_every_steps_) == 0;
 }
 
+namespace {
+// SIGINT/SIGTERM: the handler only records the signal; the run loop finishes the step, writes its outputs with
+// status "interrupted" and run_case returns 128 + the signal number (130, 143), the shell's convention.
+volatile std::sig_atomic_t g_stop_signal = 0;
+extern "C" void fdem_stop_handler(int sig) { g_stop_signal = sig; }
+
+struct StopHandlers {
+    struct sigaction old_int {}, old_term {};
+    StopHandlers() {
+        g_stop_signal = 0;
+        struct sigaction sa {};
+        sa.sa_handler = fdem_stop_handler;
+        sigemptyset(&sa.sa_mask);
+        sigaction(SIGINT, &sa, &old_int);
+        sigaction(SIGTERM, &sa, &old_term);
+    }
+    ~StopHandlers() {
+        sigaction(SIGINT, &old_int, nullptr);
+        sigaction(SIGTERM, &old_term, nullptr);
+    }
+    StopHandlers(const StopHandlers&) = delete;
+    StopHandlers& operator=(const StopHandlers&) = delete;
+};
+}  // namespace
+
+// A stop asked for by a signal: the step is finished; history row, snapshot, files and summary are written.
+void Simulation::interrupt(int sig) {
+    interrupted_signal_ = sig;
+    wall_time_ = wall_clock() - wall_start_;
+    if (opt_.progress) progress_line(true);
+    const std::string msg = std::string("interrupted by ") + (sig == SIGINT ? "SIGINT" : sig == SIGTERM ? "SIGTERM" : "a signal") +
+                            " in stage " + std::to_string(stage_ + 1) + " '" + spec_.stages[stage_].name + "' at step " +
+                            std::to_string(steps_) + ", t = " + sci(time_, 6) + " s";
+    log(msg);
+    if (!opt_.out_dir.empty()) {
+        record_dry_joints();
+        if (last_row_step_ != steps_) append_history(history_row(energies()));
+        write_snapshot();
+        flush_files();
+        write_summary("interrupted", msg);
+    }
+}
+
 void Simulation::run() {
+    const StopHandlers stop_handlers;
     log("fdem " FDEM_VERSION ": case '" + spec_.name + "' (" + spec_.file + ")");
     log("mesh: " + std::to_string(model_.n_triangles()) + " triangles, " + std::to_string(model_.n_nodes()) + " nodes");
     log("time step: " + sci(dt_) + " s = " + (spec_.dt_override ? std::string("fixed by numerics.dt") : sci(spec_.safety) + " x stable limit") +
@@ -1022,7 +1124,10 @@ void Simulation::run() {
     if (!opt_.out_dir.empty()) write_summary("running", "");
     for (std::size_t s = 0; s < spec_.stages.size(); ++s) {
         begin_stage(static_cast<int>(s));
-        while (!stage_finished()) step();
+        while (!stage_finished()) {
+            step();
+            if (g_stop_signal) return interrupt(g_stop_signal);
+        }
         if (opt_.progress) progress_line(true);
         const StageResult& r = stage_results_.back();
         std::string how = r.ended_by;
@@ -1031,7 +1136,7 @@ void Simulation::run() {
             std::to_string(r.steps) + " steps");
         if (!opt_.out_dir.empty()) {
             record_dry_joints();
-            if (history_.empty() || history_.compare(history_.size() - 1, 1, "\n") == 0) write_history_row();
+            write_history_row();
             write_snapshot();
             flush_files();
         }
@@ -1215,6 +1320,11 @@ int run_case(const std::string& case_file, const std::vector<std::string>& overr
     Model model = build_scene(spec);
     Simulation sim(spec, std::move(model), opt);
     sim.run();
+    if (sim.interrupted_signal()) {
+        std::cout << "run folder: " << opt.out_dir << std::endl;
+        std::cerr << "run interrupted: outputs written with status \"interrupted\" in " << opt.out_dir << std::endl;
+        return 128 + sim.interrupted_signal();
+    }
     // The result against the reference, on stdout.
     if (spec.reference.present) {
         const ReferenceSpec& ref = spec.reference;

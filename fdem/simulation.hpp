@@ -4,6 +4,7 @@
 
 #include <array>
 #include <cstdint>
+#include <fstream>
 #include <string>
 #include <vector>
 
@@ -70,6 +71,7 @@ public:
     void energy_every_step(bool on) { energy_every_step_ = on; }
     const std::vector<StageResult>& stage_results() const { return stage_results_; }
     double wall_time() const { return wall_time_; }
+    int interrupted_signal() const { return interrupted_signal_; }  // 0, or the signal that stopped run()
     const std::vector<double>& reactions() const { return reaction_; }
     const Interactions& interactions() const { return inter_; }
     // Largest |value| and final value of each monitor over the history rows written.
@@ -110,9 +112,14 @@ private:
     double protocol_integral(const ActiveSupport& s, double tau) const;
     double protocol_position(const ActiveSupport& s, double tau) const;
     void fail(const std::string& what);
+    void interrupt(int sig);
+    int interrupted_signal_ = 0;
     void check_energy(const Energies& e);
     std::string crushed_broken_note() const;  // "" or why contact may push crushed, broken joints apart
     void write_history_row();
+    void append_history(const std::string& row);  // append to history.csv and flush (header on first call)
+    std::string history_row(const Energies& e);
+    void open_history();  // create history.csv with its header (once)
     double control_displacement() const;  // m (or the control monitor's unit): the curve's x monitor, 0 without one
     void record_dry_joints();
     void flush_files();
@@ -182,7 +189,9 @@ private:
     double stage_ramp_end_ = 0;
 
     // outputs
-    std::string history_;
+    std::string history_;          // header, until append_history writes it
+    std::ofstream history_out_;    // history.csv, opened by the first append_history
+    long last_row_step_ = -1;      // step of the last row written
     std::vector<std::array<double, 3>> mon_ext_;
     bool mon_ext_init_ = false;
     double next_history_ = 0, next_snapshot_ = 0;
