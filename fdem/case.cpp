@@ -646,7 +646,7 @@ CaseSpec load_case(const std::string& path, const std::vector<std::string>& over
             m.line = r.line();
             m.E = r.number("E", true, "Young's modulus > 0 in Pa", positive).value_or(1);
             m.nu = r.number("nu", true, "Poisson's ratio in (-1, 0.5)", [](double x) { return x > -1 && x < 0.5; }).value_or(0);
-            m.density = r.number("density", true, "a density in [1e-3, 1e6] kg/m^3", [](double v) { return v >= 1e-3 && v <= 1e6; }).value_or(1);
+            m.density = r.number("density", true, "a density in [1e-3, 1e6] kg/m^3", [](double rho) { return rho >= 1e-3 && rho <= 1e6; }).value_or(1);
             m.viscous_damping = r.number("viscous_damping", false, "a fraction of critical damping in [0, 1]",
                                          [](double x) { return x >= 0 && x <= 1; }).value_or(0);
             if (const toml::table* ft = r.table("fracture", false, "a [materials.NAME.fracture] table")) {
