@@ -58,6 +58,19 @@ Mesh extract_current_model() {
     };
     std::vector<RawTri> raw;
     for (const auto& [dim, tag] : surfaces) {
+        // Only 3-node triangles are used: any other 2D element (quadrangles of a recombined surface, 6-node
+        // second-order triangles) would be dropped silently, so it is refused with the surface that holds it.
+        std::vector<int> types;
+        gmsh::model::mesh::getElementTypes(types, 2, tag);
+        for (int type : types) {
+            if (type == 2) continue;
+            std::string ename;
+            int edim = 0, order = 0, nn = 0, nprim = 0;
+            std::vector<double> local;
+            gmsh::model::mesh::getElementProperties(type, ename, edim, order, nn, local, nprim);
+            throw MeshError("surface " + std::to_string(tag) + " holds '" + ename + "' elements (" + std::to_string(nn) +
+                            " nodes); only 3-node triangles are supported: do not recombine, use Mesh.ElementOrder = 1");
+        }
         std::vector<std::size_t> etags, ntags;
         gmsh::model::mesh::getElementsByType(2, etags, ntags, tag);
         for (std::size_t e = 0; e < etags.size(); ++e)
@@ -82,6 +95,20 @@ Mesh extract_current_model() {
         for (int ent : ents) entity_region.emplace(ent, region);  // first group wins
     }
     const bool has_regions = !m.regions.empty();
+    if (has_regions) {
+        // With physical groups, a meshed surface outside every group would be dropped silently: refuse it.
+        std::string orphans;
+        for (const auto& [dim, tag] : surfaces) {
+            std::vector<int> types;
+            gmsh::model::mesh::getElementTypes(types, 2, tag);
+            if (!types.empty() && entity_region.find(tag) == entity_region.end())
+                orphans += (orphans.empty() ? "" : ", ") + std::to_string(tag);
+            (void)dim;
+        }
+        if (!orphans.empty())
+            throw MeshError("surface(s) " + orphans +
+                            " hold triangles but belong to no 2D physical group; add them to a Physical Surface");
+    }
     if (!has_regions) m.regions.push_back("body");
 
     // Node coordinates by tag.

@@ -190,3 +190,33 @@ TEST_CASE("units touching without shared nodes: counted for dry pairs, an error 
     o.interfaces.clear();
     CHECK_THROWS_WITH(build_topology(m, o), Catch::Contains("without sharing nodes") && Catch::Contains("no interface rule"));
 }
+
+namespace {
+std::string write_geo(const std::string& name, const std::string& extra) {
+    const std::string path = tmp_dir() + "/" + name;
+    std::ofstream f(path);
+    f << "Point(1) = {0, 0, 0, 0.5};\nPoint(2) = {1, 0, 0, 0.5};\nPoint(3) = {1, 1, 0, 0.5};\nPoint(4) = {0, 1, 0, 0.5};\n"
+         "Point(5) = {0, 2, 0, 0.5};\nPoint(6) = {1, 2, 0, 0.5};\n"
+         "Line(1) = {1, 2};\nLine(2) = {2, 3};\nLine(3) = {3, 4};\nLine(4) = {4, 1};\n"
+         "Line(5) = {3, 6};\nLine(6) = {6, 5};\nLine(7) = {5, 4};\n"
+         "Curve Loop(1) = {1, 2, 3, 4};\nPlane Surface(1) = {1};\nCurve Loop(2) = {-3, 5, 6, 7};\nPlane Surface(2) = {2};\n"
+      << extra;
+    return path;
+}
+}  // namespace
+
+TEST_CASE("elements other than 3-node triangles and surfaces outside every group are refused, not dropped", "[unit]") {
+    // Quadrangles of a recombined surface: refused with the surface and the element name.
+    const std::string quads = write_geo("quads.geo", "Recombine Surface{2};\nPhysical Surface(\"all\") = {1, 2};\n");
+    CHECK_THROWS_WITH(mesh_geo_file(quads), Catch::Contains("quads.geo") && Catch::Contains("surface 2") &&
+                                                Catch::Contains("Quadrilateral"));
+    // Second-order triangles.
+    const std::string p2 = write_geo("p2.geo", "Mesh.ElementOrder = 2;\nPhysical Surface(\"all\") = {1, 2};\n");
+    CHECK_THROWS_WITH(mesh_geo_file(p2), Catch::Contains("p2.geo") && Catch::Contains("6 nodes"));
+    // Surface 2 meshed but in no physical group, while surface 1 is.
+    const std::string orphan = write_geo("orphan.geo", "Physical Surface(\"lower\") = {1};\n");
+    CHECK_THROWS_WITH(mesh_geo_file(orphan), Catch::Contains("orphan.geo") && Catch::Contains("surface(s) 2"));
+    // The same model with both surfaces grouped reads.
+    const std::string ok = write_geo("ok.geo", "Physical Surface(\"all\") = {1, 2};\n");
+    CHECK(mesh_geo_file(ok).n_triangles() > 0);
+}
