@@ -32,8 +32,11 @@
 #include <vector>
 
 #include "block_sim.hpp"
+#include "stick_slip_exact.hpp"
 
 using contact_test::BlockSim;
+using contact_test::exact_stops;
+using contact_test::Stop;
 using fdem::contact::ContactLaw;
 using fdem::contact::ContactLaws;
 
@@ -113,50 +116,6 @@ double held_energy(BlockSim& s) {
            s.cs->dashpot_dissipation();
 }
 
-struct Stop {
-    double t, x;
-};
-// The rigid block's stops under F0 sin(omega t) (CLOSED FORMS, harmonic), up to t_end.
-std::vector<Stop> exact_stops(double f0_per_m, double omega, double t_end) {
-    const double fs = kMu * kG;  // m/s^2
-    std::vector<Stop> stops;
-    double t0 = 0.0, x0 = 0.0;
-    const double h = 1e-5;
-    for (;;) {
-        // stick until |F| > mu m g
-        double t = t0;
-        while (t < t_end && std::fabs(f0_per_m * std::sin(omega * t)) <= fs) t += h;
-        if (t >= t_end) break;
-        double lo = t - h, hi = t;  // refine the start
-        for (int i = 0; i < 60; ++i) {
-            const double mid = 0.5 * (lo + hi);
-            (std::fabs(f0_per_m * std::sin(omega * mid)) <= fs ? lo : hi) = mid;
-        }
-        const double ts = hi;
-        const double s = std::sin(omega * ts) > 0 ? 1.0 : -1.0;
-        auto v = [&](double tt) {
-            return f0_per_m / omega * (std::cos(omega * ts) - std::cos(omega * tt)) - s * fs * (tt - ts);
-        };
-        auto x = [&](double tt) {
-            const double d = tt - ts;
-            return x0 + f0_per_m / omega * (d * std::cos(omega * ts) - (std::sin(omega * tt) - std::sin(omega * ts)) / omega) -
-                   0.5 * s * fs * d * d;
-        };
-        double te = ts + h;
-        while (te < t_end && v(te) * s > 0) te += h;
-        if (te >= t_end) break;
-        lo = te - h, hi = te;
-        for (int i = 0; i < 60; ++i) {
-            const double mid = 0.5 * (lo + hi);
-            (v(mid) * s > 0 ? lo : hi) = mid;
-        }
-        t0 = hi;
-        x0 = x(hi);
-        stops.push_back({t0, x0});
-    }
-    return stops;
-}
-
 }  // namespace
 
 TEST_CASE("friction: a sliding block carries mu N within 0.1 % with contact dashpots, pushed at the top, middle or "
@@ -202,7 +161,7 @@ TEST_CASE("friction: stick-slip under a harmonic force: every stop within 1 % of
     BlockSim& s = sc.s;
     const double omega = 2 * M_PI * 2.0;        // rad/s
     const double f0 = 1.5 * kMu * kG * sc.mass;  // N
-    const std::vector<Stop> exact = exact_stops(f0 / sc.mass, omega, 1.1);
+    const std::vector<Stop> exact = exact_stops(f0 / sc.mass, omega, 1.1, kMu, kG);
     REQUIRE(exact.size() == 4);
     const double amplitude = std::fabs(exact[0].x);  // m, one slip
     const std::vector<int> load = nodes_at(sc, 0.05);

@@ -23,55 +23,12 @@
 
 #include "core/engine_helpers.hpp"
 #include "fdem/scene.hpp"
+#include "stick_slip_exact.hpp"
 
 namespace {
 
 constexpr double kG = 9.81;  // m/s^2
 constexpr double kMu = 0.8;
-
-struct Stop {
-    double t, x;  // s, m
-};
-
-std::vector<Stop> exact_stops(double f0_per_m, double omega, double t_end) {
-    const double fs = kMu * kG;  // m/s^2
-    std::vector<Stop> stops;
-    double t0 = 0.0, x0 = 0.0;
-    const double h = 1e-5;
-    for (;;) {
-        double t = t0;
-        while (t < t_end && std::fabs(f0_per_m * std::sin(omega * t)) <= fs) t += h;
-        if (t >= t_end) break;
-        double lo = t - h, hi = t;
-        for (int i = 0; i < 60; ++i) {
-            const double mid = 0.5 * (lo + hi);
-            (std::fabs(f0_per_m * std::sin(omega * mid)) <= fs ? lo : hi) = mid;
-        }
-        const double ts = hi;
-        const double s = std::sin(omega * ts) > 0 ? 1.0 : -1.0;
-        auto v = [&](double tt) {
-            return f0_per_m / omega * (std::cos(omega * ts) - std::cos(omega * tt)) - s * fs * (tt - ts);
-        };
-        auto x = [&](double tt) {
-            const double d = tt - ts;
-            return x0 +
-                   f0_per_m / omega * (d * std::cos(omega * ts) - (std::sin(omega * tt) - std::sin(omega * ts)) / omega) -
-                   0.5 * s * fs * d * d;
-        };
-        double te = ts + h;
-        while (te < t_end && v(te) * s > 0) te += h;
-        if (te >= t_end) break;
-        lo = te - h, hi = te;
-        for (int i = 0; i < 60; ++i) {
-            const double mid = 0.5 * (lo + hi);
-            (v(mid) * s > 0 ? lo : hi) = mid;
-        }
-        t0 = hi;
-        x0 = x(hi);
-        stops.push_back({t0, x0});
-    }
-    return stops;
-}
 
 // Mass-weighted mean of a group's nodes, component c (m or m/s).
 double body_mean(const fdem::Simulation& sim, const std::string& group, const std::vector<double>& field, int c) {
@@ -118,11 +75,11 @@ TEST_CASE("engine stick-slip: a 1 kg block under F0 sin(omega t) stops within 1 
     for (int k : sim.model().group("block").nodes) mass += sim.model().mass[k];
     REQUIRE(mass == Approx(m).epsilon(1e-9));
 
-    const std::vector<Stop> exact = exact_stops(f0 / m, omega, 1.1);
+    const std::vector<contact_test::Stop> exact = contact_test::exact_stops(f0 / m, omega, 1.1, kMu, kG);
     REQUIRE(exact.size() == 4);
     const double amplitude = std::fabs(exact[0].x);  // m, one slip
     const double x_start = body_mean(sim, "block", sim.model().x, 0);
-    std::vector<Stop> stops;
+    std::vector<contact_test::Stop> stops;
     double s = 0;  // sign of the current slide, 0 while sticking
     const double v_slide = 1e-3;  // m/s, a slide starts when the mean velocity exceeds this
     sim.begin_stage(0);
