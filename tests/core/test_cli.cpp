@@ -185,3 +185,73 @@ TEST_CASE("the same case gives byte-identical history.csv with 1 and 2 threads",
         else CHECK(h[0] != unfiltered);  // the filter changed the run: the second pass tested something else
     }
 }
+
+TEST_CASE("help after a command and the short and --option=VALUE forms of the options", "[unit]") {
+    const auto dir = testing::tmp_dir("cli_forms");
+    const auto path = testing::write_text(dir / "case.toml", kGood);
+    for (const std::string& args : std::vector<std::string>{"run --help", "check -h", "mesh --help", "run \"" + path + "\" -h"}) {
+        const auto r = testing::run_fdem(args, dir);
+        INFO(args << ": " << r.err);
+        CHECK(r.code == 0);
+        CHECK(r.out.find("usage:") != std::string::npos);
+    }
+    // --out=DIR, -s, -t and -q: the run lands in DIR with the overridden value, and nothing is printed.
+    const auto out = dir / "eq";
+    auto r = testing::run_fdem("run \"" + path + "\" -q -t 1 -s stages.0.duration=0.0005 --out=\"" + out.string() + "\"", dir);
+    INFO(r.err);
+    REQUIRE(r.code == 0);
+    CHECK(r.out.empty());
+    CHECK(testing::read_text(out / "summary.json").find("\"duration_s\": 0.0005") != std::string::npos);
+    // -o DIR and --set=KEY=VALUE, --threads=N
+    r = testing::run_fdem("run \"" + path + "\" --quiet --threads=1 --set=stages.0.duration=0.0004 -o \"" + (dir / "o").string() + "\"", dir);
+    REQUIRE(r.code == 0);
+    CHECK(testing::read_text(dir / "o" / "summary.json").find("\"duration_s\": 0.0004") != std::string::npos);
+    // Values missing or where none belongs: exit 1 naming the option.
+    r = testing::run_fdem("run \"" + path + "\" -o", dir);
+    CHECK(r.code == 1);
+    CHECK(r.err.find("-o needs a value") != std::string::npos);
+    r = testing::run_fdem("run \"" + path + "\" --quiet=yes", dir);
+    CHECK(r.code == 1);
+    CHECK(r.err.find("--quiet takes no value") != std::string::npos);
+    r = testing::run_fdem("run \"" + path + "\" --threads=0", dir);
+    CHECK(r.code == 1);
+    CHECK(r.err.find("--threads") != std::string::npos);
+}
+
+TEST_CASE("run -q prints nothing on stdout, also not the reference result and the run folder", "[unit]") {
+    const auto dir = testing::tmp_dir("cli_quiet");
+    const std::string text = replace(kGood, "[[stages]]",
+                                     "[reference]\nmonitor = \"u_top\"\nquantity = \"final\"\nvalue = 1e-6\nsource = \"test\"\n\n[[stages]]");
+    const auto path = testing::write_text(dir / "case.toml", text);
+    auto r = testing::run_fdem("run \"" + path + "\" --quiet --threads 1 --out \"" + (dir / "q").string() + "\"", dir);
+    INFO(r.err);
+    REQUIRE(r.code == 0);
+    CHECK(r.out.empty());
+    // run.log keeps the log; without --quiet the result line is printed.
+    CHECK(testing::read_text(dir / "q" / "run.log").find("stage 1 'load' ended") != std::string::npos);
+    r = testing::run_fdem("run \"" + path + "\" --threads 1 --out \"" + (dir / "v").string() + "\"", dir);
+    REQUIRE(r.code == 0);
+    CHECK(r.out.find("result: final u_top") != std::string::npos);
+    CHECK(r.out.find("run folder:") != std::string::npos);
+}
+
+TEST_CASE("with stderr not a terminal the log gets progress lines with the run's time left", "[unit]") {
+    const auto dir = testing::tmp_dir("cli_progress");
+    // Two stages of fixed duration, long enough (tens of thousands of steps) for several lines at 0.01 s.
+    std::string text = replace(replace(kGood, "duration = 0.001", "duration = 0.1"), "mesh_size = 0.1", "mesh_size = 0.025");
+    text += "\n[[stages]]\nname = \"hold\"\nduration = 0.1\n  [[stages.supports]]\n  group = \"bottom\"\n  fix = \"xy\"\n";
+    const auto path = testing::write_text(dir / "case.toml", text);
+    auto r = testing::run_fdem("run \"" + path + "\" --threads 1 --progress 0.01 --out \"" + (dir / "run").string() + "\"", dir);
+    INFO(r.err);
+    REQUIRE(r.code == 0);
+    const std::string log = testing::read_text(dir / "run" / "run.log");
+    CHECK(r.err.find('\r') == std::string::npos);  // no terminal line rewritten in place
+    std::smatch m;
+    REQUIRE(std::regex_search(log, m, std::regex("progress: \\[stage 1/2 load\\] +[0-9.]+%.*stage left ([^ ]+).*run left ([^\\n]+)")));
+    CHECK(m[2].str() != "?");  // both stages have a duration: the run's time left is known
+    CHECK(r.out.find("progress: [stage") != std::string::npos);  // on stdout too
+    // --quiet: none.
+    r = testing::run_fdem("run \"" + path + "\" --quiet --threads 1 --progress 0.01 --out \"" + (dir / "q").string() + "\"", dir);
+    REQUIRE(r.code == 0);
+    CHECK(testing::read_text(dir / "q" / "run.log").find("progress:") == std::string::npos);
+}
