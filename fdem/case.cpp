@@ -509,7 +509,18 @@ void read_joint(Reader& r, JointSpec& j, bool allow_stiffness) {
     j.residual_friction = r.number("residual_friction", false, "a residual friction angle in [0, 90) deg (default: friction)", angle).value_or(j.friction);
     j.GI = r.number("GI", true, "a mode I fracture energy > 0 in J/m^2", positive).value_or(std::nan(""));
     j.GII = r.number("GII", true, "a mode II fracture energy > 0 in J/m^2", positive).value_or(std::nan(""));
-    j.penalty = r.number("penalty", false, "a joint penalty p_j > 0 in Pa", positive).value_or(std::nan(""));
+    // penalty: a number (p_j, Pa) or "auto": p_j from the element size, fracture/README.md "Mesh-aware penalty".
+    const char* kPenalty = "a joint penalty p_j > 0 in Pa or \"auto\"";
+    if (const toml::node* pn = r.node("penalty", false, kPenalty); pn && pn->is_string()) {
+        if (*pn->value<std::string>() == "auto") j.penalty_auto = true;
+        else r.number("penalty", false, kPenalty, positive);  // reports the key, the line and what was expected
+    } else {
+        j.penalty = r.number("penalty", false, kPenalty, positive).value_or(std::nan(""));
+    }
+    j.penalty_ref = r.number("penalty_ref", false, "a reference joint penalty > 0 in Pa (with penalty = \"auto\")", positive)
+                        .value_or(std::nan(""));
+    if (!std::isnan(j.penalty_ref) && !j.penalty_auto)
+        r.number("penalty_ref", false, "penalty_ref only with penalty = \"auto\"", [](double) { return false; });
     // "strength" ([K25]): the whole shear strength c + |sigma| tan(phi) softens; "cohesion" ([LR97]): only c does,
     // the friction is kept (fracture/law.hpp).
     j.keep_friction = r.string("shear_softening", false, "what softens in shear", {"strength", "cohesion"})
@@ -652,7 +663,7 @@ CaseSpec load_case(const std::string& path, const std::vector<std::string>& over
             if (const toml::table* ft = r.table("fracture", false, "a [materials.NAME.fracture] table")) {
                 Reader fr(ctx, *ft, p + ".fracture");
                 read_joint(fr, m.fracture, false);
-                if (std::isnan(m.fracture.penalty))
+                if (std::isnan(m.fracture.penalty) && !m.fracture.penalty_auto)
                     ctx.error(p + ".fracture.penalty", fr.line(), "missing; expected a joint penalty p_j > 0 in Pa (it also "
                                                                   "serves as the contact penalty of the crack faces)");
                 fr.finish();
@@ -726,7 +737,7 @@ CaseSpec load_case(const std::string& path, const std::vector<std::string>& over
                 ctx.error(p, in.line, "give at most one of tangential_penalty (Pa) or shear_stiffness (Pa/m)");
         } else if (in.kind == "bonded") {
             read_joint(r, in.bond, true);
-            const bool pen = !std::isnan(in.bond.penalty), kn = !std::isnan(in.bond.normal_stiffness), ks = !std::isnan(in.bond.shear_stiffness);
+            const bool pen = !std::isnan(in.bond.penalty) || in.bond.penalty_auto, kn = !std::isnan(in.bond.normal_stiffness), ks = !std::isnan(in.bond.shear_stiffness);
             if (pen == (kn || ks) || kn != ks)
                 ctx.error(p, in.line, "give either penalty (Pa) or both normal_stiffness and shear_stiffness (Pa/m)");
         }
@@ -819,7 +830,9 @@ CaseSpec load_case(const std::string& path, const std::vector<std::string>& over
         ReferenceSpec& ref = spec.reference;
         ref.present = true;
         ref.monitor = r.string("monitor", true, "the monitor compared with the reference").value_or("");
-        ref.quantity = r.string("quantity", false, "\"peak\" or \"final\"", {"peak", "final"}).value_or("peak");
+        ref.quantity = r.string("quantity", false, "\"peak\", \"first_peak\" (before the first cohesive break) or \"final\"",
+                                {"peak", "first_peak", "final"})
+                           .value_or("peak");
         ref.value = r.number("value", true, "the reference value in the monitor's unit").value_or(0);
         ref.tolerance = r.number("tolerance", false, "a relative tolerance >= 0", [](double v) { return v >= 0; }).value_or(0);
         ref.source = r.string("source", true, "where the reference value comes from").value_or("");

@@ -30,6 +30,8 @@ struct JointSpec {
     double GI = std::nan("");                     // mode I fracture energy, J/m^2
     double GII = std::nan("");                    // mode II fracture energy, J/m^2
     double penalty = std::nan("");                // p_j, Pa
+    bool penalty_auto = false;                    // penalty = "auto": p_j from the element size (fracture/README.md)
+    double penalty_ref = std::nan("");            // Pa, with "auto": the penalty where the mesh allows it (default 10 E)
     double normal_stiffness = std::nan("");       // k_n, Pa/m
     double shear_stiffness = std::nan("");        // k_s, Pa/m
     bool keep_friction = false;                   // shear_softening = "cohesion": friction kept while c softens
@@ -199,7 +201,7 @@ struct StageSpec {
 
 struct ReferenceSpec {
     std::string monitor;   // monitor compared
-    std::string quantity;  // "peak" (largest absolute value) | "final"
+    std::string quantity;  // "peak" (largest absolute value) | "first_peak" (before the first cohesive break) | "final"
     double value = 0;      // in the monitor's unit
     double tolerance = 0;  // relative, for the pass/fail line (0: report only)
     std::string source;

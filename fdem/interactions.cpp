@@ -17,8 +17,19 @@ namespace fdem {
 
 namespace {
 
-fracture::CohesiveProps to_props(const JointSpec& j) {
+std::string fmt_g(double v) {
+    std::ostringstream o;
+    o.precision(4);
+    o << v;
+    return o.str();
+}
+
+// E (Pa): the modulus that sets the reference of penalty = "auto" (10 E) when penalty_ref is not given.
+fracture::CohesiveProps to_props(const JointSpec& j, double E) {
     fracture::CohesiveProps p;
+    p.penalty_auto = j.penalty_auto;
+    // 10 E: a joint of the element's length adds a tenth of the element's compliance (K_n = p_j / h against E / h).
+    p.penalty_ref = std::isnan(j.penalty_ref) ? 10.0 * E : j.penalty_ref;
     p.tensile_strength = j.tensile_strength;
     p.cohesion = j.cohesion;
     p.friction_deg = j.friction;
@@ -64,6 +75,14 @@ Interactions::Interactions(const CaseSpec& spec, const Model& model) {
 
     // Cohesive elements: crackable edges take their material's fracture properties, bonded edges their
     // interface's. One props entry per material / interface, in that order.
+    // The joint penalty of each cracking region's crack faces and each bonded interface after breaking, p_j (Pa):
+    // the case's value, or with penalty = "auto" the value resolved below (its reference where no element uses it).
+    std::vector<double> crack_penalty(static_cast<std::size_t>(nr), std::nan(""));
+    std::vector<double> bond_penalty(spec.interfaces.size(), std::nan(""));
+    for (int r = 0; r < nr; ++r)
+        if (const JointSpec& j = material_of(r).fracture; j.present)
+            crack_penalty[static_cast<std::size_t>(r)] = j.penalty_auto ? to_props(j, material_of(r).E).penalty_ref : j.penalty;
+    for (std::size_t i = 0; i < spec.interfaces.size(); ++i) bond_penalty[i] = spec.interfaces[i].bond.penalty;
     if (!model.cohesive.empty()) {
         std::vector<fracture::CohesiveProps> props;
         std::vector<int> crack_props(nr, -1);
@@ -71,14 +90,18 @@ Interactions::Interactions(const CaseSpec& spec, const Model& model) {
         for (int r = 0; r < nr; ++r)
             if (material_of(r).fracture.present) {
                 crack_props[r] = static_cast<int>(props.size());
-                props.push_back(to_props(material_of(r).fracture));
+                props.push_back(to_props(material_of(r).fracture, material_of(r).E));
                 props_key.push_back("materials." + material_of(r).name + ".fracture");
             }
         std::vector<int> bond_props(spec.interfaces.size(), -1);
         for (std::size_t i = 0; i < spec.interfaces.size(); ++i)
             if (spec.interfaces[i].kind == "bonded") {
                 bond_props[i] = static_cast<int>(props.size());
-                props.push_back(to_props(spec.interfaces[i].bond));
+                const auto region_E = [&](const std::string& name) {
+                    return spec.materials[spec.material_index(spec.region_material.at(name))].E;
+                };
+                props.push_back(to_props(spec.interfaces[i].bond,
+                                         std::min(region_E(spec.interfaces[i].region_a), region_E(spec.interfaces[i].region_b))));
                 props_key.push_back("interfaces." + std::to_string(i));
             }
         // Too-soft penalties: checked against the longest element of each class.
@@ -107,6 +130,19 @@ Interactions::Interactions(const CaseSpec& spec, const Model& model) {
             h_max[e.props] = std::max(h_max[e.props], h);
             elems.push_back(e);
         }
+        // penalty = "auto": resolved per class from its longest element (fracture/properties.hpp).
+        for (std::size_t p = 0; p < props.size(); ++p)
+            if (props[p].penalty_auto && h_max[p] > 0) {
+                props[p].penalty = fracture::auto_penalty(props[p], h_max[p]);
+                auto_notes_.push_back("[" + props_key[p] + "]: penalty = \"auto\": p_j = " + fmt_g(props[p].penalty) +
+                                      " Pa at h_max = " + fmt_g(h_max[p]) + " m");
+            }
+        for (int r = 0; r < nr; ++r)
+            if (crack_props[r] >= 0 && props[static_cast<std::size_t>(crack_props[r])].penalty_auto &&
+                h_max[static_cast<std::size_t>(crack_props[r])] > 0)
+                crack_penalty[static_cast<std::size_t>(r)] = props[static_cast<std::size_t>(crack_props[r])].penalty;
+        for (std::size_t i = 0; i < spec.interfaces.size(); ++i)
+            if (bond_props[i] >= 0) bond_penalty[i] = props[static_cast<std::size_t>(bond_props[i])].penalty;
         std::vector<std::string> problems;
         for (std::size_t p = 0; p < props.size(); ++p)
             for (const auto& msg : fracture::check(props[p], h_max[p])) problems.push_back(spec.file + ": [" + props_key[p] + "]: " + msg);
@@ -133,7 +169,7 @@ Interactions::Interactions(const CaseSpec& spec, const Model& model) {
         const Material& ma = material_of(a);
         if (ma.fracture.present) {
             // Crack faces: the joint penalty as normal penalty, the residual friction.
-            contact::ContactLaw l = contact::ContactLaw::penalty(ma.fracture.penalty, std::tan(ma.fracture.residual_friction * M_PI / 180));
+            contact::ContactLaw l = contact::ContactLaw::penalty(crack_penalty[static_cast<std::size_t>(a)], std::tan(ma.fracture.residual_friction * M_PI / 180));
             l.name = "crack faces of " + ma.name;
             laws.set_crack(a, l);
         }
@@ -149,7 +185,7 @@ Interactions::Interactions(const CaseSpec& spec, const Model& model) {
                 if (!std::isnan(in->shear_stiffness)) l.k_s = in->shear_stiffness;
                 l.phi_deg = in->friction;
             } else {  // bonded: after breaking, contact with the joint's stiffness and the residual friction
-                if (!std::isnan(in->bond.penalty)) l.p_n = in->bond.penalty;
+                if (const double pb = bond_penalty[static_cast<std::size_t>(in - spec.interfaces.data())]; !std::isnan(pb)) l.p_n = pb;
                 if (!std::isnan(in->bond.normal_stiffness)) l.k_n = in->bond.normal_stiffness;
                 if (!std::isnan(in->bond.shear_stiffness)) l.k_s = in->bond.shear_stiffness;
                 l.phi_deg = in->bond.residual_friction;

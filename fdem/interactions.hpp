@@ -74,7 +74,11 @@ public:
     const contact::ContactSystem* contact() const { return contact_.get(); }
     const fracture::CohesiveSystem* joints() const { return joints_.get(); }
 
+    // One line per class whose penalty = "auto" was resolved (for the log).
+    const std::vector<std::string>& penalty_notes() const { return auto_notes_; }
+
 private:
+    std::vector<std::string> auto_notes_;
     std::unique_ptr<contact::ContactSystem> contact_;
     std::unique_ptr<fracture::CohesiveSystem> joints_;
     std::string cracks_csv_;

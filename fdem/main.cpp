@@ -3,6 +3,7 @@
 #include <omp.h>
 #include <unistd.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -26,21 +27,26 @@ const char* kUsage =
     "fdem " FDEM_VERSION ": 2D combined finite-discrete element simulation of masonry\n"
     "\n"
     "usage:\n"
-    "  fdem run CASE.toml [--out DIR] [--set KEY=VALUE ...] [--threads N] [--quiet]\n"
+    "  fdem run CASE.toml [-o DIR] [-s KEY=VALUE ...] [-t N] [-q]\n"
     "      run a case; results go to DIR (default runs/<case name>): history.csv, summary.json,\n"
     "      snapshots/*.vtu + run.pvd, run.log\n"
-    "  fdem check CASE.toml [--set KEY=VALUE ...]\n"
+    "  fdem check CASE.toml [-s KEY=VALUE ...]\n"
     "      validate a case and its mesh without running\n"
-    "  fdem mesh CASE.toml [--out DIR] [--set KEY=VALUE ...]\n"
+    "  fdem mesh CASE.toml [-o DIR] [-s KEY=VALUE ...]\n"
     "      mesh only: writes DIR/mesh.vtu (regions, bodies, edge classes) and prints statistics\n"
-    "  fdem --help | --version\n"
+    "  fdem --help | --version       (fdem COMMAND -h prints this too)\n"
     "\n"
-    "options:\n"
-    "  --set KEY=VALUE  override any case value; KEY is dotted, arrays of tables by 0-based index,\n"
-    "                   VALUE is TOML (e.g. --set materials.stone.E=1.5e10 --set stages.1.duration=2)\n"
-    "  --threads N      OpenMP threads (results are bit-identical for any N)\n"
-    "  --out DIR        run folder\n"
-    "  --quiet          no log lines on stdout, no progress line\n"
+    "options (long forms also as --option=VALUE):\n"
+    "  -s, --set KEY=VALUE  override any case value; KEY is dotted, arrays of tables by 0-based index,\n"
+    "                       VALUE is TOML (e.g. --set materials.stone.E=1.5e10 --set stages.1.duration=2:\n"
+    "                       the duration of the second stage)\n"
+    "  -t, -j, --threads N  OpenMP threads (results are bit-identical for any N)\n"
+    "  -o, --out DIR        run folder\n"
+    "  -q, --quiet          nothing on stdout and no progress lines; errors and warnings still go to stderr,\n"
+    "                       and run.log in the run folder has the whole log\n"
+    "  --progress S         when stderr is not a terminal (batch, cluster), a progress line in the log every\n"
+    "                       S seconds of wall time (default 10): stage, time, steps/s, stage and run time left\n"
+    "  -h, --help           this text\n"
     "\n"
     "exit codes: 0 done, 1 bad input, 2 run failed (instability, inverted element, NaN), 3 internal error\n";
 
@@ -49,29 +55,58 @@ struct Args {
     std::vector<std::string> sets;
     int threads = 0;
     bool quiet = false;
+    bool help = false;
+    double progress_interval = 10.0;  // s
 };
 
+// Options of every command: long forms "--out DIR" and "--out=DIR", short forms "-o DIR" (also "-oDIR" is not
+// accepted: one form per option keeps the messages plain). -h/--help anywhere after the command prints the usage.
 Args parse_args(int argc, char** argv) {
     Args a;
     if (argc < 2) throw fdem::InputError(std::string("no command given\n\n") + kUsage);
     a.command = argv[1];
     for (int i = 2; i < argc; ++i) {
-        const std::string s = argv[i];
-        auto value = [&](const char* opt) {
-            if (i + 1 >= argc) throw fdem::InputError(std::string(opt) + " needs a value");
+        std::string s = argv[i];
+        std::string inline_value;
+        bool has_inline = false;
+        if (s.rfind("--", 0) == 0) {
+            if (const auto eq = s.find('='); eq != std::string::npos) {
+                inline_value = s.substr(eq + 1);
+                s = s.substr(0, eq);
+                has_inline = true;
+            }
+        }
+        auto value = [&](const std::string& opt) {
+            if (has_inline) return inline_value;
+            if (i + 1 >= argc) throw fdem::InputError(opt + " needs a value (see fdem --help)");
             return std::string(argv[++i]);
         };
-        if (s == "--out") a.out = value("--out");
-        else if (s == "--set") a.sets.push_back(value("--set"));
-        else if (s.rfind("--set=", 0) == 0) a.sets.push_back(s.substr(6));
-        else if (s == "--threads") {
-            const std::string v = value("--threads");
+        auto no_value = [&](const std::string& opt) {
+            if (has_inline) throw fdem::InputError(opt + " takes no value, got '" + opt + "=" + inline_value + "'");
+        };
+        if (s == "--out" || s == "-o") a.out = value(s);
+        else if (s == "--set" || s == "-s") a.sets.push_back(value(s));
+        else if (s == "--threads" || s == "-t" || s == "-j") {
+            const std::string v = value(s);
             char* end = nullptr;
             const long n = std::strtol(v.c_str(), &end, 10);
-            if (*end || n < 1 || n > 1024) throw fdem::InputError("--threads: expected a whole number >= 1, got '" + v + "'");
+            if (v.empty() || *end || n < 1 || n > 1024)
+                throw fdem::InputError(s + ": expected a whole number >= 1, got '" + v + "'");
             a.threads = static_cast<int>(n);
-        } else if (s == "--quiet") a.quiet = true;
-        else if (!s.empty() && s[0] == '-') throw fdem::InputError("unknown option '" + s + "' (see fdem --help)");
+        } else if (s == "--progress") {
+            const std::string v = value(s);
+            char* end = nullptr;
+            const double p = std::strtod(v.c_str(), &end);
+            if (v.empty() || *end || !(p > 0) || !std::isfinite(p))
+                throw fdem::InputError("--progress: expected seconds > 0, got '" + v + "'");
+            a.progress_interval = p;
+        } else if (s == "--quiet" || s == "-q") {
+            no_value(s);
+            a.quiet = true;
+        } else if (s == "--help" || s == "-h") {
+            no_value(s);
+            a.help = true;
+        } else if (!s.empty() && s[0] == '-') throw fdem::InputError("unknown option '" + s + "' (see fdem --help)");
         else if (a.case_file.empty()) a.case_file = s;
         else throw fdem::InputError("unexpected argument '" + s + "' (see fdem --help)");
     }
@@ -92,6 +127,10 @@ int main(int argc, char** argv) {
             return 0;
         }
         const Args a = parse_args(argc, argv);
+        if (a.help) {
+            std::cout << kUsage;
+            return 0;
+        }
         if (a.command != "run" && a.command != "check" && a.command != "mesh")
             throw fdem::InputError("unknown command '" + a.command + "' (commands: run, check, mesh; see fdem --help)");
         if (a.case_file.empty()) throw fdem::InputError("fdem " + a.command + ": no case file given");
@@ -105,6 +144,7 @@ int main(int argc, char** argv) {
             std::cout << a.case_file << ": ok: " << sim.model().n_triangles() << " triangles, " << sim.model().n_nodes()
                       << " nodes, " << sim.model().cohesive.size() << " cohesive elements, " << spec.stages.size()
                       << " stage(s), time step " << sim.dt() << " s\n";
+            for (const std::string& note : sim.interactions().penalty_notes()) std::cout << note << "\n";
             return 0;
         }
         if (a.command == "mesh") {
@@ -125,7 +165,11 @@ int main(int argc, char** argv) {
         opt.out_dir = a.out;
         opt.threads = a.threads;
         opt.quiet = a.quiet;
+        // On a terminal, a progress line rewritten in place on stderr; otherwise (batch and cluster logs) a progress
+        // line on stdout and in run.log every progress_interval seconds.
         opt.progress = !a.quiet && isatty(2);
+        opt.progress_log = !a.quiet && !isatty(2);
+        opt.progress_interval = a.progress_interval;
         return fdem::run_case(a.case_file, a.sets, opt);
     } catch (const fdem::InputError& e) {
         std::cerr << "error: " << e.what() << std::endl;

@@ -156,6 +156,7 @@ Simulation::Simulation(CaseSpec spec, Model model, RunOptions options)
     block_e_.assign(nb, 0), block_f_.assign(nb, 0), block_g_.assign(nb, 0), block_h_.assign(nb, 0), block_i_.assign(nb, 0);
     block_bad_.assign(nb, -1);
     mon_ext_.assign(spec_.monitors.size(), {0, 0, 0});
+    mon_first_peak_.assign(spec_.monitors.size(), 0.0);
     compute_dt();
     // Derived quantities must be finite (issue 26: a huge mass_scale gave dt = 1e148 s, NaN energies and "completed").
     for (int k = 0; k < nn; ++k)
@@ -735,6 +736,7 @@ void Simulation::step() {
         }
     }
     if (opt_.progress && (steps_ & 255) == 0) progress_line(false);
+    if (opt_.progress_log && (steps_ & 255) == 0) progress_log_line();
     if (steps_ % 1000 == 0) check_energy(energies());
 }
 
@@ -894,6 +896,9 @@ std::string Simulation::history_row(const Energies& e) {
         auto& ext = mon_ext_[i];
         if (!mon_ext_init_) ext = {m, m, m};
         ext = {std::min(ext[0], m), std::max(ext[1], m), m};
+        // The peak before the first cohesive element breaks (reference quantity "first_peak"): the rows up to the
+        // first break, so that the ringing after a brittle break does not count as the strength.
+        if (broken_total_ == 0 && std::abs(m) >= std::abs(mon_first_peak_[i])) mon_first_peak_[i] = m;
     }
     mon_ext_init_ = true;
     for (double v : {e.kinetic, e.elastic, e.joint, e.contact, e.external, e.damping, e.viscous, e.fracture, e.friction, e.balance_error()})
@@ -998,25 +1003,66 @@ void Simulation::flush_files() {
     write_file_atomic((dir / "run.log").string(), log_);
 }
 
-void Simulation::progress_line(bool final) {
+// The progress of the run: the stage's fraction (its duration, its until monitor, or its max_duration), the
+// stage's time left at the present rate, and the run's: this stage's plus the later stages' durations (their
+// max_duration, an upper bound, when only that is known; "?" when a later stage ends by a criterion alone).
+std::string Simulation::progress_text(double& frac) {
     const double now = wall_clock();
-    if (!final && now - last_progress_ < 1.0) return;
-    last_progress_ = now;
     const StageSpec& st = spec_.stages[stage_];
     const double ts = time_ - stage_t0_;
-    double frac = -1;
+    frac = -1;
     if (st.duration) frac = ts / *st.duration;
     if (until_monitor_ >= 0 && st.until_value != until_start_)
         frac = std::max(frac, (monitor_value(until_monitor_) - until_start_) / (st.until_value - until_start_));
     if (frac < 0 && st.max_duration) frac = ts / *st.max_duration;
     const double el = now - wall_start_;
-    const double rate = static_cast<double>(steps_) / std::max(el, 1e-9);
-    char b[256];
-    std::string eta = "?";
-    if (frac > 0.001) eta = human_time((1 - frac) * (ts / std::max(frac, 1e-9)) / dt_ / std::max(rate, 1.0));
-    std::snprintf(b, sizeof b, "\r[stage %d/%zu %s] %5.1f%%  t = %.4g s  %.3g steps/s  left %s   ", stage_ + 1,
-                  spec_.stages.size(), st.name.c_str(), 100 * std::clamp(frac, 0.0, 1.0), time_, rate, eta.c_str());
-    std::cerr << b << (final ? "\n" : "") << std::flush;
+    const double rate = std::max(static_cast<double>(steps_) / std::max(el, 1e-9), 1.0);  // steps per wall second
+    std::string eta = "?", run_eta = "?";
+    if (frac > 0.001) {
+        const double stage_left = (1 - std::min(frac, 1.0)) * (ts / std::max(frac, 1e-9)) / dt_ / rate;
+        eta = human_time(stage_left);
+        double later = 0;
+        bool known = true, bound = false;
+        for (std::size_t k = static_cast<std::size_t>(stage_) + 1; k < spec_.stages.size(); ++k) {
+            const StageSpec& sk = spec_.stages[k];
+            if (sk.duration) later += *sk.duration;
+            else if (sk.max_duration) later += *sk.max_duration, bound = true;
+            else known = false;
+        }
+        if (known) run_eta = (bound ? "at most " : "") + human_time(stage_left + later / dt_ / rate);
+    }
+    char b[320];
+    std::snprintf(b, sizeof b, "[stage %d/%zu %s] %5.1f%%  t = %.4g s  %.3g steps/s  stage left %s  run left %s", stage_ + 1,
+                  spec_.stages.size(), st.name.c_str(), 100 * std::clamp(frac, 0.0, 1.0), time_, rate, eta.c_str(),
+                  run_eta.c_str());
+    return b;
+}
+
+void Simulation::progress_line(bool final) {
+    const double now = wall_clock();
+    if (!final && now - last_progress_ < 1.0) return;
+    last_progress_ = now;
+    double frac = 0;
+    std::cerr << "\r" << progress_text(frac) << "   " << (final ? "\n" : "") << std::flush;
+}
+
+void Simulation::progress_log_line() {
+    const double now = wall_clock();
+    if (now - last_progress_log_ < opt_.progress_interval) return;
+    last_progress_log_ = now;
+    double frac = 0;
+    log("progress: " + progress_text(frac));
+}
+
+// The monitor's value that the [reference] compares: "peak" the largest absolute value of the run, "first_peak"
+// the largest absolute value before the first cohesive element breaks (the whole run if none breaks), "final" the
+// last value. From the history rows.
+double Simulation::reference_value(int i) const {
+    const auto& ext = mon_ext_[static_cast<std::size_t>(i)];
+    const std::string& q = spec_.reference.quantity;
+    if (q == "final") return ext[2];
+    if (q == "first_peak") return mon_first_peak_[static_cast<std::size_t>(i)];
+    return std::abs(ext[0]) > std::abs(ext[1]) ? ext[0] : ext[1];
 }
 
 void Simulation::fail(const std::string& what) {
@@ -1110,6 +1156,7 @@ void Simulation::run() {
         log("no interface or fracture rules: the " + std::to_string(model_.mesh.n_bodies()) + " bodies of the mesh are tied into one continuum");
     if (inter_.has_joints())
         log("cohesive elements: " + std::to_string(inter_.joints()->size()));
+    for (const std::string& note : inter_.penalty_notes()) log(note);
     if (inter_.has_dry_joints())
         log("dry joint record: " + std::to_string(inter_.dry_joint_count()) + " segments, recorded in cracks.csv when an end opens by more than " +
             sci(inter_.open_threshold()) + " m or the segment slips by more than " + sci(inter_.slip_threshold()) + " m");
@@ -1122,6 +1169,7 @@ void Simulation::run() {
     if (!spec_.dt_override && spec_.safety > 1)
         log("warning: numerics.safety = " + sci(spec_.safety) + " > 1: the time step exceeds the stability limit");
     if (!opt_.out_dir.empty()) write_summary("running", "");
+    last_progress_log_ = wall_clock();
     for (std::size_t s = 0; s < spec_.stages.size(); ++s) {
         begin_stage(static_cast<int>(s));
         while (!stage_finished()) {
@@ -1303,8 +1351,7 @@ void Simulation::write_summary(const std::string& status, const std::string& mes
         r["source"] = ref.source;
         for (std::size_t i = 0; i < spec_.monitors.size(); ++i)
             if (spec_.monitors[i].name == ref.monitor) {
-                const double got = ref.quantity == "final" ? mon_ext_[i][2]
-                                                           : (std::abs(mon_ext_[i][0]) > std::abs(mon_ext_[i][1]) ? mon_ext_[i][0] : mon_ext_[i][1]);
+                const double got = reference_value(static_cast<int>(i));
                 r["computed"] = got;
                 r["relative_error"] = ref.value != 0 ? (std::abs(got) - std::abs(ref.value)) / std::abs(ref.value) : 0.0;
             }
@@ -1321,17 +1368,17 @@ int run_case(const std::string& case_file, const std::vector<std::string>& overr
     Simulation sim(spec, std::move(model), opt);
     sim.run();
     if (sim.interrupted_signal()) {
-        std::cout << "run folder: " << opt.out_dir << std::endl;
+        if (!opt.quiet) std::cout << "run folder: " << opt.out_dir << std::endl;
         std::cerr << "run interrupted: outputs written with status \"interrupted\" in " << opt.out_dir << std::endl;
         return 128 + sim.interrupted_signal();
     }
-    // The result against the reference, on stdout.
-    if (spec.reference.present) {
+    // The result against the reference, on stdout (summary.json has it too).
+    if (spec.reference.present && !opt.quiet) {
         const ReferenceSpec& ref = spec.reference;
         const auto ext = sim.monitor_extrema();
         for (std::size_t i = 0; i < spec.monitors.size(); ++i) {
             if (spec.monitors[i].name != ref.monitor) continue;
-            const double got = ref.quantity == "final" ? ext[i][2] : (std::abs(ext[i][0]) > std::abs(ext[i][1]) ? ext[i][0] : ext[i][1]);
+            const double got = sim.reference_value(static_cast<int>(i));
             const double err = ref.value != 0 ? (std::abs(got) - std::abs(ref.value)) / std::abs(ref.value) : 0.0;
             char b[512];
             std::snprintf(b, sizeof b, "result: %s %s = %.5g %s; reference %.5g %s (%s); error %+.2f %%; run time %.2f s",
@@ -1343,7 +1390,7 @@ int run_case(const std::string& case_file, const std::vector<std::string>& overr
                           << 100 * ref.tolerance << " %" << std::endl;
         }
     }
-    std::cout << "run folder: " << opt.out_dir << std::endl;
+    if (!opt.quiet) std::cout << "run folder: " << opt.out_dir << std::endl;
     return 0;
 }
 

@@ -23,7 +23,9 @@ struct RunOptions {
     std::string out_dir;     // run folder; empty: no files are written (tests)
     int threads = 0;         // 0: OpenMP's default
     bool quiet = false;      // no log lines on stdout
-    bool progress = false;   // progress line on stderr
+    bool progress = false;   // progress line on stderr, rewritten in place (a terminal)
+    bool progress_log = false;        // progress lines in the log (run.log and stdout unless quiet): batch/cluster logs
+    double progress_interval = 10.0;  // s of wall time between two progress lines in the log
 };
 
 struct Energies {
@@ -76,6 +78,7 @@ public:
     const Interactions& interactions() const { return inter_; }
     // Largest |value| and final value of each monitor over the history rows written.
     std::vector<std::array<double, 3>> monitor_extrema() const { return mon_ext_; }  // min, max, final
+    double reference_value(int monitor) const;  // the quantity [reference] names, of monitor `monitor`
 
 private:
     struct ActiveLoad {
@@ -130,6 +133,8 @@ private:
     void write_summary(const std::string& status, const std::string& message);
     void log(const std::string& line);
     void progress_line(bool final);
+    void progress_log_line();                  // the log's progress line, every opt_.progress_interval seconds
+    std::string progress_text(double& frac);   // stage, its fraction, time, steps/s, stage and run time left
 
     CaseSpec spec_;
     Model model_;
@@ -194,12 +199,13 @@ private:
     long last_row_step_ = -1;      // step of the last row written
     std::vector<std::array<double, 3>> mon_ext_;
     bool mon_ext_init_ = false;
+    std::vector<double> mon_first_peak_;  // largest |value| (signed) before the first cohesive break
     double next_history_ = 0, next_snapshot_ = 0;
     long history_every_steps_ = 100;
     std::vector<std::pair<double, std::string>> snapshots_;
     std::vector<StageResult> stage_results_;
     std::string log_;
-    double wall_start_ = 0, wall_time_ = 0, last_flush_ = 0, last_progress_ = 0;
+    double wall_start_ = 0, wall_time_ = 0, last_flush_ = 0, last_progress_ = 0, last_progress_log_ = 0;
     double dt_report_triangles_ = 0;
 };
 

@@ -104,6 +104,13 @@ std::vector<std::string> check(const CohesiveProps& p, double h_max, double sigm
   return out;
 }
 
+double auto_penalty(const CohesiveProps& p, double h_max) {
+  const double f_t = p.tensile_strength, c = p.cohesion;
+  // The fracture-energy conditions of check() (mode I; mode II at zero normal stress) solved for p_j.
+  const double p_G = 4.0 * h_max * std::max(f_t * f_t / p.G_I, c * c / p.G_II) / 3.0;
+  return std::max(p.penalty_ref, kAutoPenaltyMargin * p_G);
+}
+
 JointLaw make_law(const CohesiveProps& p, double h) {
   double K_n = 0.0, K_s = 0.0;
   stiffnesses(p, h, K_n, K_s);

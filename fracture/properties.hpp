@@ -23,6 +23,8 @@ struct CohesiveProps {
   double G_I = unset;                    // mode I fracture energy, J/m^2 (> 0)
   double G_II = unset;                   // mode II fracture energy, J/m^2 (> 0)
   double penalty = unset;                // p_j, Pa (> 0); give this OR k_n and k_s
+  bool penalty_auto = false;             // p_j = auto_penalty(props, h_max) (resolve before check/make_law)
+  double penalty_ref = unset;            // Pa (> 0): the auto penalty where the mesh allows it
   double k_n = unset;                    // normal stiffness of a zero-thickness interface, Pa/m (> 0)
   double k_s = unset;                    // shear stiffness of a zero-thickness interface, Pa/m (> 0)
   bool keep_friction = false;            // only the cohesion softens, friction is kept (law.hpp; [LR97])
@@ -35,6 +37,14 @@ struct CohesiveProps {
 // sigma_c (Pa, >= 0): the largest compression expected on the joints; shear energy exactness needs
 // G_II > (2/3) f_s s_p with f_s = c + sigma_c tan(phi). Pass 0 to check at zero normal stress only.
 std::vector<std::string> check(const CohesiveProps& props, double h_max, double sigma_c = 0.0);
+
+// penalty = "auto" (fracture/README.md, "Mesh-aware penalty"): the joint penalty of a class whose longest element
+// is h_max (m), p_j = max(p_ref, kAutoPenaltyMargin * p_G) with p_G = 4 h_max max(f_t^2 / G_I, c^2 / G_II) / 3 (Pa),
+// the penalty at which the pre-peak work (2/3) f o_p of the longest element equals G (o_p = 2 h f / p_j, FORMULATION
+// of law.hpp). With the margin 1.5 the pre-peak work is at most 2/3 of G, a third is left for the softening branch.
+// p_ref: props.penalty_ref (Pa), which the engine sets to 10 E when the case gives none.
+inline constexpr double kAutoPenaltyMargin = 1.5;
+double auto_penalty(const CohesiveProps& props, double h_max);
 
 // The law constants of an element of length h (m) of this class (props must pass check()).
 JointLaw make_law(const CohesiveProps& props, double h);
