@@ -16,14 +16,20 @@
 //             displacement F / K_t (K_t = k_s t L for the base face of length L, plus the block's own shear), for
 //             any number of steps; a stack on an incline below its friction angle does not move.
 //
-// THE CHATTER. Undamped (no contact dashpots, no local damping), a block sliding with friction on penalty
-// contacts does not slide smoothly: the friction at its base couples its horizontal motion to its rocking and
-// bouncing modes, which grow while it slides (the frictionless slide has no vibration at all, and the undamped
-// books close, so the energy comes from the slide: friction-induced vibration of an undamped elastic body). A
-// bouncing block under a tangential load then slips in every flight. The tests therefore remove the chatter with
-// contact dashpots (contact_damping 0.5, beta = 0.5 dt_c), which must not change the friction: friction reads the
-// whole normal force, elastic push plus dashpot (potential.cpp load_edge). Measured undamped values, for the
-// record, are printed (see the README's physics section).
+// THE FLUTTER (why the block is stone-stiff, E = 1e10 Pa). Undamped, a block that slides with friction on penalty
+// contacts can be dynamically unstable: the friction at its base couples its bounce on the contact springs (here
+// omega_c = sqrt(k_n L t / m) = 1.0e4 rad/s) to its own first bending mode (free-free beam 0.2 x 0.05 m:
+// 22.4 sqrt(E h^2 / (12 rho)) / L^2 = 8.1e3 rad/s at E = 1e9 Pa), and when the two frequencies are close and mu is
+// large the coupled pair grows: the mode-coupling type of friction-induced vibration (Hoffmann, Fischer, Begley,
+// Gaul 2002, J. Sound Vib. 249, minimal model; Hulten 1993). It is a property of the undamped elastic system, not of
+// the friction law. Measured with this scene undamped, pushed at 1.02 mu m g (mu_eff over 0.1-0.4 s): E = 1e9 Pa
+// bounces up to 0.1 mm and gives mu_eff -2.7 % (-2.5 % on a 16 x 4 mesh, so not a discretisation effect), E = 3e9
+// -1.7 %; the bounce and the deficit vanish when the frequencies part (E = 1e10 or 1e11: 0.000 %; k_n = 5e8 Pa/m:
+// +0.001 %) or mu is small (mu = 0.3: 0.000 %; mu = 0.6 still -1.8 %). A stone block (E = 1e10 Pa) is away from the
+// coincidence; these tests use it, undamped and with dashpots. Contact dashpots (beta = xi dt_c) remove the flutter at
+// E = 1e9 too and must not change the friction: friction reads the whole normal force, elastic push plus dashpot
+// (potential.cpp load_edge); one run keeps that soft block with dashpots 0.5. The holding tests (no slide, so no
+// flutter) keep the soft block and its longer time step.
 #include <catch2/catch.hpp>
 
 #include <algorithm>
@@ -54,12 +60,15 @@ struct Scene {
     double dt_c = 0.0;     // s, stable step of the contact springs
 };
 
+constexpr double kEStone = 1e10;  // Pa, the sliding blocks' Young's modulus (see THE FLUTTER above)
+constexpr double kESoft = 1e9;    // Pa, blocks that must hold (no slide, so no flutter) and the damped soft slide
+
 // A fixed base (0.9 x 0.1 m) and the 1 kg block on it, settled under gravity with local damping 0.7 for 0.1 s;
 // then contact dashpots xi (fraction of critical at the stiffest contact spring, as the engine's
 // contact_damping: beta = xi dt_c, time step times sqrt(1 + xi^2) - xi).
-void make_scene(Scene& sc, double xi, int blocks = 1, double gx = 0.0, double gy = -kG) {
+void make_scene(Scene& sc, double xi, int blocks = 1, double gx = 0.0, double gy = -kG, double E = kEStone) {
     BlockSim& s = sc.s;
-    s.E = 1e9;
+    s.E = E;
     s.nu = 0.2;
     s.rho = 1000.0;
     s.t = 0.1;
@@ -118,13 +127,22 @@ double held_energy(BlockSim& s) {
 
 }  // namespace
 
-TEST_CASE("friction: a sliding block carries mu N within 0.1 % with contact dashpots, pushed at the top, middle or "
-          "bottom nodes, and its books close within 1 %",
+TEST_CASE("friction: a sliding block carries mu N within 0.1 % undamped and with contact dashpots 0.1 and 0.5, "
+          "pushed at the top, middle or bottom nodes, and its books close within 1 %",
           "[regression]") {
     const double F = 8.0;  // N, above mu m g = 7.848 N
-    for (double y : {0.05, 0.025, 0.0}) {
+    struct Run {
+        double xi, E, y;
+    };
+    std::vector<Run> runs;
+    for (double xi : {0.0, 0.5})
+        for (double y : {0.05, 0.025, 0.0}) runs.push_back({xi, kEStone, y});
+    runs.push_back({0.1, kEStone, 0.05});
+    runs.push_back({0.5, kESoft, 0.05});  // the soft block of THE FLUTTER, held by its dashpots
+    for (const Run& r : runs) {
+        const double y = r.y;
         Scene sc;
-        make_scene(sc, 0.5);
+        make_scene(sc, r.xi, 1, 0.0, -kG, r.E);
         BlockSim& s = sc.s;
         const std::vector<int> load = nodes_at(sc, y);
         REQUIRE(load.size() >= 3);
@@ -146,53 +164,56 @@ TEST_CASE("friction: a sliding block carries mu N within 0.1 % with contact dash
         double work = 0.0;  // J, the push's work: F / n times each loaded node's displacement
         for (int k : load) work += F / static_cast<double>(load.size()) * (s.x[2 * k] - x0[2 * k]);
         const double balance = (held_energy(s) - e0 - work) / work;
-        std::printf("[friction push] load at y = %.3f m: mu_eff %.5f (mu %.1f, %+.3f %%), slid %.4f m, books %+.3f %%\n",
-                    y, mu_eff, kMu, 100 * (mu_eff / kMu - 1), block_x(sc), 100 * balance);
+        std::printf("[friction push] E %.0e Pa, dashpots %.1f, load at y = %.3f m: mu_eff %.5f (mu %.1f, %+.3f %%), slid "
+                    "%.4f m, books %+.3f %%\n",
+                    r.E, r.xi, y, mu_eff, kMu, 100 * (mu_eff / kMu - 1), block_x(sc), 100 * balance);
         CHECK(mu_eff == Approx(kMu).epsilon(1e-3));
         CHECK(std::fabs(balance) < 0.01);
     }
 }
 
 TEST_CASE("friction: stick-slip under a harmonic force: every stop within 1 % of the slip amplitude of the exact "
-          "rigid-block solution, with contact dashpots",
+          "rigid-block solution, undamped and with contact dashpots 0.5",
           "[regression]") {
-    Scene sc;
-    make_scene(sc, 0.5);
-    BlockSim& s = sc.s;
-    const double omega = 2 * M_PI * 2.0;        // rad/s
-    const double f0 = 1.5 * kMu * kG * sc.mass;  // N
-    const std::vector<Stop> exact = exact_stops(f0 / sc.mass, omega, 1.1, kMu, kG);
-    REQUIRE(exact.size() == 4);
-    const double amplitude = std::fabs(exact[0].x);  // m, one slip
-    const std::vector<int> load = nodes_at(sc, 0.05);
-    const double x_start = block_x(sc);
-    double t = 0.0;
-    bool moving = false;
-    std::vector<Stop> stops;
-    const double e0 = held_energy(s);
-    double work = 0.0;  // J, F(t^n) times the loaded nodes' motion over the step
-    while (t < 1.1) {
-        std::vector<double> xl;
-        for (int k : load) s.fext[2 * k] = f0 * std::sin(omega * t) / static_cast<double>(load.size()), xl.push_back(s.x[2 * k]);
-        s.step(sc.dt);
-        t += sc.dt;
-        for (std::size_t i = 0; i < load.size(); ++i) work += s.fext[2 * load[i]] * (s.x[2 * load[i]] - xl[i]);
-        const double v = block_vx(sc);
-        if (!moving && std::fabs(v) > 0.02) moving = true;
-        if (moving && std::fabs(v) < 1e-3) {
-            moving = false;
-            stops.push_back({t, block_x(sc) - x_start});
+    for (double xi : {0.0, 0.5}) {
+        Scene sc;
+        make_scene(sc, xi);
+        BlockSim& s = sc.s;
+        const double omega = 2 * M_PI * 2.0;        // rad/s
+        const double f0 = 1.5 * kMu * kG * sc.mass;  // N
+        const std::vector<Stop> exact = exact_stops(f0 / sc.mass, omega, 1.1, kMu, kG);
+        REQUIRE(exact.size() == 4);
+        const double amplitude = std::fabs(exact[0].x);  // m, one slip
+        const std::vector<int> load = nodes_at(sc, 0.05);
+        const double x_start = block_x(sc);
+        double t = 0.0;
+        bool moving = false;
+        std::vector<Stop> stops;
+        const double e0 = held_energy(s);
+        double work = 0.0;  // J, F(t^n) times the loaded nodes' motion over the step
+        while (t < 1.1) {
+            std::vector<double> xl;
+            for (int k : load) s.fext[2 * k] = f0 * std::sin(omega * t) / static_cast<double>(load.size()), xl.push_back(s.x[2 * k]);
+            s.step(sc.dt);
+            t += sc.dt;
+            for (std::size_t i = 0; i < load.size(); ++i) work += s.fext[2 * load[i]] * (s.x[2 * load[i]] - xl[i]);
+            const double v = block_vx(sc);
+            if (!moving && std::fabs(v) > 0.02) moving = true;
+            if (moving && std::fabs(v) < 1e-3) {
+                moving = false;
+                stops.push_back({t, block_x(sc) - x_start});
+            }
         }
+        const double balance = (held_energy(s) - e0 - work) / work;
+        std::printf("[friction harmonic] dashpots %.1f: slip amplitude %.5f m, books %+.3f %%\n", xi, amplitude, 100 * balance);
+        REQUIRE(stops.size() == exact.size());
+        for (std::size_t i = 0; i < exact.size(); ++i) {
+            std::printf("  stop %zu: t %.4f s (exact %.4f), x %.6f m (exact %.6f), error %.3f %% of the amplitude\n", i,
+                        stops[i].t, exact[i].t, stops[i].x, exact[i].x, 100 * (stops[i].x - exact[i].x) / amplitude);
+            CHECK(std::fabs(stops[i].x - exact[i].x) < 0.01 * amplitude);
+        }
+        CHECK(std::fabs(balance) < 0.01);
     }
-    const double balance = (held_energy(s) - e0 - work) / work;
-    std::printf("[friction harmonic] slip amplitude %.5f m, books %+.3f %%\n", amplitude, 100 * balance);
-    REQUIRE(stops.size() == exact.size());
-    for (std::size_t i = 0; i < exact.size(); ++i) {
-        std::printf("  stop %zu: t %.4f s (exact %.4f), x %.6f m (exact %.6f), error %.3f %% of the amplitude\n", i,
-                    stops[i].t, exact[i].t, stops[i].x, exact[i].x, 100 * (stops[i].x - exact[i].x) / amplitude);
-        CHECK(std::fabs(stops[i].x - exact[i].x) < 0.01 * amplitude);
-    }
-    CHECK(std::fabs(balance) < 0.01);
 }
 
 TEST_CASE("friction: a block under a smooth push of 0.75 mu m g stays within its elastic tangential displacement for "
@@ -203,7 +224,7 @@ TEST_CASE("friction: a block under a smooth push of 0.75 mu m g stays within its
     double d_static = 0.0, F = 0.0;
     {
         Scene sc;
-        make_scene(sc, 0.0);
+        make_scene(sc, 0.0, 1, 0.0, -kG, kESoft);
         F = 0.75 * kMu * kG * sc.mass;  // N
         const std::vector<int> load = nodes_at(sc, 0.05);
         const double x_start = block_x(sc);
@@ -214,7 +235,7 @@ TEST_CASE("friction: a block under a smooth push of 0.75 mu m g stays within its
         d_static = block_x(sc) - x_start;
     }
     Scene sc;
-    make_scene(sc, 0.0);
+    make_scene(sc, 0.0, 1, 0.0, -kG, kESoft);
     BlockSim& s = sc.s;
     const std::vector<int> load = nodes_at(sc, 0.05);
     const double x_start = block_x(sc);
@@ -248,7 +269,7 @@ TEST_CASE("friction: a stack of three blocks on an incline 5 deg below its frict
           "[regression]") {
     const double theta = std::atan(kMu) - 5.0 * M_PI / 180.0;
     Scene sc;
-    make_scene(sc, 0.0, 3, 0.0, -kG);
+    make_scene(sc, 0.0, 3, 0.0, -kG, kESoft);
     BlockSim& s = sc.s;
     // tilt gravity smoothly to theta over 0.5 s, then hold it for 5 s
     const double ramp = 0.5;
