@@ -311,6 +311,18 @@ SupportSpec read_support(Ctx& ctx, const toml::table& t, const std::string& path
     s.function = read_function(ctx, r, "function");
     if (s.function.present() && s.mode[0] != DofMode::velocity && s.mode[1] != DofMode::velocity)
         ctx.error(r.key_path("function"), r.line(), "a time function multiplies a prescribed velocity: give vx or vy");
+    if (const toml::table* p = r.table("servo", false, "a table { ratio = target unbalanced-force ratio, time = response time s, "
+                                                       "min_factor = smallest velocity factor }")) {
+        Reader sr(ctx, *p, r.key_path("servo"));
+        s.servo_ratio = sr.number("ratio", true, "a target unbalanced-force ratio in (0, 1)", [](double v) { return v > 0 && v < 1; })
+                            .value_or(0.0);
+        s.servo_time = sr.number("time", true, "a response time > 0 in s", [](double v) { return v > 0; }).value_or(0.0);
+        s.servo_min = sr.number("min_factor", false, "a smallest velocity factor in (0, 1]", [](double v) { return v > 0 && v <= 1; })
+                          .value_or(0.01);
+        sr.finish();
+        if (s.mode[0] != DofMode::velocity && s.mode[1] != DofMode::velocity)
+            ctx.error(r.key_path("servo"), r.line(), "a servo controls a prescribed velocity: give vx or vy");
+    }
     auto add_protocol = [&](int comp, std::vector<double> t_pts, std::vector<double> u_pts, const std::string& key, int line) {
         if (s.mode[comp] != DofMode::inherit) {
             ctx.error(r.key_path(key), line, "component " + kComponents[comp] + " already has a support in this block");
@@ -766,7 +778,8 @@ CaseSpec load_case(const std::string& path, const std::vector<std::string>& over
             m.component = component_index(r.string("component", true, "\"x\" or \"y\"", kComponents).value_or("x"));
         r.finish();
         static const std::set<std::string> reserved{"time", "step", "stage", "E_kin", "E_el", "E_joint", "E_contact",
-                                                    "W_ext", "D_damp", "D_visc", "D_frac", "D_fric", "E_balance"};
+                                                    "W_ext", "D_damp", "D_visc", "D_frac", "D_fric", "E_balance",
+                                                    "unbalanced"};
         if (reserved.count(m.name) || spec.find_monitor(m.name))
             ctx.error(p + ".name", m.line, "the name '" + m.name + "' is already used by another column");
         if (!m.name.empty() && m.name.find_first_of(", \"\n") != std::string::npos)

@@ -131,6 +131,12 @@ struct SupportSpec {
     // protocol for one component: times (s, from the stage start) and displacements (m, relative to the stage start)
     std::vector<double> protocol_t, protocol_u;
     TimeFunction function;  // multiplies the prescribed velocities vx, vy (after their ramp)
+    // Servo-controlled loading rate (vx / vy only): the prescribed velocity times a factor in [servo_min, 1] that
+    // follows the model's unbalanced-force ratio R (the stage's `equilibrium` measure): it shrinks while the ratio,
+    // averaged over servo_time, is above servo_ratio and grows back towards 1 while it is below. 0: no servo.
+    double servo_ratio = 0;   // -, target unbalanced-force ratio
+    double servo_time = 0;    // s, response time of the controller (e-folding time of the factor and of R's mean)
+    double servo_min = 0.01;  // -, smallest velocity factor
     int line = 0;
 };
 

@@ -175,7 +175,7 @@ Simulation::Simulation(CaseSpec spec, Model model, RunOptions options)
         history_ += ",E_kin,E_el,E_joint,E_contact,W_ext,D_damp,D_visc,D_frac,D_fric,E_balance";
         if (inter_.has_joints())
             history_ += ",broken_unit_I,broken_unit_II,broken_unit_mixed,broken_interface_I,broken_interface_II,broken_interface_mixed";
-        history_ += "\n";
+        history_ += ",unbalanced\n";
     }
 }
 
@@ -327,7 +327,11 @@ void Simulation::begin_stage(int s) {
             a.group = sp.group;
             a.t0 = time_;
             a.ramp = sp.ramp;
-            if (sp.mode[c] == DofMode::velocity) a.fn = sp.function;
+            if (sp.mode[c] == DofMode::velocity) {
+                a.fn = sp.function;
+                a.servo_ratio = sp.servo_ratio, a.servo_time = sp.servo_time, a.servo_min = sp.servo_min;
+                a.servo_rbar = sp.servo_ratio;
+            }
             if (a.mode == DofMode::velocity) {
                 // Smooth ramp from the group's current prescribed velocity (0 if it was fixed or free).
                 const int d0 = 2 * a.nodes.front() + c;
@@ -520,6 +524,7 @@ void Simulation::apply_time_dependent(double t) {
             const double tau = th - s.t0;
             v = s.ramp > 0 && tau < s.ramp ? s.v_start + (s.v_target - s.v_start) * 0.5 * (1 - std::cos(kPi * tau / s.ramp)) : s.v_target;
             if (s.fn.present()) v *= s.fn(tau);
+            if (s.servo_ratio > 0) v *= s.servo_factor;
         } else {
             // Displacement protocol: the velocity that lands exactly on u(t + dt) from u(t) (corner-smoothed
             // when the support has a ramp).
@@ -709,6 +714,7 @@ void Simulation::step() {
     D_damp_ += dD;
     D_visc_ += dt * visc_power;
     unbalanced_ratio_ = scale > 0 ? unb / scale : 0;
+    update_servos();
     time_ += dt;
     tilt_deg_ += tilt_rate_ * dt;
     ++steps_;
@@ -738,6 +744,26 @@ void Simulation::step() {
     if (opt_.progress && (steps_ & 255) == 0) progress_line(false);
     if (opt_.progress_log && (steps_ & 255) == 0) progress_log_line();
     if (steps_ % 1000 == 0) check_energy(energies());
+}
+
+// Servo-controlled loading rate (the Itasca codes' practice of driving a quasi-static test by its unbalanced-force
+// ratio, Itasca 3DEC manual; Lourenco, Oliveira, Roca, Orduna 2005 run their 3DEC walls so). R's mean over the
+// response time T follows rbar += w (R - rbar), w = dt / T; the factor follows
+// f <- clamp(f exp(w clamp(ln(R* / rbar), -2, 2)), f_min, 1): while the mean ratio is above the target the actuator
+// slows down (by up to e^-2 per T), below it speeds back up, never beyond the prescribed velocity.
+void Simulation::update_servos() {
+    for (ActiveSupport& s : supports_) {
+        if (s.servo_ratio <= 0 || s.mode != DofMode::velocity) continue;
+        const double w = std::min(1.0, dt_ / s.servo_time);
+        s.servo_rbar += w * (unbalanced_ratio_ - s.servo_rbar);
+        const double g = std::log(s.servo_ratio / std::max(s.servo_rbar, 1e-300));
+        s.servo_factor = std::clamp(s.servo_factor * std::exp(w * std::clamp(g, -2.0, 2.0)), s.servo_min, 1.0);
+        s.servo_t += dt_;
+        s.servo_r_int += dt_ * s.servo_rbar;
+        s.servo_f_int += dt_ * s.servo_factor;
+        s.servo_r_max = std::max(s.servo_r_max, s.servo_rbar);
+        s.servo_f_min = std::min(s.servo_f_min, s.servo_factor);
+    }
 }
 
 // A run whose energy grows with no work put in has gone unstable even if no triangle has inverted yet
@@ -907,7 +933,7 @@ std::string Simulation::history_row(const Energies& e) {
         for (auto cls : {fracture::JointClass::unit_interior, fracture::JointClass::interface})
             for (auto mode : {fracture::FractureMode::mode_I, fracture::FractureMode::mode_II, fracture::FractureMode::mixed})
                 row += "," + std::to_string(c->of(cls, mode));
-    row += "\n";
+    row += "," + format_double(unbalanced_ratio_) + "\n";
     return row;
 }
 
@@ -1182,6 +1208,14 @@ void Simulation::run() {
         if (r.ended_by == "max_duration") how = "max_duration reached before its until/equilibrium criterion (warning)";
         log("stage " + std::to_string(s + 1) + " '" + r.name + "' ended by " + how + " at t = " + sci(r.time) + " s after " +
             std::to_string(r.steps) + " steps");
+        for (ActiveSupport& a : supports_)
+            if (a.servo_ratio > 0 && a.mode == DofMode::velocity && a.servo_t > 0) {
+                log("servo on '" + a.group + "' (" + (a.comp == 0 ? "vx" : "vy") + "): unbalanced-force ratio held at " +
+                    sci(a.servo_r_int / a.servo_t, 3) + " on average (largest " + sci(a.servo_r_max, 3) + ", target " +
+                    sci(a.servo_ratio, 3) + "); velocity factor " + sci(a.servo_f_int / a.servo_t, 3) + " on average, " +
+                    sci(a.servo_f_min, 3) + " at least");
+                a.servo_t = a.servo_r_int = a.servo_f_int = a.servo_r_max = 0, a.servo_f_min = 1;
+            }
         if (!opt_.out_dir.empty()) {
             record_dry_joints();
             write_history_row();
@@ -1246,6 +1280,7 @@ void Simulation::write_summary(const std::string& status, const std::string& mes
     for (const auto& m : spec_.monitors) cols[m.name] = m.unit();
     for (const char* c : {"E_kin", "E_el", "E_joint", "E_contact", "W_ext", "D_damp", "D_visc", "D_frac", "D_fric"}) cols[c] = "J";
     cols["E_balance"] = "-";
+    cols["unbalanced"] = "-";
     j["columns"] = cols;
     if (!spec_.curve_x.empty()) {
         Json c = Json::object();

@@ -104,8 +104,13 @@ private:
         std::vector<double> pt, pu;  // protocol: times (s, from t0) and displacements (m)
         std::vector<double> pI;      // protocol: INT_pt[0]^pt[i] u dt at each knot (m s), for the corner smoothing
         TimeFunction fn;             // velocity: factor on the prescribed velocity, of t - t0
+        double servo_ratio = 0, servo_time = 0, servo_min = 0;  // see SupportSpec (0: no servo)
+        double servo_factor = 1;     // -, the velocity factor the servo holds
+        double servo_rbar = 0;       // -, the unbalanced-force ratio averaged over servo_time
+        double servo_t = 0, servo_r_int = 0, servo_f_int = 0, servo_r_max = 0, servo_f_min = 1;  // stage statistics
         std::string group;
     };
+    void update_servos();  // after each step: the servo supports' velocity factors from the unbalanced-force ratio
     void apply_initial_conditions();
     double rotation_deg(const std::vector<int>& nodes, double lag) const;  // deg, positions x - lag v
 

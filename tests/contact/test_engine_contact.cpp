@@ -576,10 +576,11 @@ local_damping = 0.0
     REQUIRE(r.code == 0);
     const auto rows = csv_rows(testing::read_text(dir / "out" / "history.csv"));
     REQUIRE(rows.size() > 20);
-    // Columns: time, step, stage, E_kin, E_el, E_joint, E_contact, W_ext, D_damp, D_visc, D_frac, D_fric, E_balance.
+    // Columns: time, step, stage, E_kin, E_el, E_joint, E_contact, W_ext, D_damp, D_visc, D_frac, D_fric, E_balance,
+    // unbalanced.
     double worst = 0, t_worst = 0, contact_ref = 0;
     for (const auto& row : rows) {
-        REQUIRE(row.size() == 13);
+        REQUIRE(row.size() == 14);
         if (row[0] < 0.01) continue;  // from rest under gravity: see BalanceWatch
         if (row[0] > 0.19 && row[0] < 0.2) contact_ref = row[6];
         if (row[12] > worst) worst = row[12], t_worst = row[0];

@@ -144,7 +144,7 @@ TEST_CASE("a run writes history and summary and snapshots and a pvd collection",
     INFO(r.err);
     REQUIRE(r.code == 0);
     const std::string hist = testing::read_text(dir / "run" / "history.csv");
-    CHECK(hist.rfind("time,step,stage,u_top,E_kin,E_el,E_joint,E_contact,W_ext,D_damp,D_visc,D_frac,D_fric,E_balance\n", 0) == 0);
+    CHECK(hist.rfind("time,step,stage,u_top,E_kin,E_el,E_joint,E_contact,W_ext,D_damp,D_visc,D_frac,D_fric,E_balance,unbalanced\n", 0) == 0);
     const std::string summary = testing::read_text(dir / "run" / "summary.json");
     CHECK(summary.find("\"status\": \"completed\"") != std::string::npos);
     CHECK(summary.find("\"dt\"") != std::string::npos);

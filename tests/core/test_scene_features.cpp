@@ -239,6 +239,12 @@ TEST_CASE("scene features: bad time functions and initial conditions are exit 1 
         {"[[initial]]\ngroup = \"body\"\nrotation = 10.0\n" + stage, "initial.0.center"},
         {"[[initial]]\ngroup = \"nowhere\"\nvelocity = [1.0, 0.0]\n" + stage, "initial.0.group"},
         {"[[initial]]\ngroup = \"body\"\nspin = 1.0\n" + stage, "initial.0.spin"},
+        {stage + "  [[stages.supports]]\n  group = \"right\"\n  vx = 0.01\n  servo = { ratio = 1.5, time = 0.01 }\n",
+         "stages.0.supports.0.servo.ratio"},
+        {stage + "  [[stages.supports]]\n  group = \"right\"\n  vx = 0.01\n  servo = { ratio = 0.01 }\n",
+         "stages.0.supports.0.servo.time"},
+        {stage + "  [[stages.supports]]\n  group = \"right\"\n  fix = \"x\"\n  servo = { ratio = 0.01, time = 0.01 }\n",
+         "stages.0.supports.0.servo"},
     };
     int i = 0;
     for (const Bad& b : cases) {
@@ -248,4 +254,50 @@ TEST_CASE("scene features: bad time functions and initial conditions are exit 1 
         CHECK(r.code == 1);
         CHECK(r.err.find(b.key) != std::string::npos);
     }
+}
+
+// Servo-controlled loading rate (stage support key servo): the velocity factor f follows
+// f <- clamp(f exp(w clamp(ln(R* / rbar), -2, 2)), f_min, 1), w = dt / T, rbar the ratio's mean over T.
+//   - The unbalanced-force ratio R = sum |f| / sum (|f_int| + |f_ext|) is at most 1 (triangle inequality), so a
+//     target of 0.999999 never slows the drive: same bits as without the servo.
+//   - A target far below every ratio reached (1e-12) saturates the controller at e^-2 per T from the first steps,
+//     so f(t) = max(f_min, exp(-2 t / T)) and the driven edge moves by
+//     u = v T / 2 (1 - f_min) + f_min v (t_end - t1),  t1 = T ln(1 / f_min) / 2.
+TEST_CASE("servo loading: a target above every unbalanced-force ratio leaves the drive unchanged; a target below "
+          "them slows it at e^-2 per response time down to min_factor",
+          "[unit][scene]") {
+    const std::string head = square_head("servo") + R"(
+[[stages]]
+name = "pull"
+duration = 0.05
+local_damping = 0.0
+  [[stages.supports]]
+  group = "left"
+  fix = "xy"
+  [[stages.supports]]
+  group = "right"
+  vx = 0.01
+)";
+    auto edge_ux = [](const fdem::Simulation& sim) {
+        const auto& md = sim.model();
+        double ux = 0;
+        for (int k : md.group("right").nodes) ux += md.x[2 * k] - md.X[2 * k];
+        return ux / static_cast<double>(md.group("right").nodes.size());
+    };
+    auto plain = testing::make_simulation(head, "servo_plain");
+    plain.run();
+    auto high = testing::make_simulation(head + "  servo = { ratio = 0.999999, time = 0.01 }\n", "servo_high");
+    high.run();
+    CHECK(high.model().x == plain.model().x);
+    CHECK(high.model().v == plain.model().v);
+
+    const double v = 0.01, T = 0.01, fmin = 0.05;
+    auto low = testing::make_simulation(head + "  servo = { ratio = 1e-12, time = 0.01, min_factor = 0.05 }\n", "servo_low");
+    low.run();
+    const double t_end = low.time(), t1 = 0.5 * T * std::log(1 / fmin);
+    const double expected = 0.5 * v * T * (1 - fmin) + fmin * v * (t_end - t1);
+    std::printf("[scene] servo: unslowed edge %.6e m; slowed %.6e m, closed form %.6e m\n", edge_ux(plain), edge_ux(low),
+                expected);
+    CHECK(edge_ux(plain) == Approx(v * t_end).epsilon(1e-3));
+    CHECK(edge_ux(low) == Approx(expected).epsilon(5e-3));
 }
