@@ -11,7 +11,7 @@ Is the peak a peak: the load at the last history row of the same curve and drop_
 end) / peak; past_peak = "yes" when the drop is at least PAST_PEAK_DROP (5 %), else the curve is still rising or
 flat and the "peak" is only the largest load reached so far.
 
-Quasi-static check (FORMULATION §4): the cases named by --rate-case (repeatable; `all` = every case; default the
+Quasi-static check (README.md 'Physics'): the cases named by --rate-case (repeatable; `all` = every case; default the
 first case) are run again with their loading rate halved, each as its own run; per checked case the report gives
 both peaks, their relative change, the verdict (quasi-static when |change| < QS_LIMIT = 2 %) and the status of the
 half-rate run, then "N of M checked cases quasi-static; largest change X %"; quasi_static.csv holds the same table.
@@ -149,7 +149,12 @@ def numerical_settings(tree: dict) -> dict:
     for name, m in (tree.get("materials") or {}).items():
         fr = m.get("fracture") if isinstance(m, dict) else None
         if isinstance(fr, dict) and "penalty" in fr:
-            pens.append(f"{name} p_j={fr['penalty']:g} Pa")
+            if isinstance(fr["penalty"], (int, float)):
+                pens.append(f"{name} p_j={fr['penalty']:g} Pa")
+            else:  # penalty = "auto" (from the element size), at least penalty_ref (fracture/README.md)
+                ref = fr.get("penalty_ref")
+                pens.append(f"{name} p_j={fr['penalty']}" + (f" (ref {ref:g} Pa)" if isinstance(ref, (int, float))
+                                                              else ""))
     for itf in tree.get("interfaces") or []:
         regs = "/".join(itf.get("regions", []))
         for k, unit in (("normal_penalty", "Pa"), ("tangential_penalty", "Pa"), ("normal_stiffness", "Pa/m"),
@@ -278,7 +283,7 @@ def curve_metrics(run_dir: str, smooth_m: float = 0.0, rule: str = "largest", up
            "peak_raw_N": float(np.max(raw)), "oscillation_N": oscillation(x, raw, y, smooth_m),
            "load_sign": sign, "load_sign_rule": sign_rule}
     out.update(damping_work_shares(run, last, c, n))
-    # EEEP ductility of the same curve ([K25] Eq. 14, FORMULATION §9: K_e by regression to 70 % of the peak,
+    # EEEP ductility of the same curve ([K25] Eq. 14, tools/README.md 'eeep': K_e by regression to 70 % of the peak,
     # Delta_u = displacement at the peak, the [K25] choice); None when the curve has no elastic branch to fit. With
     # --peak first the curve ends at the first peak, so that peak is eeep's.
     try:
