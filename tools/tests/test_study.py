@@ -1,4 +1,5 @@
 import csv
+import re
 import json
 import os
 
@@ -170,3 +171,22 @@ def test_real_fdem_cyclic_hysteresis(tmp_path, cli):
         assert cyc[col["P_minus_kN"]] == pytest.approx(-cyc[col["P_plus_kN"]], rel=0.05)
         assert cyc[col["k_d"]] == pytest.approx(1.0, abs=0.05)
     assert (tmp_path / "h.png").exists()
+
+
+@needs_fdem
+def test_shipped_dry_stone_wall_checks_at_every_study_size():
+    """The [K25] stone joints take penalty = "auto" (penalty_ref 1e10 Pa): the fixed 1e10 Pa at the shipped 25 mm
+    mesh, so no committed result changes, and a stiffer joint at the coarse sizes of a mesh study, which with the
+    fixed penalty failed the fracture-energy check ("joint too soft") at 0.1 and 0.05 m."""
+    import subprocess
+    case = os.path.join(os.path.dirname(TINY), "..", "..", "..", "cases", "lourenco2005", "k25_N100_quick.toml")
+    got = {}
+    for h in ("0.1", "0.05", None):
+        cmd = [_fdem(), "check", case] + (["--set", f"geometry.mesh_size={h}"] if h else [])
+        r = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
+        assert r.returncode == 0, r.stdout + r.stderr
+        m = re.search(r'penalty = "auto": p_j = ([0-9.e+]+) Pa', r.stdout + r.stderr)
+        assert m, r.stdout + r.stderr
+        got[h] = float(m.group(1))
+    assert got[None] == 1e10  # the fixed value these cases had
+    assert got["0.1"] > got["0.05"] > 1e10  # [K25] joints stiffened where the check needs it
