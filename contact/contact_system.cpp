@@ -193,7 +193,7 @@ double ContactSystem::effective_buffer(const double* x) const {
             lmin = std::min(lmin, std::hypot(T[2 * j] - T[2 * k], T[2 * j + 1] - T[2 * k + 1]));
         }
     }
-    return std::isfinite(lmin) ? lmin / 5.0 : 0.0;  // FORMULATION §5 default
+    return std::isfinite(lmin) ? lmin / 5.0 : 0.0;  // README.md 'Physics', contact default
 }
 
 void ContactSystem::detect(const double* x) {

@@ -67,7 +67,7 @@ public:
     // Triangles joined by an intact cohesive element never form a pair; include_pair when it breaks.
     void exclude_pair(int ta, int tb);
     void include_pair(int ta, int tb);
-    // Copies of one mesh vertex (FORMULATION §1 duplicates a node wherever a crack may open; §5: triangles sharing a
+    // Copies of one mesh vertex (README.md 'Physics' duplicates a node wherever a crack may open; §5: triangles sharing a
     // node never form a pair). vertex[k], one per node (or empty: off, the default), is the mesh vertex node k is a
     // copy of. Two triangles of one body that meet only at copies of a vertex (corner neighbours inside a crackable
     // unit) then form no pair until release_vertex_of(k) is called for a copy k of that vertex, which the engine
@@ -77,7 +77,7 @@ public:
     void set_vertex_copies(std::vector<int> vertex);
     void release_vertex_of(int node);
 
-    // FORMULATION §3: min over triangles that can ever touch (all triangles, since any may become capable) of
+    // README.md 'Physics': min over triangles that can ever touch (all triangles, since any may become capable) of
     // 2 sqrt(m / k), m the lightest node mass of the triangle (kg), k = (stiffest normal or tangential slope of
     // the laws its material can meet, Pa/m) * t * (longest edge). x: positions (m) for the element sizes.
     double stable_dt(const double* x, const double* node_mass) const;

@@ -1,5 +1,5 @@
 // contact/potential.hpp: distributed-potential contact force and Coulomb friction of one triangle pair
-// ([MA00]; [M04] ch. 2; [K25] Eqs. 2-5; FORMULATION §5). Pure functions on small fixed arrays.
+// ([MA00]; [M04] ch. 2; [K25] Eqs. 2-5; README.md 'Physics', contact). Pure functions on small fixed arrays.
 //
 // DATA LAYOUT
 //   A triangle is 6 doubles (x0, y0, x1, y1, x2, y2), counter-clockwise, current configuration (m).
@@ -22,7 +22,7 @@
 //   Its derivative for a rigid translation/rotation of A, by the divergence theorem on A∩B (phi_A = 0 on dA,
 //   phi_B = 0 on dB), gives the force on A
 //       f_A = t [ c_A INT_{dB ∩ A} n_B phi_A dG  -  c_B INT_{dA ∩ B} n_A phi_B dG ],   f_B = -f_A,
-//   n_X the outward normal of X. (FORMULATION writes f_c = p t INT (grad phi_t - grad phi_c) dA with the opposite
+//   n_X the outward normal of X. ([MA00] writes f_c = p t INT (grad phi_t - grad phi_c) dA with the opposite
 //   sign convention for grad phi; the force here is repulsive, checked against -dE/du in the tests.)
 //   Discrete: each edge segment inside the other triangle is split where the minimum in phi changes branch; on each
 //   piece phi is linear, so INT N_a phi dG (edge nodes, linear shape functions N) and INT L_k phi dG (the other

@@ -1,4 +1,4 @@
-// fracture/cohesive_system.hpp: the set of 4-node cohesive crack elements of a model (FORMULATION §6).
+// fracture/cohesive_system.hpp: the set of 4-node cohesive crack elements of a model (fracture/README.md).
 //
 // Conventions (fixed; the engine must follow them, orient_elements() helps):
 // - Element nodes n = {a0, a1, b0, b1}: side A edge a0->a1, side B edge b0->b1, a0/b0 and a1/b1 at the same

@@ -1,4 +1,4 @@
-// fracture/law.cpp: softening function, energy-exact ranges and the point law of FORMULATION §6.
+// fracture/law.cpp: softening function, energy-exact ranges and the point law of fracture/README.md.
 // DATA LAYOUT: none (pure scalar functions; the element loop lives in cohesive_system.cpp).
 #include "fracture/law.hpp"
 
@@ -43,7 +43,7 @@ double softening_integral() {
 }
 
 double softening_range(double fracture_energy, double strength, double elastic_limit) {
-  // FORMULATION §6: G = (2/3) f o_p + kappa f o_t  =>  o_t = (G - (2/3) f o_p) / (kappa f).
+  // fracture/README.md: G = (2/3) f o_p + kappa f o_t  =>  o_t = (G - (2/3) f o_p) / (kappa f).
   return (fracture_energy - (2.0 / 3.0) * strength * elastic_limit) / (softening_integral() * strength);
 }
 

@@ -1,4 +1,4 @@
-// fracture/law.hpp: the cohesive traction-separation law of FORMULATION §6 as small pure functions.
+// fracture/law.hpp: the cohesive traction-separation law of fracture/README.md as small pure functions.
 //
 // One integration point of a cohesive element sees an opening `o` (m, positive when the faces separate,
 // negative when they overlap) and a slip `s` (m, either sign). Its physical history is the damage `D` in [0, 1],
@@ -14,7 +14,7 @@
 //   f_s = c + max(0, -sigma) tan(phi),  o_p = 2 f_t / K_n,  s_p = 2 f_s / K_s,
 //   D_I = max(0, (o - o_p)/o_t),  D_II = max(0, (|s| - s_p)/s_t),  D = min(1, sqrt(D_I^2 + D_II^2)).
 // K_n, K_s (Pa/m) are the initial slopes of the law: p_j / h for a penalty joint (then o_p = 2 h f_t / p_j as in
-// FORMULATION), or the measured k_n, k_s of a zero-thickness interface. Writing the compressive branch as K_n o
+// fracture/README.md), or the measured k_n, k_s of a zero-thickness interface. Writing the compressive branch as K_n o
 // instead of 2 (o/o_p) f_t is the same number and stays defined when it matters least (f_t tiny).
 // The shear curve depends on f_s and so on the current compression: like friction, that coupling is not a
 // potential, so a cycle of normal stress at fixed slip can move energy between the bookkeeping terms; it is bounded
@@ -38,7 +38,7 @@
 //
 // Option compressive cap (case key compressive_strength = f_c, Pa; off by default, then the law above is unchanged):
 // the compressive stress is bounded by f_c, as the cap of the interface models of Lourenco & Rots (1997) [LR97] and
-// the compressive strength the DEM reproductions give the mortar joints (CASES.md §B), here perfectly plastic (no
+// the compressive strength the DEM reproductions give the mortar joints (cases/README.md §B), here perfectly plastic (no
 // compressive softening or hardening: no compressive fracture energy is given). Past f_c the joint closes plastically:
 // a closure o_c <= 0 (history) is kept, every branch of the law then reads the elastic separation o - o_c, so an
 // unloaded crushed joint is open by -o_c at o = 0. Crushing dissipates f_c |d o_c|, booked with the damage
@@ -58,7 +58,7 @@ double softening(double D);
 // to machine precision so that the energy-exact ranges below are exact to rounding, not to 5 digits.
 double softening_integral();
 
-// Elastic limit (m): opening or slip at peak stress, o_p = 2 f / K (FORMULATION §6; K in Pa/m, f in Pa).
+// Elastic limit (m): opening or slip at peak stress, o_p = 2 f / K (fracture/README.md; K in Pa/m, f in Pa).
 inline double opening_at_peak(double strength, double stiffness) { return 2.0 * strength / stiffness; }
 
 // Energy-exact softening range (m): o_t = (G - (2/3) f o_p) / (kappa f). G in J/m^2, f in Pa, o_p in m.
@@ -198,7 +198,7 @@ inline PointResponse evaluate_point(const JointLaw& L, double o_geo, double s, c
   const double D_old = old.damage;
   const double D = trial >= 1.0 ? 1.0 : (trial > D_old ? trial : D_old);
 
-  // Undamaged tensile and shear curves and their energies; z(D) scales both (FORMULATION §6).
+  // Undamaged tensile and shear curves and their energies; z(D) scales both (fracture/README.md).
   double t_n0 = 0.0, e_n0 = 0.0;
   if (o > 0.0) {
     if (o >= o_p) {

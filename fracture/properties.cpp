@@ -79,7 +79,7 @@ std::vector<std::string> check(const CohesiveProps& p, double h_max, double sigm
   }
   if (!out.empty()) return out;  // the energy checks need every value above
 
-  // Too-compliant joints: the pre-peak work alone would exceed G (FORMULATION §6).
+  // Too-compliant joints: the pre-peak work alone would exceed G (fracture/README.md).
   double K_n = 0.0, K_s = 0.0;
   stiffnesses(p, h_max, K_n, K_s);
   const double f_t = p.tensile_strength;

@@ -40,8 +40,7 @@ std::vector<std::string> check(const CohesiveProps& props, double h_max, double 
 
 // penalty = "auto" (fracture/README.md, "Mesh-aware penalty"): the joint penalty of a class whose longest element
 // is h_max (m), p_j = max(p_ref, kAutoPenaltyMargin * p_G) with p_G = 4 h_max max(f_t^2 / G_I, c^2 / G_II) / 3 (Pa),
-// the penalty at which the pre-peak work (2/3) f o_p of the longest element equals G (o_p = 2 h f / p_j, FORMULATION
-// of law.hpp). With the margin 1.5 the pre-peak work is at most 2/3 of G, a third is left for the softening branch.
+// the penalty at which the pre-peak work (2/3) f o_p of the longest element equals G (o_p = 2 h f / p_j, law.hpp). With the margin 1.5 the pre-peak work is at most 2/3 of G, a third is left for the softening branch.
 // p_ref: props.penalty_ref (Pa), which the engine sets to 10 E when the case gives none.
 inline constexpr double kAutoPenaltyMargin = 1.5;
 double auto_penalty(const CohesiveProps& props, double h_max);

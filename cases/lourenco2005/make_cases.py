@@ -9,14 +9,14 @@ import os
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 G = 9.81            # m/s^2
-RHO = 2400.0        # kg/m^3, stone and concrete (assumed, CASES.md §A)
+RHO = 2400.0        # kg/m^3, stone and concrete (assumed, cases/README.md §A)
 T = 0.2             # m, wall thickness
 L, H = 1.0, 1.0     # m, wall length and height
 BEAM_H = 0.2        # m, beam depth (assumed)
 BASE_H = 0.1        # m, base slab depth (assumed)
 W_WALL = RHO * G * L * H * T            # N
 W_BEAM = RHO * G * L * BEAM_H * T       # N
-# Loading (the same for every wall and variant; RESULTS.md §6). CASES.md §A gives the rigid-block limit of these walls
+# Loading (the same for every wall and variant; RESULTS.md §6). cases/README.md §A gives the rigid-block limit of these walls
 # as "H = N/2 plus the self-weight share": a lever arm equal to the wall's height (the horizontal load acts at the top
 # of the wall, h = 1.0 m) and the self-weight acting on top of N. The same section also says N "includes the wall's and
 # beam's self-weight"; the two readings contradict each other. We follow the limit analysis, because the test paper's
@@ -27,7 +27,7 @@ W_BEAM = RHO * G * L * BEAM_H * T       # N
 # 16.92 kN (RESULTS.md §6).
 LOAD_HEIGHT = 1.0   # m, the actuator node: the beam's left end at the top of the wall
 
-# Numerical settings shared by every wall of a variant (FORMULATION §3-5). The [K25] time step is fixed so that all
+# Numerical settings shared by every wall of a variant (README.md 'Physics'). The [K25] time step is fixed so that all
 # four walls use the same one: 1.5e-6 s = 0.76 of the joint-spring limit 1.985e-6 s of this mesh (before engine commit
 # 0b03ca9 the engine took 0.8 x the triangle limit, 1.5e-5 s, and the wall blew up at step 9).
 # Loading rate 0.01 m/s for both variants: a single dry block pushed over its base at 0.1 m/s shows a mean force 38 %
@@ -81,7 +81,7 @@ mesh_size_base = 0.1     # m
 """
 
 COMMON_TAIL = """
-[materials.concrete]     # beam and base slab: elastic, no cracking (FORMULATION §8)
+[materials.concrete]     # beam and base slab: elastic, no cracking (cases/README.md 'A 3D test as a 2D model')
 E = 1.0e9                # Pa (assumed: 1-2x the wall modulus; a stiffer value makes the small beam/base triangles
                          # at the wall corners set a time step several times smaller)
 nu = 0.2
@@ -199,17 +199,17 @@ def header(title, r, variant_text, s, fname):
 #   J. Struct. Eng. 131(11) 2005: dry-joint sandstone wall 1000 x 1000 x 200 mm, blocks 200 x 100 x 200 mm, running
 #   bond, RC beam on top free to rotate, bottom-left block restrained against sliding; N = {r['N_kN']} kN
 #   (sigma = {r['sigma_MPa']} MPa), then horizontal displacement of the beam until well past peak.
-#   Measured peak {r['experiment_kN']} kN; published FDEM [K25] {r['fdem_k25_kN']} kN (reference.csv, CASES.md §A).
-# Model (FORMULATION §8): the wall stands on a concrete base slab (fixed at base_bottom) through a dry joint, so it can
+#   Measured peak {r['experiment_kN']} kN; published FDEM [K25] {r['fdem_k25_kN']} kN (reference.csv, cases/README.md §A).
+# Model (cases/README.md 'A 3D test as a 2D model'): the wall stands on a concrete base slab (fixed at base_bottom) through a dry joint, so it can
 #   rock and slide; the beam is tied to the top course; N is a force on beam_top and the self-weight of wall and beam
 #   ({W_WALL:.1f} + {W_BEAM:.1f} N, gravity on) acts in addition, so the base carries N + {W_WALL + W_BEAM:.1f} N. The actuator
 #   is a single node at the beam's left end at the top of the wall (h = {LOAD_HEIGHT} m): horizontal velocity prescribed,
-#   vertical free, the beam rotates. Both follow the rigid-block limit of CASES.md §A, H = N/2 plus the self-weight
-#   share, which CASES.md's other sentence ("N includes the self-weight") contradicts: see make_cases.py and
+#   vertical free, the beam rotates. Both follow the rigid-block limit of cases/README.md §A, H = N/2 plus the self-weight
+#   share, which the brief's other sentence (cases/README.md §A) ("N includes the self-weight") contradicts: see make_cases.py and
 #   RESULTS.md §6 (the other reading: --set stages.0.loads.0.force=[0.0,-(N - {W_WALL + W_BEAM:.1f})]; the load at the
 #   beam's mid-depth: --set groups.actuator.nearest=[0.0,1.1]).
 {variant_text}
-# Assumed values (not published): Poisson 0.2, density 2400 kg/m^3 (CASES.md); beam 200 mm deep and base 100 mm deep,
+# Assumed values (not published): Poisson 0.2, density 2400 kg/m^3 (cases/README.md §A); beam 200 mm deep and base 100 mm deep,
 #   both concrete with E = 1 GPa (elastic, no cracking); loading rate {s['rate']} m/s up to {s['until'] * 1000:g} mm;
 #   local damping 0.8 in the precompression stage and {s['damping']} in the shear stage; the numerical settings
 #   above are the same for all four walls.
@@ -226,8 +226,12 @@ def k25_case(r, quick=False):
     variant = f"""# Variant [K25]: the blocks take the wall modulus calibrated per precompression in [K25] (E = {r['E_wall_k25_MPa']} MPa at
 #   this N) and may crack (cohesive elements on every edge inside a block: f_t 3.7 MPa, c 5.2 MPa, G_I 110 N/m,
 #   G_II 770 N/m, friction 35 deg, residual 35 deg); joints between blocks and at the base are dry (f_t = c = 0),
-#   friction 31.8 deg, contact penalty p_n = {s['penalty']:g} Pa (assumed; same for the crack faces, the joint penalty
-#   p_j of the blocks: the smallest value > 5.7e9 Pa that the fracture-energy check of the 25 mm mesh allows, x 1.75).
+#   friction 31.8 deg, contact penalty p_n = {s['penalty']:g} Pa (assumed; same for the crack faces). The joint penalty
+#   p_j of the blocks is penalty = "auto" with penalty_ref = {s['penalty']:g} Pa: max(p_ref, 1.5 p_G), p_G the least
+#   value the fracture-energy check allows at the longest block edge (fracture/README.md "Mesh-aware penalty"). At
+#   the 25 mm mesh (longest edge 34.2 mm, 1.5 p_G = 8.5e9 Pa) that is {s['penalty']:g} Pa, the fixed value these cases
+#   had (`fdem check` prints it); coarser meshes of a mesh study get the stiffer joint the check needs (0.05 m:
+#   1.54e10 Pa, 0.1 m: 2.49e10 Pa) instead of failing.
 # Mesh: {s['mesh'] * 1000:g} mm in the blocks (the [K25] size, from the single-stone study), 100 mm in the beam and base.
 {{settings_text}}"""
     if quick:
@@ -266,7 +270,8 @@ density = 2400.0         # kg/m^3, assumed
   residual_friction = 35.0   # deg
   GI = 110.0                 # J/m^2
   GII = 770.0                # J/m^2
-  penalty = {s['penalty']:g}         # Pa, joint penalty p_j (assumed)
+  penalty = "auto"           # joint penalty p_j from the element size (see the header)
+  penalty_ref = {s['penalty']:g}      # Pa, the least p_j (assumed): p_j at the 25 mm mesh
 """
     interfaces = f"""[[interfaces]]           # dry joints between blocks
 regions = ["units", "units"]
@@ -338,7 +343,7 @@ shear_stiffness = {ks:.4g}    # Pa/m
     return fname, text
 
 
-# Single stone in tension (CASES.md §A2): the joint penalty must satisfy the fracture-energy check at the coarsest
+# Single stone in tension (cases/README.md §A2): the joint penalty must satisfy the fracture-energy check at the coarsest
 # mesh (100 mm: p_j > 4 h f_t^2 / (3 G_I) = 2.3e10 Pa for its 141 mm diagonal edges), so the study uses 3e10 Pa at
 # every size. The stable limit of the joint springs scales with h (node mass ~ h^2, spring p_j t): dt = 0.7 x that.
 # Local damping 0.8 in the pull: the bar stores f_t^2 V / (2E) = 35.6 J at peak, 16 x G_I A, and a displacement-driven
@@ -352,9 +357,9 @@ STONE_SIZES = [(0.1, "100mm"), (0.05, "50mm"), (0.025, "25mm"), (0.01, "10mm")]
 def stone_case(h, tag):
     dt = 0.7 * 2.0e-6 * (1.0e10 / STONE["penalty"]) ** 0.5 * (h / 0.025)
     fname = f"stone_tension_{tag}.toml"
-    text = f"""# Single sandstone unit in uniaxial tension, mesh {h * 1000:g} mm (mesh sensitivity, CASES.md §A2)
+    text = f"""# Single sandstone unit in uniaxial tension, mesh {h * 1000:g} mm (mesh sensitivity, cases/README.md §A2)
 # Reproduces: the single-stone study of [K25] that chose the 25 mm mesh of the walls (sizes 100, 50, 25, 10 mm: 1, 2,
-#   4 and 10 triangles across the 100 mm edge). Closed-form checks (CASES.md §C): peak force f_t A = 3.7e6 x 0.1 x 0.2
+#   4 and 10 triangles across the 100 mm edge). Closed-form checks (cases/README.md §C): peak force f_t A = 3.7e6 x 0.1 x 0.2
 #   = 74.0 kN; energy dissipated at full separation G_I A = 110 x 0.02 = 2.2 J; characteristic length
 #   E G_I / f_t^2 = {7.68e8 * 110 / 3.7e6 ** 2 * 1000:.2f} mm.
 # Model: one block 200 x 100 mm (thickness 200 mm), cohesive elements on every inner edge (f_t 3.7 MPa, c 5.2 MPa,
@@ -420,7 +425,7 @@ monitor = "R_left"
 quantity = "first_peak"      # the tensile strength: the peak before the first cohesive break, not the ringing after it
 value = 74.0e3           # N, f_t A
 tolerance = 0.05
-source = "closed form f_t A (CASES.md §C)"
+source = "closed form f_t A (cases/README.md §C)"
 
 [[stages]]
 name = "pull"

@@ -22,7 +22,7 @@ BEAM_E = 2.0e10    # Pa, steel beams modelled softer than steel (210 GPa) to kee
 # The top beam in the shear stage. "held" (the cases without suffix): no rotation and no vertical movement after the
 # precompression, so the vertical force grows as the wall dilates; our reading of the test in Lourenco & Rots (1997)
 # and Lourenco's thesis (1996), whose interface models reach the measured peaks (to be confirmed by the steering). "free" (suffix _constN): no rotation, free to
-# move vertically, N constant, as CASES.md §B states; then rigid rocking bounds H by N L / h (29.6 kN at 0.30 MPa,
+# move vertically, N constant, as the earlier reading of cases/README.md §B has it; then rigid rocking bounds H by N L / h (29.6 kN at 0.30 MPa,
 # below the measured 50 kN), see RESULTS.md.
 TOP_SUFFIX = {"held": "", "free": "_constN"}
 TOP_KEY = {"held": 'fix = "y"', "free": 'rigid = "y"'}
@@ -32,10 +32,10 @@ TOP_HEADER = {
     "held": """In the shear stage the whole beam is driven horizontally (vx) and held vertically
 #   (fix = "y"): it cannot rotate nor move up or down, so the vertical force grows when the wall dilates (monitor V_base).
 #   This follows Lourenco & Rots (1997) / Lourenco (1996), who (as we read them; to be confirmed) modelled these
-#   tests with the top boundary kept horizontal and its vertical movement precluded. CASES.md §B says "free to move vertically" (N constant): that
+#   tests with the top boundary kept horizontal and its vertical movement precluded. The earlier reading (cases/README.md §B) said "free to move vertically" (N constant): that
 #   reading is the _constN variant; with N constant, rigid rocking bounds H by N L / h, which at 0.30 MPa (29.6 kN)
 #   is far below the measured 50 kN (cases/vermeltfoort/RESULTS.md).""",
-    "free": """Variant _constN (CASES.md §B as written): in the shear stage the whole beam is driven
+    "free": """Variant _constN (the earlier reading of cases/README.md §B): in the shear stage the whole beam is driven
 #   horizontally (vx) and kept horizontal with rigid = "y" (its nodes share one vertical velocity, moved by the
 #   resultant of their forces): the beam cannot rotate, it is free to rise or sink, and N stays constant. Rigid rocking
 #   then bounds H by N L / h (29.6 kN at 0.30 MPa against the measured 50 kN); the cases without suffix hold the beam
@@ -105,7 +105,7 @@ local_damping_filter = {DAMPING_FILTER}  # s: damping signed by v minus its movi
   ramp = 0.005           # s
 """
     return stem, f"""# Mortared clay-brick shear wall {r['wall']}, sigma = {r['sigma_MPa']} MPa{', cyclic' if cyclic else ''} (Raijmakers & Vermeltfoort 1992;
-#   Vermeltfoort et al. 1993), CASES.md §B.
+#   Vermeltfoort et al. 1993), cases/README.md §B.
 # Test: wall 990 x 1000 mm, thickness 100 mm, solid clay bricks 210 x 52 x 100 mm, 10 mm mortar joints; 18 courses,
 #   the top and bottom ones clamped in steel beams (modelled: the 16 active courses, 992 mm, between a top beam and a
 #   base). Precompression N = sigma x 0.099 m^2 = {r['N_kN']} kN, then horizontal top displacement with the top beam

@@ -43,7 +43,7 @@ Result measure(int threads, bool boundary_only) {
     s.finish(laws);
     s.fix_body(0);
     if (boundary_only) {
-        // contact-capable = triangles with an edge on their brick's boundary (FORMULATION §5)
+        // contact-capable = triangles with an edge on their brick's boundary (README.md 'Physics', contact)
         for (int e = 0; e < s.n_tri(); ++e) {
             const int* q = &s.tri[3 * e];
             const int b = s.tri_body[e];

@@ -17,7 +17,7 @@ using fracture_test::OneElement;
 namespace {
 constexpr double kPi = 3.14159265358979323846;
 
-CohesiveProps stone(double penalty) {  // CASES.md A sandstone
+CohesiveProps stone(double penalty) {  // cases/README.md §A sandstone
   CohesiveProps p;
   p.tensile_strength = 3.7e6;
   p.cohesion = 5.2e6;
@@ -148,7 +148,7 @@ TEST_CASE("mixed-mode proportional path breaks where D = 1 predicts", "[unit]") 
     OneElement el(p, h, 0.1);
     const JointLaw& L = el.sys.law(0);
     const double ca = std::cos(angle_deg * kPi / 180.0), sa = std::sin(angle_deg * kPi / 180.0);
-    // Ranges from FORMULATION §6 with f_s = c (the path opens, so no compression).
+    // Ranges from fracture/README.md with f_s = c (the path opens, so no compression).
     const double o_p = 2.0 * h * p.tensile_strength / p.penalty, s_p = 2.0 * h * p.cohesion / p.penalty;
     const double kappa = 0.386307294;
     const double o_t = (p.G_I - (2.0 / 3.0) * p.tensile_strength * o_p) / (kappa * p.tensile_strength);

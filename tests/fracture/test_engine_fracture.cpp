@@ -78,7 +78,7 @@ std::vector<Crack> broken_elements(const fdem::Simulation& sim) {
     return out;
 }
 
-// Contact pairs of one body whose triangles meet only at copies of one vertex (corner neighbours, FORMULATION §1):
+// Contact pairs of one body whose triangles meet only at copies of one vertex (corner neighbours, README.md 'Physics'):
 // the contact system drops them until a cohesive element at that vertex breaks.
 int corner_pairs(const fdem::Simulation& sim) {
     const auto* c = sim.interactions().contact();
@@ -116,7 +116,7 @@ fdem::Energies energies_now(fdem::Simulation& sim) {
 }  // namespace
 
 // ---------------------------------------------------------------------------------------------------------------
-// 1. Bar in tension, every edge crackable (CASES.md C): the transfinite mesh has straight vertical lines of edges,
+// 1. Bar in tension, every edge crackable (cases/README.md §C): the transfinite mesh has straight vertical lines of edges,
 //    so the exact answer is one straight mode I crack across the bar, peak force f_t A and dissipation G_I A.
 // ---------------------------------------------------------------------------------------------------------------
 TEST_CASE("engine bar in tension with every edge crackable: one straight crack, peak f_t A, dissipation G_I A",
@@ -338,7 +338,7 @@ void print_disc(const char* label, const DiscResult& r) {
 }  // namespace
 
 // ---------------------------------------------------------------------------------------------------------------
-// 2. Brazilian disc (CASES.md C), every edge crackable, squeezed through 12-degree arcs: the tensile stress across
+// 2. Brazilian disc (cases/README.md §C), every edge crackable, squeezed through 12-degree arcs: the tensile stress across
 //    the loaded diameter is nearly uniform (2 P / (pi D t)) over its central part and the stress near the arcs is
 //    compressive, so the crack starts near the centre and runs along the loaded diameter.
 // ---------------------------------------------------------------------------------------------------------------

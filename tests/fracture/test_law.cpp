@@ -1,4 +1,4 @@
-// Unit tests of the pure law functions and the property checks (FORMULATION §6).
+// Unit tests of the pure law functions and the property checks (fracture/README.md).
 #include <catch2/catch.hpp>
 
 #include <cmath>
@@ -23,7 +23,7 @@ bool any_contains(const std::vector<std::string>& v, const std::string& what) {
   return false;
 }
 
-CohesiveProps stone() {  // CASES.md A: sandstone units, penalty chosen by us
+CohesiveProps stone() {  // cases/README.md §A: sandstone units, penalty chosen by us
   CohesiveProps p;
   p.tensile_strength = 3.7e6;
   p.cohesion = 5.2e6;
@@ -146,7 +146,7 @@ TEST_CASE("check() accepts good classes and names missing and non-physical value
   both.k_n = 1e12;
   CHECK(any_contains(check(both, 0.025), "not both"));
 
-  CohesiveProps iface = stone();  // CASES.md B interface, measured stiffness
+  CohesiveProps iface = stone();  // cases/README.md §B interface, measured stiffness
   iface.penalty = CohesiveProps::unset;
   iface.tensile_strength = 0.25e6;
   iface.cohesion = 0.35e6;
@@ -186,7 +186,7 @@ TEST_CASE("check() reports a penalty too soft for the fracture energy", "[unit]"
 }
 
 namespace {
-// The 1.21 MPa mortar interface of CASES.md §B as properties, with the mode II energy G_II (J/m^2) to test.
+// The 1.21 MPa mortar interface of cases/README.md §B as properties, with the mode II energy G_II (J/m^2) to test.
 CohesiveProps mortar_props(double G_II) {
   CohesiveProps p;
   p.tensile_strength = 0.16e6;
@@ -200,7 +200,7 @@ CohesiveProps mortar_props(double G_II) {
   return p;
 }
 
-// The 1.21 MPa mortar interface of CASES.md §B with keep_friction; sigma the precompression (Pa).
+// The 1.21 MPa mortar interface of cases/README.md §B with keep_friction; sigma the precompression (Pa).
 JointLaw mortar(bool keep_friction) {
   CohesiveProps p = mortar_props(50.0);
   p.keep_friction = keep_friction;
@@ -310,7 +310,7 @@ TEST_CASE("check(): with keep_friction G_II pays only for the cohesion", "[unit]
 }
 
 // ---------------------------------------------------------------------------------------------------------------
-// Compressive cap (law.hpp, option compressive_strength; CASES.md §B gives f_c = 11.5 MPa for the 1.21 MPa walls):
+// Compressive cap (law.hpp, option compressive_strength; cases/README.md §B gives f_c = 11.5 MPa for the 1.21 MPa walls):
 // perfectly plastic closure past f_c, elastic unloading from the crushed state, dissipation f_c |d o_c|.
 // ---------------------------------------------------------------------------------------------------------------
 TEST_CASE("compressive cap: sigma stops at -f_c, unloads at K_n from the plastic closure, dissipates f_c |o_c|", "[unit]") {

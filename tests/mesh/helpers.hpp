@@ -12,7 +12,7 @@
 namespace fdem::mesh::testing {
 
 inline WallSpec cases_a_wall(double mesh_size = 0.05) {
-    WallSpec s;  // CASES.md §A: 1000 x 1000 mm, 200 x 100 mm units, running bond, dry joints
+    WallSpec s;  // cases/README.md §A: 1000 x 1000 mm, 200 x 100 mm units, running bond, dry joints
     s.length = 1.0;
     s.height = 1.0;
     s.unit_length = 0.2;

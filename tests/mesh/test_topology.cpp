@@ -1,4 +1,4 @@
-// tests/mesh/test_topology.cpp: edge classes, node splitting, cohesive and contact sets (FORMULATION.md §1).
+// tests/mesh/test_topology.cpp: edge classes, node splitting, cohesive and contact sets (README.md 'Physics').
 #include <catch2/catch.hpp>
 
 #include <algorithm>
@@ -180,7 +180,7 @@ TEST_CASE("tied units form one continuum and split_all separates every triangle"
 
 TEST_CASE("mortared wall with beam and base: bonded joints, named boundaries", "[unit]") {
     WallSpec s;
-    s.length = 0.99;  // CASES.md §B geometry, shortened to 6 courses
+    s.length = 0.99;  // cases/README.md §B geometry, shortened to 6 courses
     s.courses = 6;
     s.unit_length = 0.21;
     s.unit_height = 0.052;

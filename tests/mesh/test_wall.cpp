@@ -1,4 +1,4 @@
-// tests/mesh/test_wall.cpp: the masonry wall generator (CASES.md §A geometry, §A2 mesh sizes, bad inputs).
+// tests/mesh/test_wall.cpp: the masonry wall generator (cases/README.md §A geometry, §A2 mesh sizes, bad inputs).
 #include <catch2/catch.hpp>
 
 #include <algorithm>

@@ -1,6 +1,6 @@
 // Long validation runs (ctest label "validation", excluded from ./test.sh; run with ./test.sh -L validation).
 // Each runs a committed case file through the fdem executable and checks the result it prints into summary.json
-// against the reference the case names: the tolerances are the acceptance limits of issue 5 / CASES.md, not fitted.
+// against the reference the case names: the tolerances are the acceptance limits of issue 5 / cases/README.md, not fitted.
 #include <catch2/catch.hpp>
 
 #include <cmath>
@@ -77,7 +77,7 @@ void check_peak_against_test(const std::string& rel_case, const std::string& nam
 
 }  // namespace
 
-// CASES.md §A2 / §C: a single stone pulled apart carries f_t A = 3.7 MPa x 0.1 m x 0.2 m = 74 kN at its peak. The
+// cases/README.md §A2 / §C: a single stone pulled apart carries f_t A = 3.7 MPa x 0.1 m x 0.2 m = 74 kN at its peak. The
 // 25 mm mesh of the wall cases gives +1.5 % (75.11 kN, lourenco2005/RESULTS.md §10, the same with the build of
 // 24 Nov); 5 % is the case file's tolerance.
 TEST_CASE("single stone in tension, 25 mm: peak force f_t A within 5 %", "[regression]") {
@@ -95,7 +95,7 @@ TEST_CASE("dry-stone wall, N = 100 kN, [K25] style: peak within 25 % of the expe
     check_peak_against_test("lourenco2005/k25_N100.toml", "k25_N100", 0.25);
 }
 
-// Issue 5 acceptance for the mortared walls: each peak within +-15 % of CASES.md §B's measured value. The 0.30 MPa
+// Issue 5 acceptance for the mortared walls: each peak within +-15 % of cases/README.md §B's measured value. The 0.30 MPa
 // wall (J4D/J5D, 50 kN) is the one in its band (48.26 kN, -3.5 %, vermeltfoort/RESULTS.md; about 45 s on 1
 // thread); it runs bonded mortar joints, the bricks' mid-line cracks and the held beam end to end. The 1.21 and 2.12
 // MPa walls are 38-40 % low and stay out of this label until they are in their bands (RESULTS.md says why).
@@ -118,7 +118,7 @@ TEST_CASE("mortared wall, 1.21 MPa (Vermeltfoort J6D): the energy balance closes
     CHECK(balance < 0.05);
 }
 
-// Issue 5 item 3 and CASES.md §C: on a tilting table the whole wall cannot stay on its dry base joint once
+// Issue 5 item 3 and cases/README.md §C: on a tilting table the whole wall cannot stay on its dry base joint once
 // tan(alpha) > mu (friction 32 deg): some mechanism must have started by then. The committed case (filtered local
 // damping 0.05) starts a stepped wedge tipping about the toe at 28-29 deg (u_top_right > 1 mm at 28.95 deg; 28.85 at
 // half the tilt rate; tilting/RESULTS.md); with local damping 0.8 against the velocity, as until 24 Nov, it ran away

@@ -9,23 +9,29 @@ import argparse
 import os
 import sys
 
-from .common import (FORCE_UNITS, LENGTH_UNITS, STRESS_UNITS, ToolError, check_finite, load_curve, output_prefix,
-                     read_table, write_json)
+from .common import (DEFAULT_X_UNIT, DEFAULT_Y_UNIT, FORCE_UNITS, LENGTH_UNITS, SIGN_CHOICES, STRESS_UNITS,
+                     ToolError, check_finite, is_run_folder, load_curve, load_run, output_prefix, read_table,
+                     resolve_sign, stage_curve, write_json)
 
 PROG = "fdem-tools"
 COMMAND_MODULES = ["plots", "cracks", "batch", "study", "validate"]  # modules with an add_parser(subparsers) function
 
 
-def _units_args(p, x_default="m", y_default="N"):
+def _units_args(p, stage_help="keep only the rows of this stage (1-based; run folders)"):
     p.add_argument("--x", help="displacement column (default: the run's curve, or the first CSV column)")
     p.add_argument("--y", help="load column (default: the run's curve, or the second CSV column)")
-    p.add_argument("--x-unit", default=x_default, choices=list(LENGTH_UNITS),
-                   help=f"unit of the CSV displacement column (default {x_default}; run folders are SI)")
-    p.add_argument("--y-unit", default=y_default, choices=list(FORCE_UNITS),
-                   help=f"unit of the CSV load column (default {y_default}; run folders are SI)")
+    p.add_argument("--x-unit", choices=list(LENGTH_UNITS),
+                   help=f"unit of the CSV displacement column (default: the unit its name ends in, as d_mm or "
+                        f"'d [mm]', else {DEFAULT_X_UNIT}; run folders are SI)")
+    p.add_argument("--y-unit", choices=list(FORCE_UNITS),
+                   help=f"unit of the CSV load column (default: the unit its name ends in, as F_kN, else "
+                        f"{DEFAULT_Y_UNIT}; run folders are SI)")
+    p.add_argument("--load-sign", choices=SIGN_CHOICES, default="auto",
+                   help="sign of the load: auto (default: the case's output.curve.sign, else the sign that makes "
+                        "the loading work positive), 1 (as recorded) or -1 (turned)")
     p.add_argument("--report-x-unit", default="mm", choices=list(LENGTH_UNITS), help="displacement unit of the report (default mm)")
     p.add_argument("--report-y-unit", default="kN", choices=list(FORCE_UNITS), help="load unit of the report (default kN)")
-    p.add_argument("--stage", type=int, help="keep only the rows of this stage (1-based; run folders)")
+    p.add_argument("--stage", type=int, help=stage_help)
     p.add_argument("--zero-start", action="store_true",
                    help="measure displacements from the first point kept (e.g. the start of --stage)")
     p.add_argument("--partial", action="store_true", help="accept a run whose summary is not 'completed'")
@@ -47,11 +53,38 @@ def _ru(args):
 # ----------------------------------------------------------------------------------------------
 
 
+def last_stage(source: str, partial: bool) -> int | None:
+    """The last stage of a run folder's history (validate's choice: the loading after precompression)."""
+    run = load_run(source, allow_unfinished=partial)
+    h = run.history
+    if h is not None and h.has("stage") and len(h):
+        import numpy as np
+        return int(np.max(h.numeric("stage")))
+    return None
+
+
 def cmd_eeep(args):
     from . import eeep
-    c = _curve(args)
-    res = eeep.eeep(c.x, c.y, fraction=args.limit, ultimate=args.ultimate, drop=args.drop, stiffness=args.stiffness,
-                    source=c.source)
+    from .validate import smooth_curve
+    if not args.smooth >= 0:
+        raise ToolError(f"--smooth must be a window >= 0 mm, got {args.smooth}")
+    run_folder = is_run_folder(args.source)
+    if run_folder and args.stage is None and not args.all_stages:
+        # the same curve validate measures: the last stage, displacement from its start, the one load sign rule
+        args.stage = last_stage(args.source, args.partial)
+        c = load_curve(args.source, args.x, args.y, args.x_unit, args.y_unit, args.stage, args.partial)
+        check_finite(c)
+        x, y, sign, sign_rule = stage_curve(c, args.load_sign)
+        stage_note = f"stage {args.stage} (the last), displacement from its start" if args.stage else "all rows"
+    else:
+        c = _curve(args)
+        sign, sign_rule = resolve_sign(c, args.load_sign)
+        x, y = c.x, sign * c.y
+        stage_note = f"stage {args.stage}" if args.stage is not None else "all rows"
+    if args.smooth > 0:
+        y = smooth_curve(abs(x - x[0]), y, args.smooth * 1e-3)
+    res = eeep.eeep(x, y, fraction=args.limit, ultimate=args.ultimate, drop=args.drop, stiffness=args.stiffness,
+                    source=c.source, load_sign=1.0)
     (xu, fx), (yu, fy) = _ru(args)
     prefix = output_prefix(args.source, "eeep", args.out)
     report = {
@@ -66,15 +99,23 @@ def cmd_eeep(args):
         "regression_limit": res["regression_limit"], "regression_points": res["regression_points"],
         "stiffness_rule": res["stiffness_rule"], "ultimate_rule": res["ultimate_rule"],
         "ultimate_note": res["ultimate_note"], "yield_note": res["yield_note"],
-        "sign_x": res["sign_x"], "sign_y": res["sign_y"], "origin_added": res["origin_added"],
+        "sign_x": res["sign_x"], "sign_y": res["sign_y"] * sign, "load_sign_rule": sign_rule,
+        "origin_added": res["origin_added"], "fallback": res["fallback"], "curve_rows": stage_note,
+        "smooth_mm": args.smooth, "input_units": {"x": c.x_unit, "y": c.y_unit, "rules": list(c.unit_rules)},
+        "warnings": list(c.warnings),
         "si": {k: res[k] for k in ("K_e", "P_peak", "Delta_peak", "Delta_u", "P_y", "Delta_y", "area")},
     }
     files = [write_json(prefix + ".json", report)]
     if not args.no_plot:
-        files += eeep.plot(c.x, c.y, res, prefix, c.label, (xu, fx), (yu, fy))
+        files += eeep.plot(x, y, res, prefix, c.label, (xu, fx), (yu, fy))
     print(f"{c.label}: K_e = {report['K_e']:.5g} {yu}/{xu}, P_peak = {report['P_peak']:.5g} {yu}, "
           f"P_y = {report['P_y']:.5g} {yu}, Delta_y = {report['Delta_y']:.5g} {xu}, "
           f"Delta_u = {report['Delta_u']:.5g} {xu}, ductility = {report['ductility']:.4g}")
+    print(f"  curve: {stage_note}; load sign {sign:+g} ({sign_rule})"
+          + (f"; load averaged over {args.smooth:g} mm" if args.smooth > 0 else ""))
+    if res["fallback"]:
+        print(f"  FALLBACK: {res['yield_note']} (no elastic-plastic line of stiffness K_e holds the area "
+              f"{res['area']:.4g} J up to Delta_u)")
     print("wrote " + ", ".join(files))
 
 
@@ -140,31 +181,35 @@ def cmd_hysteresis(args):
     from .common import write_csv
     c = _curve(args)
     (xu, fx), (yu, fy) = _ru(args)
+    sign, sign_rule = resolve_sign(c, args.load_sign)
     k_el = args.k_el * fy / fx if args.k_el is not None else None
-    res = hysteresis.analyse(c.x, c.y, k_el=k_el, e_h=args.e_h, deadband=args.deadband, source=c.source)
+    res = hysteresis.analyse(c.x, c.y, k_el=k_el, e_h=args.e_h, deadband=args.deadband, source=c.source,
+                             load_sign=sign, tip_band=args.tip_band)
     prefix = output_prefix(args.source, "hysteresis", args.out)
     rows = []
     for cy in res["cycles"]:
         rows.append([cy["cycle"], int(cy["complete"]), cy["d_plus"] / fx, cy["P_plus"] / fy, cy["d_minus"] / fx,
                      cy["P_minus"] / fy, cy["k_i"] * fx / fy, cy["k_d"], cy["W_i"], cy["E_i"], cy["E_d"],
-                     cy["d_max"] / fx, cy["P_at_d_max"] / fy, cy["d_min"] / fx, cy["P_at_d_min"] / fy,
-                     cy["k_ext"] * fx / fy])
+                     int(cy["W_negative"]), cy["P_largest_plus"] / fy, cy["d_at_P_largest_plus"] / fx,
+                     cy["P_largest_minus"] / fy, cy["d_at_P_largest_minus"] / fx])
     header = ["cycle", "complete", f"d_plus_{xu}", f"P_plus_{yu}", f"d_minus_{xu}", f"P_minus_{yu}",
-              f"k_i_{yu}_per_{xu}", "k_d", "W_i_J", "E_i_J", "E_d", f"d_max_{xu}", f"P_at_d_max_{yu}",
-              f"d_min_{xu}", f"P_at_d_min_{yu}", f"k_ext_{yu}_per_{xu}"]
+              f"k_i_{yu}_per_{xu}", "k_d", "W_i_J", "E_i_J", "E_d", "W_negative", f"P_largest_plus_{yu}",
+              f"d_at_P_largest_plus_{xu}", f"P_largest_minus_{yu}", f"d_at_P_largest_minus_{xu}"]
     report = {"source": c.source, "units": {"displacement": xu, "load": yu, "stiffness": f"{yu}/{xu}", "energy": "J"},
               "k_el": res["k_el"] * fx / fy, "k_el_rule": res["k_el_rule"], "E_h_J": res["E_h"],
               "E_h_rule": res["E_h_rule"], "E_total_J": res["E_total"], "n_cycles": res["n_cycles"],
-              "sign_y": res["sign_y"],
-              "columns": header, "cycles": rows}
+              "peak_rule": res["peak_rule"], "sign_y": res["sign_y"], "load_sign_rule": sign_rule,
+              "warnings": list(c.warnings) + res["warnings"], "columns": header, "cycles": rows}
     files = [write_json(prefix + ".json", report), write_csv(prefix + ".csv", header, rows)]
     if not args.no_plot:
         files += hysteresis.plot(c.x, c.y, res, prefix, c.label, (xu, fx), (yu, fy))
     print(f"{c.label}: {res['n_cycles']} cycles, k_el = {report['k_el']:.5g} {yu}/{xu}, "
-          f"E_total = {res['E_total']:.5g} J")
+          f"E_total = {res['E_total']:.5g} J; load sign {sign:+g} ({sign_rule}); peaks at the loop tips")
     for r in rows:
-        print("  cycle {:3d}{}: P+ {:9.4g} P- {:9.4g} {}  k_i {:9.4g}  k_d {:6.3f}  k_ext {:9.4g}  E_i {:9.4g} J  "
-              "E_d {:6.3f}".format(r[0], " " if r[1] else "*", r[3], r[5], yu, r[6], r[7], r[15], r[9], r[10]))
+        print("  cycle {:3d}{}: d+ {:8.4g} P+ {:9.4g}  d- {:8.4g} P- {:9.4g} {}  k_i {:9.4g}  k_d {:6.3f}  "
+              "W_i {:9.4g} J{} E_i {:9.4g} J  E_d {:6.3f}".format(r[0], " " if r[1] else "*", r[2], r[3], r[4], r[5],
+                                                                 yu, r[6], r[7], r[8], " (NEGATIVE)" if r[11] else "",
+                                                                 r[9], r[10]))
     print("wrote " + ", ".join(files))
 
 
@@ -182,11 +227,19 @@ def build_parser():
     ap = OneLineParser(prog=PROG, description="Post-processing of fdem run folders and measured curves.")
     sub = ap.add_subparsers(dest="command", metavar="COMMAND")
 
-    p = sub.add_parser("eeep", help="EEEP bilinear curve and ductility (FORMULATION §9)",
+    p = sub.add_parser("eeep", help="EEEP bilinear curve and ductility ([K25] Eq. 14, ASTM E2126)",
                        description="EEEP bilinear idealisation and ductility of a monotonic load-displacement curve "
-                                   "(FORMULATION §9, [K25] Eq. 14, ASTM E2126). SOURCE is an fdem run folder or a CSV.")
+                                   "([K25] Eq. 14, ASTM E2126; tools/README.md 'eeep'). SOURCE is an fdem run folder "
+                                   "(by default its last stage, displacement from the stage's start, as validate) or "
+                                   "a CSV.")
     p.add_argument("source", metavar="SOURCE", help="run folder or CSV file")
-    _units_args(p)
+    _units_args(p, stage_help="keep only the rows of this stage (1-based; run folders; default: the last stage, "
+                              "displacements from its start, as validate)")
+    p.add_argument("--all-stages", action="store_true",
+                   help="run folders: read every row (precompression too) instead of the last stage")
+    p.add_argument("--smooth", type=float, default=0.0, metavar="MM",
+                   help="take the curve on the load averaged over MM mm of control displacement centred on each row, "
+                        "as validate --smooth (default 0: raw)")
     p.add_argument("--limit", type=float, default=0.7,
                    help="regression limit: fit K_e to the ascending branch up to this fraction of the peak (default 0.7)")
     p.add_argument("--stiffness", choices=["regression", "secant"], default="regression",
@@ -214,13 +267,18 @@ def build_parser():
 
     p = sub.add_parser("hysteresis", help="per-cycle peaks, secant stiffness and dissipated energy of a cyclic curve",
                        description="Per-cycle peaks, secant stiffness k_i, k_d = k_i / k_el, cumulative dissipated "
-                                   "energy E_i and E_d = E_i / E_h of a cyclic load-displacement curve (FORMULATION §9).")
+                                   "energy E_i and E_d = E_i / E_h of a cyclic load-displacement curve (the indices of "
+                                   "the M-DEM paper's Eqs. 6-8, tools/README.md 'hysteresis'): each cycle's peaks are "
+                                   "the loads at its extreme displacements.")
     p.add_argument("source", metavar="SOURCE", help="run folder or CSV file")
     _units_args(p)
     p.add_argument("--k-el", type=float, help="reference elastic stiffness in report units (default: k of the first cycle)")
     p.add_argument("--e-h", type=float, help="reference energy E_h in J (default: the total at the end)")
     p.add_argument("--deadband", type=float, default=1e-3,
                    help="zero band for cycle detection, fraction of the largest displacement (default 1e-3)")
+    p.add_argument("--tip-band", type=float, default=0.05,
+                   help="a cycle's peak is the largest load while the displacement is within this fraction of the "
+                        "excursion's extreme (default 0.05; 0: the load at the extreme row)")
     p.add_argument("--no-plot", action="store_true", help="write the JSON and CSV only")
     p.set_defaults(func=cmd_hysteresis)
 

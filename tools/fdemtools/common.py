@@ -198,6 +198,150 @@ class Curve:
     x_name: str
     y_name: str
     t: np.ndarray | None = None  # s, when known
+    sign: float | None = None    # load sign the source states (a case's output.curve.sign), else None
+    sign_source: str = ""        # where that sign comes from
+    x_unit: str = "m"            # unit the displacement column was read in (SI after reading)
+    y_unit: str = "N"            # unit the load column was read in
+    unit_rules: tuple = ("SI run folder", "SI run folder")  # how each unit was found (given, column name, default)
+    warnings: list = field(default_factory=list)  # unit warnings printed while reading
+
+
+# ----------------------------------------------------------------------------------------------
+# The load sign rule (one rule for plot, hysteresis, eeep and validate; README "Curves, signs and units")
+
+SIGN_CHOICES = ("auto", "1", "-1")
+
+
+def loading_work_sign(x, y) -> float:
+    """+1 or -1: the sign that makes the load do positive work on the loading branches of the curve.
+
+    A loading branch is a segment along which the displacement moves away from its starting value
+    (|x - x0| grows). Along it, an applied load does positive work on the structure: W+ = sum over those segments
+    of (y_k + y_k+1)/2 (x_k+1 - x_k) > 0; a reaction (the structure pushing back on its support) does negative
+    work. So the sign is that of W+ (+1 when W+ = 0). Unlike the covariance of load and displacement, W+ does
+    not change sign when the load softens after its peak (a pushover whose load falls from 40 to 10 kN), and it
+    reads cyclic loops too (every excursion away from zero is a loading branch)."""
+    x, y = np.asarray(x, float), np.asarray(y, float)
+    if len(x) < 2:
+        return 1.0
+    r = x - x[0]
+    dx = np.diff(x)
+    away = (r[1:] + r[:-1]) * dx > 0  # the midpoint of the segment and its step have the same sign
+    w = float(np.sum(0.5 * (y[1:] + y[:-1])[away] * dx[away]))
+    return -1.0 if w < 0 else 1.0
+
+
+def resolve_sign(curve: "Curve", given: str | float | None = "auto") -> tuple:
+    """(sign, rule) of a curve's load: the command line's --load-sign (1 or -1) first, then the sign the case
+    states (its [output] curve.sign, through the run folder), else loading_work_sign."""
+    if given not in (None, "auto"):
+        v = float(given)
+        if v not in (1.0, -1.0):
+            raise ToolError(f"--load-sign must be auto, 1 or -1, got '{given}'")
+        return v, "given (--load-sign)"
+    if curve.sign is not None:
+        return float(curve.sign), curve.sign_source or "stated by the case"
+    return loading_work_sign(curve.x, curve.y), "loading work (the load does positive work as the displacement grows)"
+
+
+def _case_curve_sign(run: "Run") -> tuple:
+    """The load sign a run's case states: summary.json curve.sign, else the case file's [output] curve.sign
+    (summary.json case_file, resolved from the working folder or beside the run folder). (None, '') if none."""
+    c = run.summary.get("curve") or {}
+    if c.get("sign") is not None:
+        return _sign_value(c["sign"], f"{run.path}/summary.json curve.sign"), "case (summary.json curve.sign)"
+    cf = run.summary.get("case_file")
+    if not cf:
+        return None, ""
+    for p in (cf, os.path.join(run.path, cf), os.path.join(os.path.dirname(os.path.normpath(run.path)), cf)):
+        if os.path.isfile(p):
+            import tomllib
+            try:
+                with open(p, "rb") as f:
+                    tree = tomllib.load(f)
+            except (OSError, tomllib.TOMLDecodeError):
+                return None, ""
+            curve = (tree.get("output") or {}).get("curve") or {}
+            if isinstance(curve, dict) and curve.get("sign") is not None:
+                return _sign_value(curve["sign"], f"{p}: output.curve.sign"), f"case ({p} output.curve.sign)"
+            return None, ""
+    return None, ""
+
+
+def _sign_value(v, where: str) -> float:
+    try:
+        f = float(v)
+    except (TypeError, ValueError):
+        f = 0.0
+    if f not in (1.0, -1.0):
+        raise ToolError(f"{where}: expected 1 or -1, got {v!r}")
+    return f
+
+
+# ----------------------------------------------------------------------------------------------
+# Units of CSV columns (README "Curves, signs and units")
+
+DEFAULT_X_UNIT, DEFAULT_Y_UNIT = "m", "N"  # every command's default for a CSV column without a unit in its name
+
+
+def unit_from_name(name: str, table: dict) -> str | None:
+    """The unit a column name carries: 'd_mm', 'F_kN', 'disp_m', 'load_N', 'd [mm]', 'F (kN)', 'u.mm'. None if
+    the name ends in no known unit of `table` (matched exactly, so 'm' is metres and 'M' nothing)."""
+    import re
+    n = name.strip()
+    m = re.search(r"[\[(]\s*([A-Za-z*]+)\s*[\])]\s*$", n)
+    if m and m.group(1) in table:
+        return m.group(1)
+    m = re.search(r"[_.\s-]([A-Za-z*]+)$", n)
+    if m and m.group(1) in table:
+        return m.group(1)
+    return None
+
+
+def column_unit(name: str, given: str | None, table: dict, default: str, what: str, source: str) -> tuple:
+    """(unit, rule) of a CSV column: the unit given on the command line, else the unit its name carries, else
+    the default. A given unit that contradicts the name is used, with a warning."""
+    named = unit_from_name(name, table)
+    if given:
+        unit_factor(given, table, what)
+        if named and named != given:
+            warn(f"{source}: column '{name}' is named in {named} but --{'x' if what == 'length' else 'y'}-unit "
+                 f"says {given}; reading it in {given}")
+        return given, "given"
+    if named:
+        return named, "column name"
+    return default, "default"
+
+
+# Magnitudes that suggest the other unit in a structural test: a displacement of 1 m or more, a load below 100 N.
+SUSPECT_X_M, SUSPECT_Y_N = 1.0, 100.0
+
+
+def check_magnitudes(c: "Curve", rule_x: str = "", rule_y: str = "") -> list:
+    """Warnings (printed and returned) when a CSV curve's magnitudes look like another unit than the one it was
+    read in: a largest |displacement| of 1 m or more (mm read as m?) or below 1 um (m read as mm?); a largest |load|
+    below 100 N (kN read as N?). Only warnings: a test may be that large or that small."""
+    out = []
+    ax = float(np.max(np.abs(c.x))) if len(c.x) else 0.0
+    ay = float(np.max(np.abs(c.y))) if len(c.y) else 0.0
+    src = f"{c.source}: column '{{}}' read in {{}} ({{}})"
+    if ax >= SUSPECT_X_M:
+        out.append(src.format(c.x_name, c.x_unit, rule_x or "unit") +
+                   f" reaches {ax / LENGTH_UNITS[c.x_unit]:.4g} {c.x_unit} = {ax:.4g} m: mm? (--x-unit mm or name it "
+                   f"'{c.x_name}_mm')")
+    elif 0 < ax < 1e-6:
+        out.append(src.format(c.x_name, c.x_unit, rule_x or "unit") + f" reaches only {ax:.3g} m: m? (--x-unit m)")
+    if 0 < ay < SUSPECT_Y_N:
+        out.append(src.format(c.y_name, c.y_unit, rule_y or "unit") + f" reaches only {ay:.3g} N: kN? (--y-unit kN "
+                   f"or name it '{c.y_name}_kN')")
+    for w in out:
+        warn(w)
+    return out
+
+
+def warn(msg: str) -> None:
+    """A warning line on stdout (with the results; stderr keeps the one line of an error)."""
+    print(f"warning: {msg}", flush=True)
 
 
 def _si_from_run_unit(unit: str, kind: str, path: str, col: str) -> float:
@@ -209,10 +353,12 @@ def _si_from_run_unit(unit: str, kind: str, path: str, col: str) -> float:
     return table[unit]
 
 
-def load_curve(source: str, x: str | None = None, y: str | None = None, x_unit: str = "m", y_unit: str = "N",
-               stage: int | None = None, partial: bool = False, label: str | None = None) -> Curve:
-    """A load-displacement curve in SI from a run folder (summary.json names the columns) or a CSV file
-    (columns by name, else the first two). `stage` keeps only the rows of that stage (run folders)."""
+def load_curve(source: str, x: str | None = None, y: str | None = None, x_unit: str | None = None,
+               y_unit: str | None = None, stage: int | None = None, partial: bool = False,
+               label: str | None = None) -> Curve:
+    """A load-displacement curve in SI from a run folder (summary.json names the columns and their units) or a CSV
+    file (columns by name, else the first two; units given, else read from the column names, else m and N). `stage`
+    keeps only the rows of that stage. A run folder's curve carries the load sign its case states, if any."""
     if is_run_folder(source):
         run = load_run(source, allow_unfinished=partial)
         if x is None or y is None:
@@ -228,7 +374,10 @@ def load_curve(source: str, x: str | None = None, y: str | None = None, x_unit: 
                 raise ToolError(f"{source}: no rows of stage {stage}")
             xs, ys = xs[keep], ys[keep]
             t = t[keep] if t is not None else None
-        return Curve(xs, ys, label or run.name, source, x, y, t)
+        sign, sign_src = (None, "")
+        if y == (run.summary.get("curve") or {}).get("y"):
+            sign, sign_src = _case_curve_sign(run)
+        return Curve(xs, ys, label or run.name, source, x, y, t, sign, sign_src)
     if os.path.isdir(source):
         raise ToolError(f"{source}: a folder but not a run folder (no summary.json or history.csv)")
     tab = read_table(source)
@@ -236,16 +385,26 @@ def load_curve(source: str, x: str | None = None, y: str | None = None, x_unit: 
         if len(tab.names) < 2:
             raise ToolError(f"{source}: needs at least two columns")
         x, y = x or tab.names[0], y or tab.names[1]
-    fx = unit_factor(x_unit, LENGTH_UNITS, "length")
-    fy = unit_factor(y_unit, FORCE_UNITS, "force")
-    xs, ys = tab.numeric(x) * fx, tab.numeric(y) * fy
+    ux, rx = column_unit(x, x_unit, LENGTH_UNITS, DEFAULT_X_UNIT, "length", source)
+    uy, ry = column_unit(y, y_unit, FORCE_UNITS, DEFAULT_Y_UNIT, "force", source)
+    xs, ys = tab.numeric(x) * LENGTH_UNITS[ux], tab.numeric(y) * FORCE_UNITS[uy]
     t = tab.numeric("time") if tab.has("time") and tab.col("time").dtype.kind == "f" else None
     if stage is not None and tab.has("stage"):
         keep = tab.numeric("stage") == stage
         xs, ys = xs[keep], ys[keep]
         t = t[keep] if t is not None else None
     stem = os.path.splitext(os.path.basename(source))[0]
-    return Curve(xs, ys, label or stem, source, x, y, t)
+    c = Curve(xs, ys, label or stem, source, x, y, t, x_unit=ux, y_unit=uy, unit_rules=(rx, ry))
+    c.warnings = check_magnitudes(c, rx, ry)
+    return c
+
+
+def stage_curve(c: Curve, load_sign: str | float | None = "auto") -> tuple:
+    """The curve as `validate` and `eeep` measure a run's loading stage: x = |x - x_0| (displacement from the first
+    row kept), y = sign x load (resolve_sign). Returns (x, y, sign, rule)."""
+    x, y = np.asarray(c.x, float), np.asarray(c.y, float)
+    sign, rule = resolve_sign(c, load_sign)
+    return np.abs(x - x[0]), sign * y, sign, rule
 
 
 def check_finite(c: Curve) -> None:

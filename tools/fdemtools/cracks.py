@@ -184,10 +184,50 @@ def match_edges(run_dir: str, geo: dict, pts, times):
     return idx
 
 
+def run_range(run, cr) -> dict:
+    """What the run covers: time (s) from the history (else the snapshots, else summary.json's end time and
+    cracks.csv) and the largest |control displacement| (m) of the curve's x (else cracks.csv); None where unknown."""
+    out = {"t0": None, "t1": None, "d_max": None}
+    h = run.history
+    if h is not None and h.has("time") and len(h):
+        t = h.numeric("time")
+        out["t0"], out["t1"] = float(t.min()), float(t.max())
+    else:
+        ts = [t for t, _ in snapshots(run.path) if np.isfinite(t)]
+        ends = ts + ([float(run.summary["time"])] if isinstance(run.summary.get("time"), (int, float)) else [])
+        ends += [float(v) for v in cr["time"]] if len(cr["time"]) else []
+        if ends:
+            out["t0"], out["t1"] = 0.0, max(ends)
+    try:
+        if h is not None:
+            cx, _ = run.curve_columns()
+            out["d_max"] = float(np.max(np.abs(h.numeric(cx))))
+    except ToolError:
+        pass
+    if out["d_max"] is None and np.isfinite(cr["control_displacement"]).any():
+        out["d_max"] = float(np.nanmax(np.abs(cr["control_displacement"])))
+    return out
+
+
+def check_range(run, cr, time: float | None, displacement: float | None) -> None:
+    """--time / --displacement outside what the run covers: a ToolError naming the range (exit 1), not the last
+    snapshot drawn under a title it never reached."""
+    r = run_range(run, cr)
+    if time is not None and r["t1"] is not None:
+        if time > r["t1"] * (1 + 1e-9) + 1e-300 or time < r["t0"] - 1e-12:
+            raise ToolError(f"{run.path}: --time {time:g} s is outside the run, which covers {r['t0']:g} to "
+                            f"{r['t1']:g} s")
+    if displacement is not None and r["d_max"] is not None:
+        if abs(displacement) > r["d_max"] * (1 + 1e-9):
+            raise ToolError(f"{run.path}: --displacement {abs(displacement) * 1e3:g} mm is beyond the run, whose "
+                            f"control displacement reaches {r['d_max'] * 1e3:.4g} mm (|x| from 0 to that)")
+
+
 def draw(run_dir: str, prefix: str, time: float | None = None, displacement: float | None = None,
          scale: float = 1.0, partial: bool = False) -> tuple:
     run = load_run(run_dir, allow_unfinished=partial, need_history=False)
     cr = read_cracks(run_dir)
+    check_range(run, cr, time, displacement)
     if displacement is not None:
         if not np.isfinite(cr["control_displacement"]).any():
             raise ToolError(f"{run_dir}: cracks.csv has no control_displacement to select by displacement")

@@ -1,4 +1,6 @@
-"""Equivalent energy elastic-plastic (EEEP) bilinear curve and ductility. FORMULATION §9, [K25] Eq. 14, ASTM E2126.
+"""Equivalent energy elastic-plastic (EEEP) bilinear curve and ductility. [K25] Eq. 14 (Karakus et al., the EEEP
+ductility of the dry-joint stone walls), ASTM E2126 (the EEEP curve, the 0.4 P_peak stiffness and the 0.8 P_peak
+failure limit).
 
 Continuous definitions, for a monotonic load-displacement curve P(Delta) starting at the origin:
   K_e      elastic stiffness: least-squares line through the origin fitted to the ascending branch
@@ -13,14 +15,18 @@ Discrete form coded here: the sampled curve is taken as piecewise linear between
 trapezoidal rule (exact for the polyline) and the 70 % and 80 % crossings are linear interpolations.
 P_y is evaluated as 2 A / (Delta_u + sqrt(Delta_u^2 - 2 A / K_e)), the same value without the cancellation of
 the difference form. When Delta_u^2 < 2 A / K_e (the curve holds more energy than any elastic-plastic line
-of stiffness K_e can), ASTM E2126 allows P_y = 0.85 P_peak; that fallback is used and flagged.
+of stiffness K_e can), ASTM E2126 allows P_y = 0.85 P_peak; that fallback is used, flagged (`fallback`), printed
+by the command line and drawn in the figure.
+Signs: the displacement is mirrored when its largest excursion is negative; the load takes the tools' one sign rule
+(common.resolve_sign: given, else the case's, else the sign whose loading work is positive), so a softening curve is
+never turned and a reaction is.
 All quantities are in whatever consistent units the arrays carry (SI from the command line).
 """
 from __future__ import annotations
 
 import numpy as np
 
-from .common import ToolError
+from .common import ToolError, loading_work_sign
 
 
 def _interp_x(x0, y0, x1, y1, y):
@@ -31,12 +37,13 @@ def _interp_x(x0, y0, x1, y1, y):
 
 
 def eeep(d, p, fraction: float = 0.7, ultimate: str = "peak", drop: float = 0.8, stiffness: str = "regression",
-         source: str = "curve") -> dict:
+         source: str = "curve", load_sign: float | None = None) -> dict:
     """EEEP analysis of the curve (d, p). Returns a dict of results (same units as the input).
 
     fraction: regression limit as a fraction of the peak load (0 < fraction <= 1).
     ultimate: "peak" ([K25]) or "drop" (ASTM E2126: post-peak drop to `drop` x peak).
     stiffness: "regression" (least squares through the origin) or "secant" (at fraction x peak).
+    load_sign: +1 / -1 to take the load as given / turned; None: common.loading_work_sign.
     """
     if not 0 < fraction <= 1:
         raise ToolError(f"regression limit must be in (0, 1], got {fraction}")
@@ -55,10 +62,11 @@ def eeep(d, p, fraction: float = 0.7, ultimate: str = "peak", drop: float = 0.8,
     if not (np.isfinite(d).all() and np.isfinite(p).all()):
         raise ToolError(f"{source}: the curve contains non-finite values")
 
-    # A curve loaded in the negative direction is analysed as its mirror image; each axis is turned on its own
-    # because a reaction monitor carries the opposite sign of the applied load.
+    # A curve loaded in the negative direction is analysed as its mirror image (both axes turned); a reaction
+    # monitor's sign is turned on top of that by the one load sign rule.
     sign_x = -1.0 if abs(d.min()) > abs(d.max()) else 1.0
-    sign_y = -1.0 if abs(p.min()) > abs(p.max()) else 1.0
+    s = loading_work_sign(d, p) if load_sign is None else float(load_sign)
+    sign_y = sign_x * s
     d, p = sign_x * d, sign_y * p
     # The bilinear idealisation starts at the origin, so the curve must too.
     origin_added = not (d[0] == 0.0 and p[0] == 0.0)
@@ -127,9 +135,11 @@ def eeep(d, p, fraction: float = 0.7, ultimate: str = "peak", drop: float = 0.8,
     if disc >= 0:
         p_y = 2.0 * area / (d_u + np.sqrt(disc))
         yield_note = "equal energy ([K25] Eq. 14)"
+        fallback = False
     else:
         p_y = 0.85 * p_peak
         yield_note = "0.85 x peak load (ASTM E2126 when Delta_u^2 < 2 A / K_e): EEEP area differs from A"
+        fallback = True
     d_y = p_y / k_e
     mu = d_u / d_y
     eeep_area = p_y * d_u - 0.5 * p_y * d_y
@@ -151,6 +161,7 @@ def eeep(d, p, fraction: float = 0.7, ultimate: str = "peak", drop: float = 0.8,
         "ultimate_rule": ultimate,
         "ultimate_note": ultimate_note,
         "yield_note": yield_note,
+        "fallback": fallback,
         "mirrored": bool(sign_x < 0 or sign_y < 0),
         "sign_x": sign_x,
         "sign_y": sign_y,
@@ -174,6 +185,12 @@ def plot(curve_d, curve_p, res: dict, prefix: str, label: str, x_unit=("mm", 1e-
     ax.plot([res["Delta_y"] * sx], [res["P_y"] * sy], "o", color="#d62728", ms=5)
     ax.plot([res["Delta_peak"] * sx], [res["P_peak"] * sy], "^", color="0.2", ms=6,
             label=f"peak {res['P_peak'] * sy:.4g} {y_unit[0]}")
+    if res.get("fallback"):  # drawn, not only flagged in the JSON
+        ax.axhline(res["P_y"] * sy, color="#ff7f0e", lw=1.0, ls="-.",
+                   label="ASTM E2126 fallback $P_y$ = 0.85 $P_{peak}$ (no equal-energy line: "
+                         r"$\Delta_u^2 < 2A/K_e$)")
+        ax.text(0.5, 0.03, "FALLBACK: P_y = 0.85 P_peak, EEEP area differs from the curve's", color="#ff7f0e",
+                transform=ax.transAxes, ha="center", fontsize=8)
     ax.axvline(res["Delta_u"] * sx, color="0.5", lw=0.8, ls=":")
     ax.text(res["Delta_u"] * sx, 0.97, r" $\Delta_u$", transform=ax.get_xaxis_transform(), va="top", color="0.3")
     ax.set_xlabel(f"displacement ({x_unit[0]})" + (" [sign reversed]" if res["sign_x"] < 0 else ""))

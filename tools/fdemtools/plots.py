@@ -12,7 +12,8 @@ import os
 
 import numpy as np
 
-from .common import FORCE_UNITS, LENGTH_UNITS, ToolError, load_curve, load_run
+from .common import (DEFAULT_X_UNIT, DEFAULT_Y_UNIT, FORCE_UNITS, LENGTH_UNITS, SIGN_CHOICES, ToolError, load_curve,
+                     load_run, resolve_sign)
 
 ENERGY_COLUMNS = [  # column, label, style
     ("W_ext", "external work $W_{ext}$", {"color": "k", "lw": 2.0}),
@@ -40,23 +41,22 @@ def run_labels(paths: list, runs: list) -> list:
     return [os.path.basename(os.path.normpath(p)) for p in paths]
 
 
-def load_sign(x, y) -> float:
-    """-1 when the load falls as the displacement grows (a reaction monitor), so that it can be turned to be
-    compared with an applied load; else 1."""
-    x, y = np.asarray(x, float), np.asarray(y, float)
-    if len(x) < 2:
-        return 1.0
-    return -1.0 if float(np.dot(x - x.mean(), y - y.mean())) < 0 else 1.0
-
-
 def plot_curves(curves: list, experiments: list, prefix: str, xu=("mm", 1e-3), yu=("kN", 1e3),
-                turn: bool = True) -> list:
+                load_sign: str = "auto") -> list:
+    """Every run and experiment, each load with the tools' one sign rule (common.resolve_sign; experiments too).
+    A turned load is labelled so and a note printed."""
     from .figures import new_figure, save
     fig, ax = new_figure()
     for c in experiments:
-        ax.plot(c.x / xu[1], c.y / yu[1], color="k", lw=2.2, alpha=0.75, label=f"{c.label} (experiment)")
+        s, rule = resolve_sign(c, load_sign)
+        if s < 0:
+            print(f"note: load sign of {c.label} (experiment) turned: {rule}")
+        ax.plot(c.x / xu[1], s * c.y / yu[1], color="k", lw=2.2, alpha=0.75,
+                label=f"{c.label} (experiment)" + (" (load sign turned)" if s < 0 else ""))
     for c in curves:
-        s = load_sign(c.x, c.y) if turn else 1.0
+        s, rule = resolve_sign(c, load_sign)
+        if s < 0:
+            print(f"note: load sign of {c.label} turned: {rule}")
         ax.plot(c.x / xu[1], s * c.y / yu[1], lw=1.4, label=c.label + (" (load sign turned)" if s < 0 else ""))
     ax.set_xlabel(f"control displacement ({xu[0]})")
     ax.set_ylabel(f"load ({yu[0]})")
@@ -99,16 +99,16 @@ def plot_energy(run, label: str, prefix: str) -> list:
     return save(fig, prefix)
 
 
-def plot_damage(run, label: str, prefix: str, xu=("mm", 1e-3), yu=("kN", 1e3), turn: bool = True) -> list:
+def plot_damage(run, label: str, prefix: str, xu=("mm", 1e-3), yu=("kN", 1e3), load_sign: str = "auto") -> list:
     from .figures import new_figure, save
     h = run.history
     missing = [c for cols in BROKEN.values() for c in cols if not h.has(c)]
     if missing:
         raise ToolError(f"{run.path}: history.csv has no broken-element columns ({missing[0]}...): fracture off?")
-    cx, cy = run.curve_columns()
-    x = h.numeric(cx) * (1.0 / xu[1])
-    y = h.numeric(cy) * (1.0 / yu[1])
-    sign = load_sign(x, y) if turn else 1.0
+    c = load_curve(run.path, partial=True)
+    x = c.x * (1.0 / xu[1])
+    y = c.y * (1.0 / yu[1])
+    sign, _ = resolve_sign(c, load_sign)
     y = sign * y
     fig, ax = new_figure(figsize=(7.0, 4.6))
     ax.plot(x, y, color="0.35", lw=1.4, label=f"load ({yu[0]})" + (", sign turned" if sign < 0 else ""))
@@ -141,6 +141,7 @@ def cmd_plot(args):
     out = args.out_dir or (os.path.join(args.runs[0], "post") if len(runs) == 1 else "fdem-plots")
     xu = (args.report_x_unit, LENGTH_UNITS[args.report_x_unit])
     yu = (args.report_y_unit, FORCE_UNITS[args.report_y_unit])
+    sign_arg = "1" if args.raw_sign else args.load_sign
     files = []
     if "curves" in figs:
         curves = [load_curve(p, args.x, args.y, stage=args.stage, partial=args.partial, label=lab)
@@ -148,7 +149,7 @@ def cmd_plot(args):
         exps = []
         for e in args.experiment or []:
             exps.append(load_curve(e, args.exp_x, args.exp_y, args.exp_x_unit, args.exp_y_unit))
-        files += plot_curves(curves, exps, os.path.join(out, "curves"), xu, yu, turn=not args.raw_sign)
+        files += plot_curves(curves, exps, os.path.join(out, "curves"), xu, yu, load_sign=sign_arg)
     single = len(runs) == 1
     for run, lab in zip(runs, labels):
         suffix = "" if single else "_" + _safe(lab)
@@ -156,7 +157,7 @@ def cmd_plot(args):
             files += plot_energy(run, lab, os.path.join(out, "energy" + suffix))
         if "damage" in figs:
             try:
-                files += plot_damage(run, lab, os.path.join(out, "damage" + suffix), xu, yu, turn=not args.raw_sign)
+                files += plot_damage(run, lab, os.path.join(out, "damage" + suffix), xu, yu, load_sign=sign_arg)
             except ToolError as e:
                 if args.figures != "curves,energy,damage":
                     raise  # asked for explicitly
@@ -174,8 +175,12 @@ def add_parser(sub):
     p.add_argument("--experiment", action="append", metavar="CSV", help="experimental curve (repeatable)")
     p.add_argument("--exp-x", help="displacement column of the experiment (default: first)")
     p.add_argument("--exp-y", help="load column of the experiment (default: second)")
-    p.add_argument("--exp-x-unit", default="mm", choices=list(LENGTH_UNITS), help="experiment displacement unit (default mm)")
-    p.add_argument("--exp-y-unit", default="kN", choices=list(FORCE_UNITS), help="experiment load unit (default kN)")
+    p.add_argument("--exp-x-unit", choices=list(LENGTH_UNITS),
+                   help=f"experiment displacement unit (default: the unit its column name ends in, as d_mm, else "
+                        f"{DEFAULT_X_UNIT}, as every command)")
+    p.add_argument("--exp-y-unit", choices=list(FORCE_UNITS),
+                   help=f"experiment load unit (default: the unit its column name ends in, as F_kN, else "
+                        f"{DEFAULT_Y_UNIT})")
     p.add_argument("--x", help="run displacement column (default: the run's curve)")
     p.add_argument("--y", help="run load column (default: the run's curve)")
     p.add_argument("--stage", type=int, help="plot only rows of this stage in the curves figure")
@@ -183,9 +188,10 @@ def add_parser(sub):
     p.add_argument("--figures", default="curves,energy,damage", help="which figures (default curves,energy,damage)")
     p.add_argument("--report-x-unit", default="mm", choices=list(LENGTH_UNITS), help="displacement unit of the plots")
     p.add_argument("--report-y-unit", default="kN", choices=list(FORCE_UNITS), help="load unit of the plots")
-    p.add_argument("--raw-sign", action="store_true",
-                   help="plot loads as recorded (default: a load that falls as the displacement grows, i.e. a "
-                        "reaction, is turned and labelled so)")
+    p.add_argument("--load-sign", choices=SIGN_CHOICES, default="auto",
+                   help="sign of the loads: auto (default: the case's output.curve.sign, else the sign that makes "
+                        "the loading work positive; a turned load is labelled so), 1 (as recorded) or -1 (turned)")
+    p.add_argument("--raw-sign", action="store_true", help="same as --load-sign 1")
     p.add_argument("--partial", action="store_true", help="accept runs whose summary is not 'completed'")
     p.add_argument("--out-dir", help="output folder (default RUN/post for one run, else ./fdem-plots)")
     p.set_defaults(func=cmd_plot)

@@ -1,8 +1,15 @@
 """`study mesh` and `study speed`: parameter studies run through the batch machinery (so they resume too).
 
-study mesh: the case at a list of mesh sizes h; quantities of interest per run: peak load (largest |load| of the
-  case's curve), final fracture dissipation D_frac and external work W_ext when recorded, run time and triangle
-  count. The change of each quantity relative to the finest mesh is tabulated and plotted against h.
+study mesh: the case at a list of values of a mesh key (default geometry.mesh_size, h in m; any other key, such as
+  a scale factor, is tabulated and plotted under its own name, unscaled); quantities of interest per run: peak load
+  (largest |load| of the case's curve, kN), the case's own reference quantity (its [reference] monitor and quantity,
+  as the run computed it, with the reference value and the error), final fracture dissipation D_frac and external
+  work W_ext when recorded, run time and triangle count. The change of each quantity relative to the finest mesh is
+  tabulated and plotted; the observed convergence order is estimated from the three finest completed runs
+  (Richardson: q(h) = q* + C h^p; for sizes h1 > h2 > h3, (q1 - q2) / (q2 - q3) = (h1^p - h2^p) / (h2^p - h3^p),
+  solved for p; with a constant ratio r = h1/h2 = h2/h3, p = ln((q1 - q2) / (q2 - q3)) / ln r; q* = q3 + (q3 - q2)
+  / ((h2/h3)^p - 1)). Differences of opposite sign (oscillating) or a zero difference give no order. A run that did
+  not complete is reported with why: its summary's message, else the last error and warning lines of its log.
 study speed: a grid of mesh sizes x loading rates x damping values. Error of a run: |P - P_ref| / |P_ref| of its
   peak load, with P_ref given (--reference, kN), else the case's reference peak, else the peak of the most
   accurate run of the grid (smallest mesh size, slowest rate, least damping). A run is on the Pareto front when
@@ -28,8 +35,15 @@ def _num(v: str):
 
 def run_quantities(rec: dict) -> dict:
     """Quantities of interest of a finished run (None where the run does not record them)."""
-    q = {"peak_load_N": rec.get("peak_load_N"), "wall_time_s": rec.get("wall_time_s"),
+    peak = rec.get("peak_load_N")
+    q = {"peak_load_kN": peak / 1e3 if peak is not None else None, "wall_time_s": rec.get("wall_time_s"),
          "n_triangles": rec.get("n_triangles"), "D_frac_J": None, "W_ext_J": None}
+    ref = (rec.get("summary") or {}).get("reference")
+    if isinstance(ref, dict) and ref.get("monitor"):
+        q["reference"] = f"{ref.get('monitor')} {ref.get('quantity', 'peak')}"
+        q["reference_value"] = ref.get("value")
+        q["reference_computed"] = ref.get("computed")
+        q["reference_error"] = ref.get("relative_error")
     if rec.get("status") != "completed":
         return q
     run = load_run(rec["run_dir"])
@@ -37,13 +51,72 @@ def run_quantities(rec: dict) -> dict:
     for col, key in (("D_frac", "D_frac_J"), ("W_ext", "W_ext_J")):
         if h.has(col) and len(h):
             q[key] = float(h.numeric(col)[-1])
-    if q["peak_load_N"] is None:
+    if q["peak_load_kN"] is None:
         try:
             _, y = run.curve_columns()
-            q["peak_load_N"] = float(np.max(np.abs(h.numeric(y))))
+            q["peak_load_kN"] = float(np.max(np.abs(h.numeric(y)))) / 1e3
         except ToolError:
             pass
     return q
+
+
+def failure_reason(rec: dict, lines: int = 3) -> str:
+    """Why a run did not complete: its summary's message, else the last error and warning lines of its log (the
+    last lines of the log when none says error or warning), joined by ' | '."""
+    msg = ((rec.get("summary") or {}).get("message") or rec.get("message") or "").strip()
+    if msg:
+        return msg
+    log = os.path.join(os.path.dirname(os.path.dirname(rec["run_dir"])), "logs", rec["name"] + ".log")
+    try:
+        with open(log, encoding="utf-8", errors="replace") as f:
+            text = [ln.strip() for ln in f if ln.strip() and not ln.startswith("$ ")]
+    except OSError:
+        return f"no summary and no log ({log})" if rec.get("exit_code") is not None else "not run"
+    hits = [ln for ln in text if "error" in ln.lower() or "warning" in ln.lower()]
+    pick = (hits or text)[-lines:]
+    return " | ".join(pick) if pick else f"no summary, empty log (exit code {rec.get('exit_code')})"
+
+
+def richardson(hs, qs) -> dict:
+    """Observed convergence order p and extrapolated value q* from three (h, q) pairs, h1 > h2 > h3 after sorting:
+    q(h) = q* + C h^p (module docstring). {'order': None, ...} with a note when the differences do not shrink
+    monotonically."""
+    pts = sorted(((float(h), float(q)) for h, q in zip(hs, qs)), reverse=True)
+    out = {"order": None, "extrapolated": None, "sizes": [p[0] for p in pts], "note": ""}
+    if len(pts) != 3 or len({p[0] for p in pts}) != 3:
+        out["note"] = "needs three different sizes"
+        return out
+    (h1, q1), (h2, q2), (h3, q3) = pts
+    d12, d23 = q1 - q2, q2 - q3
+    if d23 == 0 or d12 == 0:
+        out["note"] = "a difference is zero (converged or insensitive)"
+        return out
+    ratio = d12 / d23
+    if ratio <= 0:
+        out["note"] = "the changes alternate in sign (oscillating): no order"
+        return out
+
+    def f(p):
+        return (h1 ** p - h2 ** p) / (h2 ** p - h3 ** p) - ratio
+
+    lo, hi = 1e-3, 20.0
+    if f(lo) * f(hi) > 0:
+        out["note"] = f"no order in [{lo:g}, {hi:g}] (ratio of changes {ratio:.3g})"
+        return out
+    for _ in range(200):
+        mid = 0.5 * (lo + hi)
+        if f(lo) * f(mid) <= 0:
+            hi = mid
+        else:
+            lo = mid
+    p = 0.5 * (lo + hi)
+    out["order"] = p
+    out["extrapolated"] = q3 + (q3 - q2) / ((h2 / h3) ** p - 1.0)
+    return out
+
+
+def _is_size_key(key: str) -> bool:
+    return key.split(".")[-1].startswith("mesh_size")
 
 
 def pareto_front(times, errors) -> list:
@@ -66,64 +139,99 @@ def _batch(args, points, out, grid):
 def cmd_mesh(args):
     sizes = split_values(args.sizes)
     hs = [_num(s) for s in sizes]
+    size_key = _is_size_key(args.key)
     if any(h is None or h <= 0 for h in hs):
-        raise ToolError(f"--sizes: expected positive numbers in m, got '{args.sizes}'")
+        raise ToolError(f"--sizes: expected positive numbers{' in m' if size_key else ''}, got '{args.sizes}'")
+    # the study's variable: a mesh size in m (plotted in mm), or any other key under its own name, unscaled
+    var = "mesh_size_m" if size_key else args.key
+    var_label, var_scale = ("mesh size (mm)", 1e3) if size_key else (f"{args.key} (as given)", 1.0)
     out = args.out_dir or os.path.join("runs", "study_mesh_" + os.path.splitext(os.path.basename(args.case))[0])
     recs = _batch(args, [{args.key: s} for s in sizes], out, [[args.key, sizes]])
     rows = []
     for h, r in zip(hs, recs):
         q = run_quantities(r)
-        rows.append({"mesh_size_m": h, "status": r["status"], **q, "run": r["name"]})
+        why = "" if r["status"] == "completed" else failure_reason(r)
+        rows.append({var: h, "status": r["status"], **q, "why": why, "run": r["name"]})
+    for r in rows:
+        for k in ("reference", "reference_value", "reference_computed", "reference_error"):
+            r.setdefault(k, None)
     ok = [r for r in rows if r["status"] == "completed"]
+    for r in rows:
+        if r["why"]:
+            print(f"  {var} = {r[var]:g}: {r['status']}: {r['why']}")
     if not ok:
-        raise ToolError(f"no run of the mesh study completed (see {os.path.join(out, 'logs')})")
-    finest = min(ok, key=lambda r: r["mesh_size_m"])
-    qty = [("peak_load_N", "peak load", 1e-3, "kN"), ("D_frac_J", "fracture dissipation", 1.0, "J"),
-           ("W_ext_J", "external work", 1.0, "J")]
+        raise ToolError(f"no run of the mesh study completed (see {os.path.join(out, 'logs')}); "
+                        + "; ".join(f"{r[var]:g}: {r['why']}" for r in rows))
+    finest = min(ok, key=lambda r: r[var])
+    ref_name = next((r["reference"] for r in ok if r["reference"]), None)
+    qty = [("peak_load_kN", "peak load", 1.0, "kN"),
+           ("reference_computed", f"reference: {ref_name}", 1.0, "as the case"),
+           ("D_frac_J", "fracture dissipation", 1.0, "J"), ("W_ext_J", "external work", 1.0, "J")]
     qty = [t for t in qty if any(r[t[0]] is not None for r in ok)]
+    orders = {}
     for r in rows:
         for key, *_ in qty:
             ref = finest[key]
             r[key + "_rel_to_finest"] = (r[key] - ref) / abs(ref) if r[key] is not None and ref else None
+    for key, name, *_ in qty:
+        pts = sorted([(r[var], r[key]) for r in ok if r[key] is not None])[:3]  # the three finest
+        if len(pts) == 3:
+            orders[key] = richardson([p[0] for p in pts], [p[1] for p in pts])
     header = list(rows[0].keys())
     write_csv(os.path.join(out, "mesh_study.csv"), header, [[r[k] for k in header] for r in rows])
     write_json(os.path.join(out, "mesh_study.json"), {"case": os.path.abspath(args.case), "key": args.key,
-                                                     "finest_mesh_size_m": finest["mesh_size_m"], "runs": rows})
+                                                     "variable": var, "finest": finest[var],
+                                                     "convergence_order": orders, "runs": rows})
     from .figures import new_figure, save
     n = len(qty) + 1
     fig, axs = new_figure(1, n, figsize=(4.2 * n, 4.0), squeeze=False)
-    h_ok = np.array([r["mesh_size_m"] for r in ok]) * 1e3
+    h_ok = np.array([r[var] for r in ok]) * var_scale
     for ax, (key, name, scale, unit) in zip(axs[0], qty):
         v = [r[key] for r in ok]
         sel = [i for i, x in enumerate(v) if x is not None]
         ax.plot(h_ok[sel], np.array([v[i] for i in sel]) * scale, "o-", color="#1f77b4")
-        _mesh_axis(ax, h_ok)
+        if key == "reference_computed" and finest.get("reference_value") is not None:
+            ax.axhline(finest["reference_value"], color="k", lw=1.0, ls="--", label="reference value")
+            ax.legend(fontsize=7)
+        _mesh_axis(ax, h_ok, var_label, size_key)
         ax.set_ylabel(f"{name} ({unit})")
-        ax.set_title(name, fontsize=9)
+        o = orders.get(key)
+        ax.set_title(name + (f"\nobserved order {o['order']:.2f}" if o and o["order"] is not None else ""),
+                     fontsize=9)
     ax = axs[0, -1]
     t = [r["wall_time_s"] for r in ok]
     ax.loglog(h_ok, t, "s-", color="#d62728")
     for x, y, r in zip(h_ok, t, ok):
         if r["n_triangles"]:
             ax.annotate(f"{r['n_triangles']} tri", (x, y), xytext=(4, 4), textcoords="offset points", fontsize=7)
-    _mesh_axis(ax, h_ok)
+    _mesh_axis(ax, h_ok, var_label, size_key)
     ax.set_ylabel("wall time (s)")
     ax.set_title("run time", fontsize=9)
     files = save(fig, os.path.join(out, "mesh_study"))
-    print(format_rows(rows, ["mesh_size_m", "status", "peak_load_N", "D_frac_J", "wall_time_s", "n_triangles"]))
+    print(format_rows(rows, [var, "status", "peak_load_kN", "reference_computed", "reference_error", "D_frac_J",
+                             "wall_time_s", "n_triangles"]))
+    if ref_name:
+        print(f"reference quantity of the case: {ref_name}, value {finest['reference_value']}")
+    for key, o in orders.items():
+        if o["order"] is not None:
+            print(f"{key}: observed convergence order {o['order']:.3g} (three finest: {o['sizes']}), "
+                  f"extrapolated {o['extrapolated']:.6g}")
+        else:
+            print(f"{key}: no convergence order: {o['note']}")
     print("wrote " + ", ".join([os.path.join(out, "mesh_study.csv"), os.path.join(out, "mesh_study.json")] + files))
     return 0 if len(ok) == len(rows) else 2
 
 
-def _mesh_axis(ax, h_mm):
-    """Log mesh-size axis labelled at the sizes run, finer meshes to the right."""
+def _mesh_axis(ax, h, label="mesh size (mm)", log=True):
+    """Mesh-variable axis labelled at the values run, finer meshes (smaller values) to the right."""
     from matplotlib.ticker import NullLocator
-    ax.set_xscale("log")
-    ax.xaxis.set_minor_locator(NullLocator())
-    ax.set_xticks(sorted(set(h_mm)))
-    ax.set_xticklabels([f"{h:g}" for h in sorted(set(h_mm))])
+    if log:
+        ax.set_xscale("log")
+        ax.xaxis.set_minor_locator(NullLocator())
+    ax.set_xticks(sorted(set(h)))
+    ax.set_xticklabels([f"{v:g}" for v in sorted(set(h))])
     ax.invert_xaxis()
-    ax.set_xlabel("mesh size (mm)")
+    ax.set_xlabel(label)
 
 
 def format_rows(rows, keys):
@@ -250,11 +358,15 @@ def add_parser(sub):
                                    "loading rate and damping, with the Pareto front). Resumable like batch.")
     ss = p.add_subparsers(dest="study", metavar="STUDY")
     m = ss.add_parser("mesh", help="run a case at several mesh sizes",
-                      description="Runs the case at each mesh size and plots peak load, fracture dissipation, "
-                                  "external work (when recorded) and run time against mesh size.")
+                      description="Runs the case at each mesh size and plots peak load, the case's reference "
+                                  "quantity, fracture dissipation, external work (when recorded) and run time against "
+                                  "mesh size, with the observed convergence order from the three finest sizes "
+                                  "(Richardson); a run that failed is reported with the last error lines of its log.")
     _common(m)
     m.add_argument("--sizes", required=True, help="comma-separated mesh sizes in m, e.g. 0.1,0.05,0.025")
-    m.add_argument("--key", default="geometry.mesh_size", help="case key of the mesh size (default geometry.mesh_size)")
+    m.add_argument("--key", default="geometry.mesh_size",
+                   help="case key of the mesh size (default geometry.mesh_size); another key (a scale factor) is "
+                        "tabulated and plotted under its own name, unscaled")
     m.add_argument("--out-dir", help="study folder (default runs/study_mesh_<case>)")
     m.set_defaults(func=cmd_mesh)
     s = ss.add_parser("speed", help="wall time against error over mesh sizes, loading rates and damping",

@@ -11,7 +11,7 @@ Is the peak a peak: the load at the last history row of the same curve and drop_
 end) / peak; past_peak = "yes" when the drop is at least PAST_PEAK_DROP (5 %), else the curve is still rising or
 flat and the "peak" is only the largest load reached so far.
 
-Quasi-static check (FORMULATION §4): the cases named by --rate-case (repeatable; `all` = every case; default the
+Quasi-static check (README.md 'Physics'): the cases named by --rate-case (repeatable; `all` = every case; default the
 first case) are run again with their loading rate halved, each as its own run; per checked case the report gives
 both peaks, their relative change, the verdict (quasi-static when |change| < QS_LIMIT = 2 %) and the status of the
 half-rate run, then "N of M checked cases quasi-static; largest change X %"; quasi_static.csv holds the same table.
@@ -67,7 +67,7 @@ import numpy as np
 
 from .batch import Batch, collect, default_jobs, fdem_binary, parse_assignment, run_name
 from .eeep import eeep
-from .common import ToolError, load_curve, load_run, write_csv
+from .common import SIGN_CHOICES, ToolError, load_curve, load_run, stage_curve, write_csv
 
 QS_LIMIT = 0.02  # the peak may change by less than this when the rate is halved
 PAST_PEAK_DROP = 0.05  # the load at the end must be this far below the peak (fraction of it) to call it a peak
@@ -149,7 +149,12 @@ def numerical_settings(tree: dict) -> dict:
     for name, m in (tree.get("materials") or {}).items():
         fr = m.get("fracture") if isinstance(m, dict) else None
         if isinstance(fr, dict) and "penalty" in fr:
-            pens.append(f"{name} p_j={fr['penalty']:g} Pa")
+            if isinstance(fr["penalty"], (int, float)):
+                pens.append(f"{name} p_j={fr['penalty']:g} Pa")
+            else:  # penalty = "auto" (from the element size), at least penalty_ref (fracture/README.md)
+                ref = fr.get("penalty_ref")
+                pens.append(f"{name} p_j={fr['penalty']}" + (f" (ref {ref:g} Pa)" if isinstance(ref, (int, float))
+                                                              else ""))
     for itf in tree.get("interfaces") or []:
         regs = "/".join(itf.get("regions", []))
         for k, unit in (("normal_penalty", "Pa"), ("tangential_penalty", "Pa"), ("normal_stiffness", "Pa/m"),
@@ -234,11 +239,15 @@ def cut_at(x: np.ndarray, d: float) -> int:
     return int(hit[0]) + 1 if len(hit) else len(x)
 
 
-def curve_metrics(run_dir: str, smooth_m: float = 0.0, rule: str = "largest", up_to_m: float | None = None) -> dict:
-    """Peak |load| (N), displacement at peak (m, from the start of the stage) and initial stiffness (N/m) of the
-    load-displacement curve in the run's last stage (the loading after precompression); the |load| at the last
+def curve_metrics(run_dir: str, smooth_m: float = 0.0, rule: str = "largest", up_to_m: float | None = None,
+                  load_sign: str = "auto") -> dict:
+    """Peak load (N), displacement at peak (m, from the start of the stage) and initial stiffness (N/m) of the
+    load-displacement curve in the run's last stage (the loading after precompression); the load at the last
     history row (N), the drop after the peak (fraction of the peak) and the largest control displacement reached
-    (m). `x`, `y` (|x - x0| in m, |load| in N) are kept for comparing two runs over the same range. With
+    (m). The load is taken with the tools' one sign rule (common.resolve_sign: --load-sign, else the case's
+    output.curve.sign, else the sign that makes the loading work positive), the same curve `eeep` reads
+    (common.stage_curve). `x`, `y` (|x - x0| in m, signed load in N) are kept for comparing two runs over the
+    same range. With
     smooth_m > 0 all of these are taken on the load averaged over smooth_m of displacement (smooth_curve); the raw
     largest load is peak_raw_N and the largest |raw - smoothed| is oscillation_N. rule picks the peak (peak_index);
     up_to_m cuts the curve at that displacement first (after smoothing, so the window does not change the mean of
@@ -248,12 +257,10 @@ def curve_metrics(run_dir: str, smooth_m: float = 0.0, rule: str = "largest", up
     if run.history is not None and run.history.has("stage") and len(run.history):
         last = int(np.max(run.history.numeric("stage")))
     c = load_curve(run_dir, None, None, "m", "N", last, True)
-    x, y = np.asarray(c.x, float), np.asarray(c.y, float)
-    if len(x) == 0:
+    if len(c.x) == 0:
         raise ToolError(f"{run_dir}: empty curve")
-    x = np.abs(x - x[0])
-    raw = np.abs(y)
-    y = smooth_curve(x, raw, smooth_m)  # the raw |load| itself when smooth_m = 0
+    x, raw, sign, sign_rule = stage_curve(c, load_sign)
+    y = smooth_curve(x, raw, smooth_m)  # the raw (signed) load itself when smooth_m = 0
     n = len(x) if up_to_m is None else cut_at(x, up_to_m)
     x, y, raw = x[:n], y[:n], raw[:n]
     i, past = peak_index(y, rule)
@@ -273,17 +280,21 @@ def curve_metrics(run_dir: str, smooth_m: float = 0.0, rule: str = "largest", up
            "load_at_end_N": end, "drop_after_peak": (peak - end) / peak if peak > 0 else None, "past_peak": past,
            "largest_load_N": float(y[il]), "largest_at_m": float(x[il]), "rule": rule,
            "reach_m": float(np.max(x)), "x": x, "y": y,
-           "peak_raw_N": float(np.max(raw)), "oscillation_N": oscillation(x, raw, y, smooth_m)}
+           "peak_raw_N": float(np.max(raw)), "oscillation_N": oscillation(x, raw, y, smooth_m),
+           "load_sign": sign, "load_sign_rule": sign_rule}
     out.update(damping_work_shares(run, last, c, n))
-    # EEEP ductility of the same curve ([K25] Eq. 14, FORMULATION §9: K_e by regression to 70 % of the peak,
+    # EEEP ductility of the same curve ([K25] Eq. 14, tools/README.md 'eeep': K_e by regression to 70 % of the peak,
     # Delta_u = displacement at the peak, the [K25] choice); None when the curve has no elastic branch to fit. With
     # --peak first the curve ends at the first peak, so that peak is eeep's.
     try:
         xe, ye = (x, y) if rule == "largest" else (x[: i + 1], y[: i + 1])
-        mu = float(eeep(xe, ye, source=run_dir)["ductility"])
+        e = eeep(xe, ye, source=run_dir, load_sign=1.0)
+        mu = float(e["ductility"])
         out["ductility"] = mu if np.isfinite(mu) else None
+        out["eeep_K_e_N_m"] = float(e["K_e"])
     except (ToolError, ValueError, ZeroDivisionError, FloatingPointError):
         out["ductility"] = None
+        out["eeep_K_e_N_m"] = None
     return out
 
 
@@ -509,7 +520,8 @@ def run_family(args) -> int:
                 os.path.isfile(os.path.join(rec["run_dir"], "history.csv")):
             try:
                 m = curve_metrics(rec["run_dir"], args.smooth * 1e-3, args.peak,
-                                  None if args.peak_up_to is None else args.peak_up_to * 1e-3)
+                                  None if args.peak_up_to is None else args.peak_up_to * 1e-3,
+                                  getattr(args, "load_sign", "auto"))
             except ToolError as e:
                 m = {"note": str(e)}
         by_task[label] = (rec, m)
@@ -726,4 +738,7 @@ def add_parser(sub):
     p.add_argument("--peak-up-to", type=float, metavar="MM",
                    help="measure every curve only up to MM mm of control displacement (peak, load at the end, EEEP, "
                         "half-rate check)")
+    p.add_argument("--load-sign", choices=SIGN_CHOICES, default="auto",
+                   help="sign of the load: auto (default: the case's output.curve.sign, else the sign that makes the "
+                        "loading work positive), 1 (as recorded) or -1 (turned)")
     p.set_defaults(func=cmd_validate)

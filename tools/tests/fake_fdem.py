@@ -4,7 +4,9 @@
 `fake_fdem.py run CASE --out DIR [--set k=v ...] [--threads N] [--quiet]` appends its --set list to the file
 named by $FAKE_FDEM_LOG and writes a run folder following the contract. The "peak load" depends on the settings
 in a known way: peak = 10 kN * (1 + mesh_size) * (1 + rate) * (1 + damping); wall time = 0.01 / mesh_size^2.
-A setting `fail=true` makes it exit 2 with a failed summary; `slow=SECONDS` makes it sleep first.
+A setting `fail=true` makes it exit 2 with a failed summary; `slow=SECONDS` makes it sleep first; `die=TEXT` makes
+it print "error: TEXT" as the engine does for bad input and exit 1 before writing any summary. With `ref=1` the summary
+carries a [reference] result (monitor F, quantity peak, value 10 kN, computed = the peak).
 """
 import json
 import os
@@ -30,6 +32,10 @@ def main(argv):
     if log:
         with open(log, "a") as f:
             f.write(json.dumps(sets, sort_keys=True) + "\n")
+    if "die" in sets:
+        print("fdem: reading the case")
+        print(f"error: {sets['die']}", file=sys.stderr)
+        return 1
     os.makedirs(out, exist_ok=True)
     summ = {"case": "fake", "status": "running", "curve": {"x": "u", "y": "F"}, "columns": {"u": "m", "F": "N"}}
     with open(os.path.join(out, "summary.json"), "w") as f:
@@ -54,6 +60,9 @@ def main(argv):
                  "monitors": {"u": {"min": 0, "max": 1e-3, "final": 1e-3}, "F": {"min": 0, "max": peak, "final": peak}},
                  "energy": {"balance_error": 0.001 * (1 + h)},
                  "settings": sets})
+    if sets.get("ref") == "1":
+        summ["reference"] = {"monitor": "F", "quantity": "peak", "value": 10e3, "source": "fake", "computed": peak,
+                             "relative_error": (peak - 10e3) / 10e3}
     with open(os.path.join(out, "summary.json"), "w") as f:
         json.dump(summ, f)
     return 2 if failed else 0

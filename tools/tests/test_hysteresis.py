@@ -45,8 +45,9 @@ def test_known_loops():
 def test_flat_loops_secant_at_the_tips():
     """Steady elastic-perfectly-plastic loops (stiffness K, yield load F, amplitude D >= 2 F / K), each cycle from
     d = 0 up to +D on the flat branch P = F, down to -D (P = max(F - K (D - d), -F)), back up to 0
-    (P = min(-F + K (d + D), F)). The largest load F is reached at d = 0, the start of the cycle, so k_i is not the
-    loop's secant; the loads at the tips are +-F and k_ext = F / D exactly."""
+    (P = min(-F + K (d + D), F)). The largest load F is reached at d = 0, the start of the cycle; the peaks of the
+    M-DEM paper's Eq. 8 are the loads at the loop's tips, +-F at +-D, so k_i = F / D exactly (the largest-load rule
+    gave P+ at d = 0 and a k_i that grows without bound as the start approaches 0)."""
     F = 2e3
     d_all, p_all = [], []
     amps = (2e-3, 2e-3, 4e-3, 4e-3)
@@ -63,12 +64,50 @@ def test_flat_loops_secant_at_the_tips():
     assert r["n_cycles"] == len(amps)
     for c, D in zip(r["cycles"], amps):
         assert c["complete"]
-        assert c["d_max"] == pytest.approx(D, rel=1e-12)
-        assert c["P_at_d_max"] == pytest.approx(F, rel=1e-12)
-        assert c["P_at_d_min"] == pytest.approx(-F, rel=1e-12)
-        assert c["k_ext"] == pytest.approx(F / D, rel=1e-12)
+        assert c["d_plus"] == pytest.approx(D, rel=1e-12)
+        assert c["d_minus"] == pytest.approx(-D, rel=1e-12)
         assert c["P_plus"] == pytest.approx(F, rel=1e-12)
-        assert c["d_plus"] < 0.01 * D  # the largest load sits at the start of the flat branch, not at the tip
+        assert c["P_minus"] == pytest.approx(-F, rel=1e-12)
+        assert c["k_i"] == pytest.approx(F / D, rel=1e-12)
+        assert c["W_i"] > 0 and not c["W_negative"]
+        # the largest load of the positive excursion is reported apart, where it is: at the start of the flat branch
+        assert c["P_largest_plus"] == pytest.approx(F, rel=1e-12)
+        assert c["d_at_P_largest_plus"] < 0.01 * D
+
+
+def test_sliding_loop_largest_load_on_the_other_side():
+    """A sliding loop whose largest positive load occurs at negative displacement (the load overshoots while the
+    displacement is still coming back from -D, as in cycle 4 of the committed 0.30 MPa cyclic wall, P+ at -1.93
+    mm): the peak of the positive excursion is still the load at +D."""
+    D, F = 1e-3, 10e3
+    d = np.array([0, 0.5e-3, D, 0.5e-3, 0, -0.5e-3, -D, -0.5e-3, -0.2e-3, 0])
+    p = np.array([0, F, F, 0, -F, -F, -F, 0, 1.3 * F, F])  # 1.3 F at d = -0.2 mm (negative side)
+    r = hysteresis.analyse(d, p, load_sign=1.0)
+    c = r["cycles"][0]
+    assert c["d_plus"] == D and c["P_plus"] == F and c["d_minus"] == -D and c["P_minus"] == -F
+    assert c["k_i"] == pytest.approx(2 * F / (2 * D), rel=1e-12)
+
+
+def test_negative_energy_is_flagged(tmp_path, cli):
+    """A loop run anticlockwise (an applied load that returns energy: noise, an unclosed loop or a wrong sign) has
+    W_i < 0; the cycle is flagged and a warning printed, not a silent negative dissipation."""
+    D, h = 1e-3, 2e3
+    up, down = np.linspace(-D, D, 41), np.linspace(D, -D, 41)[1:]
+    # cycle 1: clockwise (upper branch going right); cycle 2: anticlockwise (upper branch going left)
+    d = np.concatenate((np.linspace(0, D, 21), down, up[1:], down, up[1:], np.linspace(-D, 0, 21)[1:]))
+    p = np.concatenate((K * np.linspace(0, D, 21) + h, K * down + h, K * up[1:] - h, K * down - h, K * up[1:] + h,
+                        K * np.linspace(-D, 0, 21)[1:] + h))
+    r = hysteresis.analyse(d, p, load_sign=1.0)
+    w = [c["W_i"] for c in r["cycles"]]
+    negs = [c["W_negative"] for c in r["cycles"]]
+    assert any(negs) and not all(negs)
+    assert all((wi < 0) == n for wi, n in zip(w, negs))
+    assert any("negative dissipated energy" in m for m in r["warnings"])
+    f = tmp_path / "noisy.csv"
+    f.write_text("u_m,F_N\n" + "".join(f"{a!r},{b!r}\n" for a, b in zip(d, p)))
+    rc, out, err = cli("hysteresis", f, "--load-sign", "1", "--no-plot")
+    assert rc == 0, err
+    assert "warning:" in out and "negative dissipated energy" in out and "(NEGATIVE)" in out
 
 
 def test_given_references_and_trailing_half_cycle():

@@ -254,3 +254,17 @@ def test_dry_joint_bad_rows_fail_clearly(tmp_path, cli, row, message):
     assert rc == 1 and len(err.strip().splitlines()) == 1, err
     for m in message:
         assert m in err, err
+
+
+def test_cracks_outside_the_run_exit_1_with_the_range(tmp_path, cli):
+    """--displacement 50 on a run that reached 10 mm (and --time beyond its end) drew the last snapshot under a title
+    it never reached, exit 0; now exit 1 naming what the run covers."""
+    run = make_run(str(tmp_path / "run"))  # u = 10 mm x t, t from 0 to 1 s
+    rc, out, err = cli("cracks", run, "--displacement", "50")
+    assert rc == 1 and "reaches 10 mm" in err and len(err.strip().splitlines()) == 1
+    rc, out, err = cli("cracks", run, "--time", "99")
+    assert rc == 1 and "covers 0 to 1 s" in err
+    rc, out, err = cli("cracks", run, "--time", "-1")
+    assert rc == 1 and "outside the run" in err
+    rc, out, err = cli("cracks", run, "--displacement", "10")  # the end of the run itself is inside
+    assert rc == 0, err

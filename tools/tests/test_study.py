@@ -1,4 +1,5 @@
 import csv
+import re
 import json
 import os
 
@@ -24,17 +25,55 @@ def test_mesh_study_logic_with_fake_fdem(tmp_path, cli):
     case = tmp_path / "case.toml"
     case.write_text("# fake\n")
     out = tmp_path / "m"
-    rc, o, err = cli("study", "mesh", case, "--sizes", "0.2,0.1,0.05", "--fdem", FAKE, "--out-dir", out)
+    rc, stdout, err = cli("study", "mesh", case, "--sizes", "0.2,0.1,0.05", "--fdem", FAKE, "--out-dir", out,
+                          "--set", "ref=1")
     assert rc == 0, err
     rows = read_csv(out / "mesh_study.csv")
     # fake peak = 10 kN (1 + h): relative change to the finest (h = 0.05) is (h - 0.05) / 1.05
     for r in rows:
         h = float(r["mesh_size_m"])
-        assert float(r["peak_load_N"]) == pytest.approx(1e4 * (1 + h), rel=1e-12)
-        assert float(r["peak_load_N_rel_to_finest"]) == pytest.approx((h - 0.05) / 1.05, rel=1e-9, abs=1e-15)
+        assert float(r["peak_load_kN"]) == pytest.approx(10 * (1 + h), rel=1e-12)  # kN, as results.csv
+        assert float(r["peak_load_kN_rel_to_finest"]) == pytest.approx((h - 0.05) / 1.05, rel=1e-9, abs=1e-15)
         assert float(r["wall_time_s"]) == pytest.approx(0.01 / h ** 2, rel=1e-9)
+        # the case's own reference quantity, as the run computed it
+        assert r["reference"] == "F peak" and float(r["reference_value"]) == 1e4
+        assert float(r["reference_computed"]) == pytest.approx(1e4 * (1 + h), rel=1e-12)
     for ext in ("png", "svg"):
         assert (out / f"mesh_study.{ext}").stat().st_size > 2000
+    # q(h) = 10 kN (1 + h) converges with order 1 exactly, towards 10 kN
+    j = json.loads((out / "mesh_study.json").read_text())
+    o = j["convergence_order"]["peak_load_kN"]
+    assert o["order"] == pytest.approx(1.0, rel=1e-9) and o["extrapolated"] == pytest.approx(10.0, rel=1e-9)
+    assert "peak_load_kN: observed convergence order 1 " in stdout
+
+
+def test_richardson_order():
+    """q = q* + C h^p recovered from three sizes, constant ratio and not; oscillating changes give no order."""
+    for p in (0.5, 1.0, 2.0, 3.3):
+        for hs in ((0.1, 0.05, 0.025), (0.1, 0.07, 0.02)):
+            r = study.richardson(hs, [5.0 - 2.0 * h ** p for h in hs])
+            assert r["order"] == pytest.approx(p, rel=1e-9) and r["extrapolated"] == pytest.approx(5.0, rel=1e-9)
+    assert study.richardson((0.1, 0.05, 0.025), (1.0, 2.0, 1.5))["order"] is None
+    assert "oscillating" in study.richardson((0.1, 0.05, 0.025), (1.0, 2.0, 1.5))["note"]
+
+
+def test_mesh_study_says_why_a_run_failed_and_names_other_keys(tmp_path, cli):
+    """A run that exits with an error and no summary is reported with its log's error line (was: "no summary"); a
+    key that is not a mesh size keeps its own name and is not drawn as 'mesh size (mm)' x 1000."""
+    case = tmp_path / "case.toml"
+    case.write_text("# fake\n")
+    out = tmp_path / "m"
+    rc, o, err = cli("study", "mesh", case, "--sizes", "0.1,0.05", "--fdem", FAKE, "--out-dir", out, "--set",
+                     "die=materials.stone.fracture.penalty: the joint is too soft for G_I at this mesh size")
+    assert rc == 1 and "too soft for G_I" in err
+    out2 = tmp_path / "f"
+    rc, o, err = cli("study", "mesh", case, "--key", "geometry.size_factor", "--sizes", "1,0.5,0.25", "--fdem", FAKE,
+                     "--out-dir", out2)
+    assert rc == 0, err
+    rows = read_csv(out2 / "mesh_study.csv")
+    assert "mesh_size_m" not in rows[0] and [float(r["geometry.size_factor"]) for r in rows] == [1, 0.5, 0.25]
+    svg = (out2 / "mesh_study.svg").read_text()
+    assert "geometry.size_factor" in svg and "mesh size (mm)" not in svg
 
 
 def test_speed_study_logic_with_fake_fdem(tmp_path, cli):
@@ -82,7 +121,7 @@ def test_real_fdem_study_plot_eeep(tmp_path, cli):
     assert int(rows[1]["n_triangles"]) > int(rows[0]["n_triangles"])
     # an elastic block sheared by ~1 mm: the base reaction is thousands of N, and finer meshes are softer
     # (constant-strain triangles converge from the stiff side)
-    p = [float(r["peak_load_N"]) for r in rows]
+    p = [1e3 * float(r["peak_load_kN"]) for r in rows]
     assert 1e3 < p[1] < p[0]
     for ext in ("png", "svg"):
         assert (out / f"mesh_study.{ext}").stat().st_size > 2000
@@ -132,3 +171,22 @@ def test_real_fdem_cyclic_hysteresis(tmp_path, cli):
         assert cyc[col["P_minus_kN"]] == pytest.approx(-cyc[col["P_plus_kN"]], rel=0.05)
         assert cyc[col["k_d"]] == pytest.approx(1.0, abs=0.05)
     assert (tmp_path / "h.png").exists()
+
+
+@needs_fdem
+def test_shipped_dry_stone_wall_checks_at_every_study_size():
+    """The [K25] stone joints take penalty = "auto" (penalty_ref 1e10 Pa): the fixed 1e10 Pa at the shipped 25 mm
+    mesh, so no committed result changes, and a stiffer joint at the coarse sizes of a mesh study, which with the
+    fixed penalty failed the fracture-energy check ("joint too soft") at 0.1 and 0.05 m."""
+    import subprocess
+    case = os.path.join(os.path.dirname(TINY), "..", "..", "..", "cases", "lourenco2005", "k25_N100_quick.toml")
+    got = {}
+    for h in ("0.1", "0.05", None):
+        cmd = [_fdem(), "check", case] + (["--set", f"geometry.mesh_size={h}"] if h else [])
+        r = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
+        assert r.returncode == 0, r.stdout + r.stderr
+        m = re.search(r'penalty = "auto": p_j = ([0-9.e+]+) Pa', r.stdout + r.stderr)
+        assert m, r.stdout + r.stderr
+        got[h] = float(m.group(1))
+    assert got[None] == 1e10  # the fixed value these cases had
+    assert got["0.1"] > got["0.05"] > 1e10  # [K25] joints stiffened where the check needs it

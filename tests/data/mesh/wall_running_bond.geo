@@ -1,4 +1,4 @@
-// CASES.md §A wall written by hand in Gmsh's .geo language: 1000 x 1000 mm, 200 x 100 mm units, running bond
+// cases/README.md §A wall written by hand in Gmsh's .geo language: 1000 x 1000 mm, 200 x 100 mm units, running bond
 // (courses of 5 full units alternate with 4 full and 2 half units), dry joints, 50 mm mesh. Group names follow
 // mesh/wall.hpp so that tests can compare it with the generated wall.
 SetFactory("OpenCASCADE");

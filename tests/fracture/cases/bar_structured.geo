@@ -1,4 +1,4 @@
-// Bar 0.2 x 0.1 m (CASES.md A2 stone unit) meshed as nx x ny cells split by alternating diagonals, so that every
+// Bar 0.2 x 0.1 m (cases/README.md §A2 stone unit) meshed as nx x ny cells split by alternating diagonals, so that every
 // column boundary is a straight vertical line of edges: a mode I crack can run straight across the bar.
 // Used by bar_structured.toml; change nx, ny (keep nx = 2 ny) for the mesh sizes 50, 25, 12.5, 10 mm (4, 8, 16, 20).
 nx = 16; ny = 8;
