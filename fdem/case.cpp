@@ -826,10 +826,15 @@ CaseSpec load_case(const std::string& path, const std::vector<std::string>& over
                               .value_or(spec.joint_open);
         spec.joint_slip = r.number("joint_slip", false, "the slip of a dry joint that is recorded, > 0 in m", positive)
                               .value_or(spec.joint_slip);
-        if (const toml::table* c = r.table("curve", false, "a table { x = MONITOR, y = MONITOR }")) {
+        if (const toml::table* c = r.table("curve", false, "a table { x = MONITOR, y = MONITOR, sign = 1 or -1 (optional) }")) {
             Reader cr(ctx, *c, "output.curve");
             spec.curve_x = cr.string("x", true, "the monitor of the control displacement").value_or("");
             spec.curve_y = cr.string("y", true, "the monitor of the load").value_or("");
+            spec.curve_sign = static_cast<int>(
+                cr.number("sign", false, "1 or -1: the factor that makes the load positive while loading (the tools' "
+                                         "load sign; without it they take the sign of positive loading work)",
+                          [](double v) { return v == 1.0 || v == -1.0; })
+                    .value_or(0.0));
             cr.finish();
             for (const auto* n : {&spec.curve_x, &spec.curve_y})
                 if (!n->empty() && !spec.find_monitor(*n))

@@ -241,6 +241,7 @@ struct CaseSpec {
     double joint_open = 1e-4;  // m
     double joint_slip = 1e-4;  // m
     std::string curve_x, curve_y;  // monitors forming the load-displacement curve (optional)
+    int curve_sign = 0;            // 1 / -1: the load's sign the tools apply (0: not stated, the tools' own rule)
     ReferenceSpec reference;
     std::vector<std::pair<std::string, std::string>> overrides;  // --set key=value as given
 

@@ -1286,6 +1286,7 @@ void Simulation::write_summary(const std::string& status, const std::string& mes
         Json c = Json::object();
         c["x"] = spec_.curve_x;
         c["y"] = spec_.curve_y;
+        if (spec_.curve_sign != 0) c["sign"] = spec_.curve_sign;
         j["curve"] = c;
     }
     j["n_triangles"] = model_.n_triangles();

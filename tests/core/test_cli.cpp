@@ -349,3 +349,23 @@ TEST_CASE("penalty auto meets the mode I energy condition at every mesh size of 
     CHECK(r.code == 1);
     CHECK(r.err.find("materials.stone.fracture.penalty_ref") != std::string::npos);
 }
+
+TEST_CASE("output.curve.sign: a stated load sign reaches summary.json for the tools; anything but 1 or -1 is refused "
+          "naming the key",
+          "[unit]") {
+    const auto dir = testing::tmp_dir("cli_curve_sign");
+    const std::string with_curve = replace(kGood, "[[stages]]", "[[monitors]]\nname = \"F\"\ntype = \"load\"\ngroup = \"top\"\n"
+                                                               "component = \"x\"\n\n[output]\ncurve = { x = \"u_top\", "
+                                                               "y = \"F\", sign = -1 }\n\n[[stages]]");
+    const auto path = testing::write_text(dir / "case.toml", with_curve);
+    const auto r = testing::run_fdem("run \"" + path + "\" --quiet --out \"" + (dir / "run").string() + "\"", dir);
+    INFO(r.err);
+    REQUIRE(r.code == 0);
+    const std::string summary = testing::read_text(dir / "run" / "summary.json");
+    CHECK(std::regex_search(summary, std::regex("\"sign\": -1")));
+    const auto bad = testing::write_text(dir / "bad.toml", replace(with_curve, "sign = -1", "sign = 2"));
+    const auto rb = testing::run_fdem("check \"" + bad + "\"", dir);
+    INFO(rb.err);
+    CHECK(rb.code == 1);
+    CHECK(rb.err.find("output.curve.sign") != std::string::npos);
+}
