@@ -15,6 +15,8 @@
 //   hold:     a tangential load below mu N, applied smoothly, moves the block only by its elastic tangential
 //             displacement F / K_t (K_t = k_s t L for the base face of length L, plus the block's own shear), for
 //             any number of steps; a stack on an incline below its friction angle does not move.
+//   books:    every test closes its energy books within 1 % of the work put in (push, or the potential change of
+//             the turning gravity on the incline).
 //
 // THE FLUTTER (why the block is stone-stiff, E = 1e10 Pa). Undamped, a block that slides with friction on penalty
 // contacts can be dynamically unstable: the friction at its base couples its bounce on the contact springs (here
@@ -242,10 +244,13 @@ TEST_CASE("friction: a block under a smooth push of 0.75 mu m g stays within its
     double t = 0.0, dmax = 0.0, mean_mid = 0.0, mean_end = 0.0, dfric_mid = 0.0;
     const long n = 1000000;
     long n_mid = 0, n_end = 0;
+    const double e0 = held_energy(s);
+    double work = 0.0;  // J, the push's work: f(t^n) times the loaded nodes' motion over each step
     for (long i = 0; i < n; ++i) {
         const double f = t < ramp ? F * 0.5 * (1 - std::cos(M_PI * t / ramp)) : F;
-        for (int k : load) s.fext[2 * k] = f / static_cast<double>(load.size());
+        for (int k : load) s.fext[2 * k] = f / static_cast<double>(load.size()), work -= s.fext[2 * k] * s.x[2 * k];
         s.step(sc.dt);
+        for (int k : load) work += s.fext[2 * k] * s.x[2 * k];
         t += sc.dt;
         const double d = block_x(sc) - x_start;
         dmax = std::max(dmax, std::fabs(d));
@@ -259,7 +264,10 @@ TEST_CASE("friction: a block under a smooth push of 0.75 mu m g stays within its
                 "mean over 40-50 %% of the run %.6g m, over the last 10 %% %.6g m; friction dissipation %.3g J at half, %.3g J "
                 "at the end\n",
                 n, t, dmax, d_static, mean_mid, mean_end, dfric_mid, s.cs->friction_dissipation());
+    const double balance = (held_energy(s) - e0 - work) / work;
+    std::printf("[friction hold] push work %.4g J, books %+.3f %% of it\n", work, 100 * balance);
     REQUIRE(d_static > 0.0);
+    CHECK(std::fabs(balance) < 0.01);
     CHECK(dmax < 1.1 * d_static);                               // never beyond its elastic displacement
     CHECK(std::fabs(mean_end - mean_mid) < 1e-2 * d_static);   // and its mean position holds over the second half
 }
@@ -275,10 +283,19 @@ TEST_CASE("friction: a stack of three blocks on an incline 5 deg below its frict
     const double ramp = 0.5;
     double t = 0.0;
     std::vector<double> x_ramped;
+    // Books: turning gravity changes the potential -sum m g . x at fixed x; that change is the work put in.
+    const double e0 = held_energy(s);
+    double work = 0.0, turned = 0.0;  // J: the net potential change put in, and its absolute sum (the scale)
     while (t < ramp + 5.0) {
         const double a = t < ramp ? theta * 0.5 * (1 - std::cos(M_PI * t / ramp)) : theta;
-        s.gx = kG * std::sin(a);
-        s.gy = -kG * std::cos(a);
+        const double gx = kG * std::sin(a), gy = -kG * std::cos(a);
+        if (gx != s.gx || gy != s.gy) {
+            double du = 0.0;
+            for (int k = 0; k < s.n_nodes(); ++k) du -= s.m[2 * k] * ((gx - s.gx) * s.x[2 * k] + (gy - s.gy) * s.x[2 * k + 1]);
+            work += du, turned += std::fabs(du);
+        }
+        s.gx = gx;
+        s.gy = gy;
         s.step(sc.dt);
         t += sc.dt;
         if (x_ramped.empty() && t >= ramp + 0.2) x_ramped = s.x;
@@ -289,5 +306,9 @@ TEST_CASE("friction: a stack of three blocks on an incline 5 deg below its frict
     std::printf("[friction incline] stack of 3 at %.2f deg (friction angle %.2f deg): largest node motion over the "
                 "last 4.8 s %.3g m\n",
                 theta * 180 / M_PI, std::atan(kMu) * 180 / M_PI, shift);
+    const double balance = (held_energy(s) - e0 - work) / turned;
+    std::printf("[friction incline] potential put in by the tilt: net %.4g J, turned %.4g J; books %+.4f %% of it\n", work,
+                turned, 100 * balance);
     CHECK(shift < 1e-6);
+    CHECK(std::fabs(balance) < 0.01);
 }
