@@ -19,7 +19,7 @@ namespace fdem {
 
 enum class Plane { stress, strain };
 
-// Cohesive properties (FORMULATION §6): the fracture of a material's interior, or a bonded (mortared) interface.
+// Cohesive properties ([K25] Eqs. 6-13, fracture/README.md): the fracture of a material's interior, or a bonded (mortared) interface.
 // NaN = not given. Give penalty (Pa) OR normal_stiffness and shear_stiffness (Pa/m).
 struct JointSpec {
     bool present = false;
@@ -39,7 +39,7 @@ struct JointSpec {
     int line = 0;
 };
 
-// How two regions meet (FORMULATION §1, §5): tied (one continuum), bonded (cohesive element, then contact),
+// How two regions meet (README "Physics"): tied (one continuum), bonded (cohesive element, then contact),
 // dry (contact with Coulomb friction only). region_a == region_b: two different bodies of one region.
 struct InterfaceSpec {
     std::string region_a, region_b;
@@ -58,7 +58,7 @@ struct Material {
     double E = 0;                // Young's modulus, Pa
     double nu = 0;               // Poisson's ratio, -
     double density = 0;          // kg/m^3
-    double viscous_damping = 0;  // fraction of the element's critical viscous damping xi, - (FORMULATION §2)
+    double viscous_damping = 0;  // fraction of the element's critical viscous damping xi, - ([M04] ch. 4)
     JointSpec fracture;          // [materials.NAME.fracture]: present = the material may crack inside
     int line = 0;
 };
@@ -186,7 +186,7 @@ struct StageSpec {
     double gravity_ramp = 0;
     double tilt_rate = 0;
     TimeFunction gravity_function;  // multiplies gravity from this stage's start; kept until a stage sets gravity
-    std::optional<double> local_damping;  // alpha of FORMULATION §4, 0 <= alpha < 1
+    std::optional<double> local_damping;  // alpha of the local damping [C79], 0 <= alpha < 1
     // Time constant tau (s) of the moving mean each DOF's velocity is measured against for the sign of the local
     // damping force: -alpha |f| sign(v - vbar_tau). 0 (default): the absolute velocity, as in [C79]. A steady motion
     // (a wall driven at a constant rate) is then not braked: only fluctuations faster than tau are damped. Kept by

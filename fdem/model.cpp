@@ -138,7 +138,7 @@ Model build_model(const CaseSpec& spec, mesh::Mesh mesh) {
         // [M04]: eta = xi 2 h sqrt(E rho), xi = 1 critical.
         t.eta = mat.viscous_damping * 2 * h * std::sqrt(mat.E * mat.density * spec.mass_scale);  // inertial density
         md.tri_material[e] = mi;
-        const double m3 = mat.density * t.A0t / 3.0;  // lumped mass, FORMULATION §1
+        const double m3 = mat.density * t.A0t / 3.0;  // lumped mass, a third of the triangle's
         for (int k = 0; k < 3; ++k) md.mass[n[k]] += m3;
     }
     md.inv_mass.resize(nn);

@@ -51,7 +51,7 @@ struct Model {
 // each new_of_old. Deterministic (ties broken by the old index).
 std::pair<std::vector<int>, std::vector<int>> reorder_for_locality(mesh::Mesh& mesh);
 
-// Builds the model (after reorder_for_locality): lumped masses rho t A0 / 3 per node (FORMULATION §1), precomputed D0^-1, A0, altitudes,
+// Builds the model (after reorder_for_locality): lumped masses rho t A0 / 3 per node, precomputed D0^-1, A0, altitudes,
 // material constants (plane stress or strain), viscous coefficients. Throws InputError for a region without
 // material and mesh::MeshError for a triangle with non-positive reference area.
 Model build_model(const CaseSpec& spec, mesh::Mesh mesh);
@@ -59,7 +59,7 @@ Model build_model(const CaseSpec& spec, mesh::Mesh mesh);
 // node origins (renumbered with the mesh).
 Model build_model(const CaseSpec& spec, mesh::Topology topo);
 
-// Stable time step of the triangles alone (FORMULATION §3): min over triangles of h_e / c_p, reduced for
+// Stable time step of the triangles alone ([M04] ch. 4): min over triangles of h_e / c_p, reduced for
 // viscous damping by (sqrt(1 + xi^2) - xi). Returns the limit (s) and the triangle that sets it.
 struct StepLimit {
     double dt = 0;  // s

@@ -1,6 +1,6 @@
 // fdem/simulation.cpp: the explicit central-difference integrator and everything around it.
 //
-// One step (FORMULATION §3, §4), with x^n, v^{n-1/2} known:
+// One step (central differences with local damping, README "Physics"; [M04] ch. 4, [C79]), with x^n, v^{n-1/2} known:
 //   1. loads, gravity and prescribed velocities at time t^n (ramps, protocols, tilting);
 //   2. triangle forces f_int(x^n, v^{n-1/2}) in parallel, one 6-double record per triangle;
 //   3. node loop in parallel: gather the triangle records in CSR order, add applied loads and gravity,

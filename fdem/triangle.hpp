@@ -1,4 +1,4 @@
-// fdem/triangle.hpp: the deformable constant-strain triangle with finite rotations ([M04] ch. 4; FORMULATION §2).
+// fdem/triangle.hpp: the deformable constant-strain triangle with finite rotations ([M04] ch. 4).
 //
 // DATA LAYOUT ASSUMPTIONS
 //   x, v: 2 * n_nodes doubles (node k at [2k], [2k+1]); TriangleRef: one 64-byte record per triangle (hot data,

@@ -1,6 +1,6 @@
 // mesh/topology.hpp: mesh -> FDEM topology: edge classes, node splitting, cohesive and contact sets.
 //
-// FORMULATION.md §1: nodes are shared inside a continuum and duplicated only where a crack or a joint may open.
+// Nodes are shared inside a continuum and duplicated only where a crack or a joint may open.
 // Every edge of the mesh gets one class:
 //   interior       two triangles of one continuum, nodes shared, no crack possible;
 //   crackable      two triangles of one body (or of tied bodies) whose material may fracture: nodes duplicated,

@@ -10,9 +10,6 @@ from conftest import run_inprocess
 
 REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 PATTERN = re.compile(r"FORMULATION|CASES\.md")
-# fdem/ and mesh/ belong to the engine's owners (issue 31, C++ points), who clear their comments on their branches;
-# remove an entry here once its folder is clean.
-PENDING = ("fdem/", "mesh/")
 
 
 def tracked_files():
@@ -20,7 +17,7 @@ def tracked_files():
         out = subprocess.run(["git", "-C", REPO, "ls-files"], capture_output=True, text=True, check=True).stdout
     except (OSError, subprocess.CalledProcessError):
         pytest.skip("not a git checkout")
-    return [f for f in out.splitlines() if not f.startswith(PENDING) and f != "tools/tests/test_docs_standalone.py"]
+    return [f for f in out.splitlines() if f != "tools/tests/test_docs_standalone.py"]
 
 
 def test_no_citation_of_documents_outside_the_repository():
