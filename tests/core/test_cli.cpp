@@ -317,7 +317,19 @@ TEST_CASE("penalty auto meets the mode I energy condition at every mesh size of 
     auto check = [&](const std::string& size, const std::string& sets) {
         return testing::run_fdem("check \"" + path + "\" --set geometry.mesh_size=" + size + " " + sets, dir);
     };
-    CHECK(check("0.1", "").code == 1);  // the fixed penalty is too soft there
+    {
+        // The same wall with the fixed p_j = 1e10 Pa the case had before "auto": too soft at 0.1 m.
+        std::string text = testing::read_text(path);
+        const std::string a = "  penalty = \"auto\"", b = "  penalty_ref = 1e+10";
+        REQUIRE(text.find(a) != std::string::npos);
+        REQUIRE(text.find(b) != std::string::npos);
+        text.replace(text.find(a), a.size(), "  penalty = 1e+10");
+        text.replace(text.find(b), b.size(), "");
+        const auto fixed = testing::write_text(dir / "fixed.toml", text);
+        CHECK(testing::run_fdem("check \"" + fixed + "\" --set geometry.mesh_size=0.1", dir).code == 1);
+        CHECK(testing::run_fdem("check \"" + fixed + "\" --set geometry.mesh_size=0.025", dir).code == 0);
+        CHECK(check("0.1", "").code == 0);  // the shipped case, penalty = "auto"
+    }
     for (const std::string size : {"0.1", "0.05", "0.025"}) {
         for (const std::string ref : {"", " --set materials.stone.fracture.penalty_ref=1e10"}) {
             const auto r = check(size, "--set 'materials.stone.fracture.penalty=\"auto\"'" + ref);
@@ -342,7 +354,7 @@ TEST_CASE("penalty auto meets the mode I energy condition at every mesh size of 
     CHECK(r.code == 1);
     CHECK(r.err.find("materials.stone.fracture.penalty") != std::string::npos);
     CHECK(r.err.find("\"auto\"") != std::string::npos);
-    r = check("0.025", "--set materials.stone.fracture.penalty_ref=1e10");
+    r = check("0.025", "--set materials.stone.fracture.penalty=1e10");  // penalty_ref without "auto"
     CHECK(r.code == 1);
     CHECK(r.err.find("materials.stone.fracture.penalty_ref") != std::string::npos);
     r = check("0.025", "--set 'materials.stone.fracture.penalty=\"auto\"' --set materials.stone.fracture.penalty_ref=-1");
@@ -350,8 +362,8 @@ TEST_CASE("penalty auto meets the mode I energy condition at every mesh size of 
     CHECK(r.err.find("materials.stone.fracture.penalty_ref") != std::string::npos);
 }
 
-TEST_CASE("output.curve.sign: a stated load sign reaches summary.json for the tools; anything but 1 or -1 is refused "
-          "naming the key",
+TEST_CASE("output.curve.sign: a stated load sign reaches summary.json for the tools, and anything but 1 or -1 is "
+          "refused naming the key",
           "[unit]") {
     const auto dir = testing::tmp_dir("cli_curve_sign");
     const std::string with_curve = replace(kGood, "[[stages]]", "[[monitors]]\nname = \"F\"\ntype = \"load\"\ngroup = \"top\"\n"

@@ -263,7 +263,7 @@ TEST_CASE("scene features: bad time functions and initial conditions are exit 1 
 //   - A target far below every ratio reached (1e-12) saturates the controller at e^-2 per T from the first steps,
 //     so f(t) = max(f_min, exp(-2 t / T)) and the driven edge moves by
 //     u = v T / 2 (1 - f_min) + f_min v (t_end - t1),  t1 = T ln(1 / f_min) / 2.
-TEST_CASE("servo loading: a target above every unbalanced-force ratio leaves the drive unchanged; a target below "
+TEST_CASE("servo loading: a target above every unbalanced-force ratio leaves the drive unchanged, and a target below "
           "them slows it at e^-2 per response time down to min_factor",
           "[unit][scene]") {
     const std::string head = square_head("servo") + R"(
