@@ -436,7 +436,7 @@ void Simulation::begin_stage(int s) {
             for (const auto& sp : st.supports)
                 if (sp.group == m.group && sp.mode[m.component] == DofMode::velocity &&
                     (st.until_value - until_start_) * sp.velocity[m.component] <= 0 && !st.max_duration && !st.duration)
-                    throw InputError(spec_.file + ":" + std::to_string(st.line) + ": key 'stages." + std::to_string(s) +
+                    throw InputError(spec_.file + ":" + std::to_string(st.line) + ": key 'stages." + std::to_string(s + 1) +
                                      ".until': this stage can never end: monitor '" + m.name + "' is at " +
                                      sci(until_start_) + " and the prescribed velocity moves it away from " +
                                      sci(st.until_value));
