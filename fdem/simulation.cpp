@@ -104,6 +104,8 @@ mesh::Mesh make_mesh(const CaseSpec& spec) {
         mesh::PhysicalGroup grp;
         grp.name = gs.name;
         grp.dim = 0;
+        grp.within = gs.within;                        // copies on the within group's bodies only (topology)
+        grp.every_copy = gs.box && gs.within.empty();  // a box alone: every node copy in it
         if (gs.box) {
             const auto& b = *gs.box;
             const double tol = 1e-9 * std::max({1.0, std::abs(b[0]), std::abs(b[1]), std::abs(b[2]), std::abs(b[3])});
