@@ -192,7 +192,15 @@ private:
     std::set<std::string> known_;
 };
 
-// --set a.b.0.c=value: parse the value as TOML (a bare word becomes a string) and put it into the tree.
+// --set a.b.1.c=value: parse the value as TOML (a bare word becomes a string) and put it into the tree. Array
+// elements count from 1 (stages.1 is the first stage), as in the logs, the history's stage column and the messages.
+long array_index(const std::string& p, std::size_t size) {
+    char* end = nullptr;
+    const long idx = std::strtol(p.c_str(), &end, 10);
+    if (p.empty() || *end || idx < 1 || static_cast<std::size_t>(idx) > size) return -1;
+    return idx - 1;
+}
+
 void apply_override(toml::table& root, const std::string& spec, Ctx& ctx) {
     const auto eq = spec.find('=');
     if (eq == std::string::npos || eq == 0) throw InputError("--set " + spec + ": expected key=value, e.g. --set materials.stone.E=1e9");
@@ -213,11 +221,10 @@ void apply_override(toml::table& root, const std::string& spec, Ctx& ctx) {
             if (!t->contains(p)) t->insert(p, toml::table{});
             cur = t->get(p);
         } else if (auto* a = cur->as_array()) {
-            char* end = nullptr;
-            const long idx = std::strtol(p.c_str(), &end, 10);
-            if (*end || idx < 0 || static_cast<std::size_t>(idx) >= a->size())
-                throw InputError("--set " + spec + ": '" + p + "' is not an index of the array (0.." +
-                                 std::to_string(static_cast<long>(a->size()) - 1) + ")");
+            const long idx = array_index(p, a->size());
+            if (idx < 0)
+                throw InputError("--set " + spec + ": '" + p + "' is not an index of the array (1.." +
+                                 std::to_string(a->size()) + "; elements count from 1)");
             cur = a->get(static_cast<std::size_t>(idx));
         } else {
             throw InputError("--set " + spec + ": '" + parts[i - 1] + "' is a value, not a table");
@@ -228,10 +235,10 @@ void apply_override(toml::table& root, const std::string& spec, Ctx& ctx) {
     if (auto* t = cur->as_table()) {
         v->visit([&](auto&& val) { t->insert_or_assign(last, val); });
     } else if (auto* a = cur->as_array()) {
-        char* end = nullptr;
-        const long idx = std::strtol(last.c_str(), &end, 10);
-        if (*end || idx < 0 || static_cast<std::size_t>(idx) >= a->size())
-            throw InputError("--set " + spec + ": '" + last + "' is not an index of the array");
+        const long idx = array_index(last, a->size());
+        if (idx < 0)
+            throw InputError("--set " + spec + ": '" + last + "' is not an index of the array (1.." +
+                             std::to_string(a->size()) + "; elements count from 1)");
         v->visit([&](auto&& val) { a->replace(a->cbegin() + idx, val); });
     } else {
         throw InputError("--set " + spec + ": the parent of '" + last + "' is a value, not a table");
@@ -487,7 +494,7 @@ void read_wall(Ctx& ctx, Reader& r, mesh::WallSpec& w) {
     w.mesh_size_beam = r.number("mesh_size_beam", false, "a mesh size > 0 in m", positive).value_or(0);
     w.mesh_size_base = r.number("mesh_size_base", false, "a mesh size > 0 in m", positive).value_or(0);
     for (const toml::table* t : r.tables("openings", false, "[[geometry.openings]] blocks { x, y, width, height }")) {
-        Reader o(ctx, *t, r.key_path("openings." + std::to_string(w.openings.size())));
+        Reader o(ctx, *t, r.key_path("openings." + std::to_string(w.openings.size() + 1)));
         mesh::WallOpening op;
         op.x = o.number("x", true, "the opening's left edge in m").value_or(0);
         op.y = o.number("y", true, "the opening's bottom edge in m").value_or(0);
@@ -497,7 +504,7 @@ void read_wall(Ctx& ctx, Reader& r, mesh::WallSpec& w) {
         w.openings.push_back(op);
     }
     for (const toml::table* t : r.tables("refine", false, "[[geometry.refine]] blocks { x, y, width, height, size }")) {
-        Reader o(ctx, *t, r.key_path("refine." + std::to_string(w.refine.size())));
+        Reader o(ctx, *t, r.key_path("refine." + std::to_string(w.refine.size() + 1)));
         mesh::WallRefinement rf;
         rf.x = o.number("x", true, "the box's left edge in m").value_or(0);
         rf.y = o.number("y", true, "the box's bottom edge in m").value_or(0);
@@ -724,7 +731,7 @@ CaseSpec load_case(const std::string& path, const std::vector<std::string>& over
     }
 
     for (const toml::table* t : top.tables("interfaces", false, "[[interfaces]] blocks")) {
-        const std::string p = "interfaces." + std::to_string(spec.interfaces.size());
+        const std::string p = "interfaces." + std::to_string(spec.interfaces.size() + 1);
         Reader r(ctx, *t, p);
         InterfaceSpec in;
         in.line = r.line();
@@ -766,7 +773,7 @@ CaseSpec load_case(const std::string& path, const std::vector<std::string>& over
     }
 
     for (const toml::table* t : top.tables("monitors", false, "[[monitors]] blocks")) {
-        const std::string p = "monitors." + std::to_string(spec.monitors.size());
+        const std::string p = "monitors." + std::to_string(spec.monitors.size() + 1);
         Reader r(ctx, *t, p);
         MonitorSpec m;
         m.line = r.line();
@@ -788,7 +795,7 @@ CaseSpec load_case(const std::string& path, const std::vector<std::string>& over
     }
 
     for (const toml::table* t : top.tables("initial", false, "[[initial]] blocks")) {
-        const std::string p = "initial." + std::to_string(spec.initial.size());
+        const std::string p = "initial." + std::to_string(spec.initial.size() + 1);
         Reader r(ctx, *t, p);
         InitialSpec in;
         in.line = r.line();
@@ -861,7 +868,7 @@ CaseSpec load_case(const std::string& path, const std::vector<std::string>& over
 
     const auto stage_tables = top.tables("stages", true, "at least one [[stages]] block");
     for (std::size_t si = 0; si < stage_tables.size(); ++si) {
-        const std::string p = "stages." + std::to_string(si);
+        const std::string p = "stages." + std::to_string(si + 1);
         Reader r(ctx, *stage_tables[si], p);
         StageSpec s;
         s.line = r.line();
@@ -891,10 +898,10 @@ CaseSpec load_case(const std::string& path, const std::vector<std::string>& over
         s.history_interval = r.number("history_interval", false, "an interval > 0 in s", positive);
         s.snapshot_interval = r.number("snapshot_interval", false, "an interval > 0 in s", positive);
         const auto loads = r.tables("loads", false, "[[stages.loads]] blocks");
-        for (std::size_t i = 0; i < loads.size(); ++i) s.loads.push_back(read_load(ctx, *loads[i], p + ".loads." + std::to_string(i)));
+        for (std::size_t i = 0; i < loads.size(); ++i) s.loads.push_back(read_load(ctx, *loads[i], p + ".loads." + std::to_string(i + 1)));
         const auto sups = r.tables("supports", false, "[[stages.supports]] blocks");
         for (std::size_t i = 0; i < sups.size(); ++i)
-            s.supports.push_back(read_support(ctx, *sups[i], p + ".supports." + std::to_string(i)));
+            s.supports.push_back(read_support(ctx, *sups[i], p + ".supports." + std::to_string(i + 1)));
         r.finish();
 
         // A stage must be able to end.
@@ -951,31 +958,31 @@ void check_against_mesh(const CaseSpec& spec, const MeshNames& names) {
         }
     for (std::size_t i = 0; i < spec.monitors.size(); ++i) {
         const auto& m = spec.monitors[i];
-        if (m.type != "tilt" && !has_group(m.group)) missing("monitors." + std::to_string(i) + ".group", m.line, m.group);
+        if (m.type != "tilt" && !has_group(m.group)) missing("monitors." + std::to_string(i + 1) + ".group", m.line, m.group);
     }
     for (std::size_t i = 0; i < spec.initial.size(); ++i)
         if (!has_group(spec.initial[i].group))
-            missing("initial." + std::to_string(i) + ".group", spec.initial[i].line, spec.initial[i].group);
+            missing("initial." + std::to_string(i + 1) + ".group", spec.initial[i].line, spec.initial[i].group);
     for (std::size_t i = 0; i < spec.interfaces.size(); ++i)
         for (const auto* r : {&spec.interfaces[i].region_a, &spec.interfaces[i].region_b})
             if (std::find(names.regions.begin(), names.regions.end(), *r) == names.regions.end())
-                errors.push_back(spec.file + ":" + std::to_string(spec.interfaces[i].line) + ": key 'interfaces." + std::to_string(i) +
+                errors.push_back(spec.file + ":" + std::to_string(spec.interfaces[i].line) + ": key 'interfaces." + std::to_string(i + 1) +
                                  ".regions': the mesh has no region named '" + *r + "'");
     for (std::size_t si = 0; si < spec.stages.size(); ++si) {
         const auto& s = spec.stages[si];
         for (std::size_t i = 0; i < s.loads.size(); ++i)
             if (!has_group(s.loads[i].group))
-                missing("stages." + std::to_string(si) + ".loads." + std::to_string(i) + ".group", s.loads[i].line, s.loads[i].group);
+                missing("stages." + std::to_string(si + 1) + ".loads." + std::to_string(i + 1) + ".group", s.loads[i].line, s.loads[i].group);
         for (std::size_t i = 0; i < s.supports.size(); ++i)
             if (!has_group(s.supports[i].group))
-                missing("stages." + std::to_string(si) + ".supports." + std::to_string(i) + ".group", s.supports[i].line,
+                missing("stages." + std::to_string(si + 1) + ".supports." + std::to_string(i + 1) + ".group", s.supports[i].line,
                         s.supports[i].group);
         for (std::size_t i = 0; i < s.loads.size(); ++i) {
             if (!s.loads[i].is_pressure) continue;
             for (std::size_t g = 0; g < names.groups.size(); ++g)
                 if (names.groups[g] == s.loads[i].group && names.group_dims[g] != 1)
-                    errors.push_back(spec.file + ":" + std::to_string(s.loads[i].line) + ": key 'stages." + std::to_string(si) +
-                                     ".loads." + std::to_string(i) + ".pressure': group '" + s.loads[i].group +
+                    errors.push_back(spec.file + ":" + std::to_string(s.loads[i].line) + ": key 'stages." + std::to_string(si + 1) +
+                                     ".loads." + std::to_string(i + 1) + ".pressure': group '" + s.loads[i].group +
                                      "' is not a curve (1D physical group); a pressure needs edges");
         }
     }

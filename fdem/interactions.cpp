@@ -102,7 +102,7 @@ Interactions::Interactions(const CaseSpec& spec, const Model& model) {
                 };
                 props.push_back(to_props(spec.interfaces[i].bond,
                                          std::min(region_E(spec.interfaces[i].region_a), region_E(spec.interfaces[i].region_b))));
-                props_key.push_back("interfaces." + std::to_string(i));
+                props_key.push_back("interfaces." + std::to_string(i + 1));
             }
         // Too-soft penalties: checked against the longest element of each class.
         std::vector<double> h_max(props.size(), 0.0);

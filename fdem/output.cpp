@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 #include <stdexcept>
+#include <system_error>
 
 namespace fdem {
 
@@ -45,18 +46,65 @@ void append_block(std::string& blob, const void* data, std::uint64_t bytes) {
 void array_header(std::string& xml, const VtuArray& a, std::uint64_t offset) {
     xml += "        <DataArray type=\"";
     xml += a.is_int ? "Int32" : "Float64";
-    xml += "\" Name=\"" + a.name + "\" NumberOfComponents=\"" + std::to_string(a.components) +
-           "\" format=\"appended\" offset=\"" + std::to_string(offset) + "\"/>\n";
+    xml += "\" Name=\"" + a.name + "\" NumberOfComponents=\"" + std::to_string(a.components) + "\"";
+    for (std::size_t i = 0; i < a.component_names.size(); ++i)
+        xml += " ComponentName" + std::to_string(i) + "=\"" + a.component_names[i] + "\"";
+    xml += " format=\"appended\" offset=\"" + std::to_string(offset) + "\"/>\n";
 }
 }  // namespace
 
+std::string vtu_field_data(const std::vector<VtuStrings>& field_data) {
+    if (field_data.empty()) return "";
+    std::string xml = "      <FieldData>\n";
+    for (const auto& f : field_data) {
+        xml += "        <DataArray type=\"String\" Name=\"" + f.name + "\" NumberOfTuples=\"" +
+               std::to_string(f.values.size()) + "\" format=\"ascii\">\n         ";
+        for (const auto& v : f.values) {
+            for (unsigned char c : v) xml += " " + std::to_string(static_cast<int>(c));
+            xml += " 0";
+        }
+        xml += "\n        </DataArray>\n";
+    }
+    xml += "      </FieldData>\n";
+    return xml;
+}
+
+StressMeasures stress_measures(double sxx, double syy, double sxy, double szz) {
+    const double c = 0.5 * (sxx + syy), r = std::hypot(0.5 * (sxx - syy), sxy);
+    const double vm = std::sqrt(0.5 * ((sxx - syy) * (sxx - syy) + (syy - szz) * (syy - szz) + (szz - sxx) * (szz - sxx)) +
+                                3 * sxy * sxy);
+    return {c + r, c - r, vm};
+}
+
+int remove_previous_snapshots(const std::string& out_dir) {
+    namespace fs = std::filesystem;
+    int removed = 0;
+    std::error_code ec;
+    const fs::path dir(out_dir);
+    for (const char* f : {"run.pvd", "run.pvd.tmp"})
+        if (fs::remove(dir / f, ec)) ++removed;
+    if (!fs::is_directory(dir / "snapshots", ec)) return removed;
+    std::vector<fs::path> old;
+    for (const auto& e : fs::directory_iterator(dir / "snapshots", ec)) {
+        const std::string n = e.path().filename().string();
+        const bool vtu = n.size() > 4 && n.compare(n.size() - 4, 4, ".vtu") == 0;
+        const bool tmp = n.size() > 8 && n.compare(n.size() - 8, 8, ".vtu.tmp") == 0;
+        if (n.rfind("step_", 0) == 0 && (vtu || tmp)) old.push_back(e.path());
+    }
+    for (const auto& p : old)
+        if (fs::remove(p, ec)) ++removed;
+    return removed;
+}
+
 std::string vtu_document(const std::vector<double>& xy, const std::vector<int>& triangles, const std::vector<int>& lines,
-                         const std::vector<VtuArray>& point_data, const std::vector<VtuArray>& cell_data) {
+                         const std::vector<VtuArray>& point_data, const std::vector<VtuArray>& cell_data,
+                         const std::vector<VtuStrings>& field_data) {
     const std::size_t np = xy.size() / 2, ntri = triangles.size() / 3, nline = lines.size() / 2, nc = ntri + nline;
     std::string xml, blob;
     xml += "<?xml version=\"1.0\"?>\n";
     xml += "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n";
     xml += "  <UnstructuredGrid>\n";
+    xml += vtu_field_data(field_data);
     xml += "    <Piece NumberOfPoints=\"" + std::to_string(np) + "\" NumberOfCells=\"" + std::to_string(nc) + "\">\n";
     auto add = [&](const VtuArray& a) {
         array_header(xml, a, blob.size());
@@ -68,7 +116,7 @@ std::string vtu_document(const std::vector<double>& xy, const std::vector<int>& 
     xml += "      </PointData>\n      <CellData>\n";
     for (const auto& a : cell_data) add(a);
     xml += "      </CellData>\n      <Points>\n";
-    VtuArray pts{"Points", 3, {}, {}, false};
+    VtuArray pts{"Points", 3, {}, {}, false, {}};
     pts.f64.resize(3 * np);
     for (std::size_t i = 0; i < np; ++i) pts.f64[3 * i] = xy[2 * i], pts.f64[3 * i + 1] = xy[2 * i + 1], pts.f64[3 * i + 2] = 0;
     add(pts);

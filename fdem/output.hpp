@@ -24,12 +24,37 @@ struct VtuArray {
     std::vector<double> f64;   // used when !is_int
     std::vector<int32_t> i32;  // used when is_int
     bool is_int = false;
+    std::vector<std::string> component_names;  // optional: ComponentName_i attributes (ParaView's labels)
+};
+
+// A string array of the file's FieldData (one value per entry: e.g. the region names, indexed by region id).
+struct VtuStrings {
+    std::string name;
+    std::vector<std::string> values;
 };
 
 // Triangles (3 node indices each) with point coordinates xy (2 per point); z is written as 0.
-// Optional line cells (2 node indices each) follow the triangles.
+// Optional line cells (2 node indices each) follow the triangles. field_data: string arrays in FieldData (ASCII,
+// VTK's encoding of a string array: each character's code, each string ended by 0).
 std::string vtu_document(const std::vector<double>& xy, const std::vector<int>& triangles, const std::vector<int>& lines,
-                         const std::vector<VtuArray>& point_data, const std::vector<VtuArray>& cell_data);
+                         const std::vector<VtuArray>& point_data, const std::vector<VtuArray>& cell_data,
+                         const std::vector<VtuStrings>& field_data = {});
+
+// The FieldData block of a VTU file (also used by mesh/vtu.cpp's ASCII writer): "" when there is nothing.
+std::string vtu_field_data(const std::vector<VtuStrings>& field_data);
+
+// Stress measures of a triangle from its in-plane Cauchy stress (sxx, syy, sxy) and the out-of-plane szz (0 in
+// plane stress): principal stresses s1 >= s2 (Mohr's circle: (sxx + syy)/2 +- sqrt(((sxx - syy)/2)^2 + sxy^2)) and
+// the von Mises stress sqrt(((s_xx - s_yy)^2 + (s_yy - s_zz)^2 + (s_zz - s_xx)^2) / 2 + 3 s_xy^2), all in Pa.
+struct StressMeasures {
+    double s1, s2, von_mises;
+};
+StressMeasures stress_measures(double sxx, double syy, double sxy, double szz);
+
+// A fresh run into an existing folder: removes the previous run's snapshots (snapshots/step_*.vtu and their
+// .tmp files) and run.pvd, so that the folder never mixes two runs' snapshots. Other files are left alone.
+// Returns the number of files removed.
+int remove_previous_snapshots(const std::string& out_dir);
 
 std::string pvd_document(const std::vector<std::pair<double, std::string>>& snapshots);
 

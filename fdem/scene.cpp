@@ -2,6 +2,7 @@
 #include "fdem/scene.hpp"
 
 #include <algorithm>
+#include <cstdio>
 
 #include "fdem/errors.hpp"
 #include "fdem/simulation.hpp"
@@ -41,6 +42,66 @@ mesh::TopologyOptions topology_options(const CaseSpec& spec, const mesh::Mesh& m
     return opt;
 }
 
+namespace {
+std::string body_list(const mesh::Mesh& m, const std::vector<int>& bodies) {
+    std::string s;
+    for (int b : bodies) {
+        std::string region = "?";
+        for (int t = 0; t < m.n_triangles(); ++t)
+            if (m.tri_body[t] == b) {
+                region = m.tri_region[t] >= 0 ? m.regions[m.tri_region[t]] : "(no region)";
+                break;
+            }
+        s += (s.empty() ? "" : ", ") + std::to_string(b) + " (region '" + region + "')";
+    }
+    return s;
+}
+}  // namespace
+
+// Groups that loads, supports and initial conditions name, against the node copies of the split mesh
+// (mesh/topology.hpp, "Groups of the split mesh"): a group whose node is split between bodies with no rule to
+// choose one is refused; a curve group that left out the copies of other bodies at its ends is reported.
+void check_group_bodies(const CaseSpec& spec, const mesh::Topology& topo) {
+    struct Use {
+        std::string key, group;
+        int line;
+    };
+    std::vector<Use> uses;
+    for (std::size_t si = 0; si < spec.stages.size(); ++si) {
+        const std::string p = "stages." + std::to_string(si + 1);
+        for (std::size_t i = 0; i < spec.stages[si].loads.size(); ++i)
+            uses.push_back({p + ".loads." + std::to_string(i + 1) + ".group", spec.stages[si].loads[i].group, spec.stages[si].loads[i].line});
+        for (std::size_t i = 0; i < spec.stages[si].supports.size(); ++i)
+            uses.push_back({p + ".supports." + std::to_string(i + 1) + ".group", spec.stages[si].supports[i].group,
+                            spec.stages[si].supports[i].line});
+    }
+    for (std::size_t i = 0; i < spec.initial.size(); ++i)
+        uses.push_back({"initial." + std::to_string(i + 1) + ".group", spec.initial[i].group, spec.initial[i].line});
+    const mesh::Mesh& m = topo.mesh;
+    std::vector<std::string> warned;
+    for (const Use& u : uses) {
+        const mesh::PhysicalGroup* g = m.find_group(u.group);
+        if (!g) continue;
+        if (!g->split_bodies.empty()) {
+            const double x = m.xy[2 * g->split_node], y = m.xy[2 * g->split_node + 1];
+            char at[96];
+            std::snprintf(at, sizeof at, "(%.6g, %.6g) m", x, y);
+            throw InputError(spec.file + ":" + std::to_string(u.line) + ": key '" + u.key + "': group '" + u.group +
+                             "' has a node at " + at + " that belongs to bodies " + body_list(m, g->split_bodies) +
+                             ", which a joint separates: a point group cannot say which body's copy it means and would "
+                             "drive all of them. Use a curve or surface group of that body, or a [groups] entry with "
+                             "`within` a group of that body");
+        }
+        if (!g->left_out_bodies.empty() && std::find(warned.begin(), warned.end(), u.group) == warned.end()) {
+            warned.push_back(u.group);
+            std::fprintf(stderr, "warning: %s:%d: key '%s': group '%s' takes its nodes on bodies %s only; the copies of "
+                         "bodies %s at the same points (shared corners) are not part of it\n",
+                         spec.file.c_str(), u.line, u.key.c_str(), u.group.c_str(), body_list(m, g->bodies).c_str(),
+                         body_list(m, g->left_out_bodies).c_str());
+        }
+    }
+}
+
 mesh::Topology build_topology_only(const CaseSpec& spec, mesh::RoughnessStats* roughness) {
     mesh::Mesh m = make_mesh(spec);
     try {
@@ -50,6 +111,7 @@ mesh::Topology build_topology_only(const CaseSpec& spec, mesh::RoughnessStats* r
                 for (std::size_t b = a; b < m.regions.size(); ++b)
                     opt.interfaces.push_back({m.regions[a], m.regions[b], mesh::InterfaceKind::tied});
         mesh::Topology topo = mesh::build_topology(m, opt);
+        check_group_bodies(spec, topo);
         if (spec.geometry.joint_roughness > 0) {
             try {
                 const mesh::RoughnessStats rs = mesh::roughen_dry_joints(

@@ -26,4 +26,9 @@ Model build_scene(const CaseSpec& spec);
 // `roughness` is given, what moved is reported there.
 mesh::Topology build_topology_only(const CaseSpec& spec, mesh::RoughnessStats* roughness = nullptr);
 
+// The groups named by loads, supports and initial conditions against the split mesh's node copies: throws
+// InputError for a group whose node is split between bodies with no rule to choose (a point group at a corner two
+// blocks share); warns on stderr when a curve group left out other bodies' copies at its ends.
+void check_group_bodies(const CaseSpec& spec, const mesh::Topology& topo);
+
 }  // namespace fdem

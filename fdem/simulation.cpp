@@ -104,6 +104,8 @@ mesh::Mesh make_mesh(const CaseSpec& spec) {
         mesh::PhysicalGroup grp;
         grp.name = gs.name;
         grp.dim = 0;
+        grp.within = gs.within;                        // copies on the within group's bodies only (topology)
+        grp.every_copy = gs.box && gs.within.empty();  // a box alone: every node copy in it
         if (gs.box) {
             const auto& b = *gs.box;
             const double tol = 1e-9 * std::max({1.0, std::abs(b[0]), std::abs(b[1]), std::abs(b[2]), std::abs(b[3])});
@@ -440,7 +442,7 @@ void Simulation::begin_stage(int s) {
             for (const auto& sp : st.supports)
                 if (sp.group == m.group && sp.mode[m.component] == DofMode::velocity &&
                     (st.until_value - until_start_) * sp.velocity[m.component] <= 0 && !st.max_duration && !st.duration)
-                    throw InputError(spec_.file + ":" + std::to_string(st.line) + ": key 'stages." + std::to_string(s) +
+                    throw InputError(spec_.file + ":" + std::to_string(st.line) + ": key 'stages." + std::to_string(s + 1) +
                                      ".until': this stage can never end: monitor '" + m.name + "' is at " +
                                      sci(until_start_) + " and the prescribed velocity moves it away from " +
                                      sci(st.until_value));
@@ -960,33 +962,48 @@ void Simulation::open_history() {
 void Simulation::write_snapshot() {
     if (opt_.out_dir.empty()) return;
     const int nn = model_.n_nodes(), nt = model_.n_triangles();
-    VtuArray disp{"displacement", 3, {}, {}, false}, vel{"velocity", 3, {}, {}, false};
+    VtuArray disp{"displacement", 3, {}, {}, false, {"ux", "uy", "uz"}}, vel{"velocity", 3, {}, {}, false, {"vx", "vy", "vz"}};
     disp.f64.resize(3 * nn), vel.f64.resize(3 * nn);
     for (int k = 0; k < nn; ++k) {
         disp.f64[3 * k] = model_.x[2 * k] - model_.X[2 * k], disp.f64[3 * k + 1] = model_.x[2 * k + 1] - model_.X[2 * k + 1], disp.f64[3 * k + 2] = 0;
         vel.f64[3 * k] = model_.v[2 * k], vel.f64[3 * k + 1] = model_.v[2 * k + 1], vel.f64[3 * k + 2] = 0;
     }
-    VtuArray stress{"stress", 3, {}, {}, false}, mat{"material", 1, {}, {}, true}, region{"region", 1, {}, {}, true};
-    VtuArray body{"unit", 1, {}, {}, true};  // the body (unit, beam, base) a triangle belongs to
+    VtuArray stress{"stress", 3, {}, {}, false, {"sxx", "syy", "sxy"}}, mat{"material", 1, {}, {}, true, {}};
+    VtuArray region{"region", 1, {}, {}, true, {}};
+    VtuArray body{"unit", 1, {}, {}, true, {}};  // the body (unit, beam, base) a triangle belongs to
+    // Derived stress measures (Pa): von Mises with the out-of-plane stress (plane stress 0; plane strain, F_zz = 1,
+    // the neo-Hookean law's s_zz = lambda ln J / J), and the in-plane principal stresses s1 >= s2.
+    VtuArray von_mises{"von_mises", 1, {}, {}, false, {}}, principal{"principal_stress", 2, {}, {}, false, {"s1", "s2"}};
     stress.f64.resize(3 * nt), mat.i32.resize(nt), region.i32.resize(nt), body.i32.resize(nt);
+    von_mises.f64.resize(nt), principal.f64.resize(2 * nt);
     std::vector<int> tri(3 * nt);
     for (int e = 0; e < nt; ++e) {
-        triangle_stress(model_.tris[e], model_.mat[model_.tris[e].mat], model_.x.data(), &stress.f64[3 * e]);
+        const MaterialConst& mc = model_.mat[model_.tris[e].mat];
+        double* s3 = &stress.f64[3 * e];
+        triangle_stress(model_.tris[e], mc, model_.x.data(), s3);
+        double F[4];
+        triangle_F(model_.tris[e], model_.x.data(), F);
+        const double J = F[0] * F[3] - F[1] * F[2];
+        const double szz = spec_.plane == Plane::strain && J > 0 ? mc.lambda * std::log(J) / J : 0.0;
+        const StressMeasures sm = stress_measures(s3[0], s3[1], s3[2], szz);
+        von_mises.f64[e] = sm.von_mises, principal.f64[2 * e] = sm.s1, principal.f64[2 * e + 1] = sm.s2;
         mat.i32[e] = model_.tri_material[e];
         region.i32[e] = model_.mesh.tri_region[e];
         body.i32[e] = model_.mesh.tri_body.empty() ? 0 : model_.mesh.tri_body[e];
         for (int k = 0; k < 3; ++k) tri[3 * e + k] = model_.tris[e].n[k];
     }
     // Cohesive elements and dry joint segments as line cells on their side-A edge, after the triangles: cell_kind
-    // 0 triangle, 1 cohesive element, 2 dry joint; joint_damage (max over its points; -1 on triangles and dry joints),
+    // 0 triangle, 1 cohesive element, 2 dry joint (the codes of mesh.vtu, mesh/vtu.hpp; always written);
+    // joint_damage (max over its points; -1 on triangles and dry joints),
     // joint_state (cohesive: 0 intact, 1 damaged, 2 broken; dry: 0 not recorded, 1 in the joint record; -1 on
     // triangles), joint_opening and joint_slip (m, the definitions of Interactions::joint_motion; NaN on triangles).
     std::vector<int> lines;
-    VtuArray kind{"cell_kind", 1, {}, {}, true}, damage{"joint_damage", 1, {}, {}, false}, state{"joint_state", 1, {}, {}, true};
-    VtuArray opening{"joint_opening", 1, {}, {}, false}, slip{"joint_slip", 1, {}, {}, false};
+    VtuArray kind{"cell_kind", 1, {}, {}, true, {}}, damage{"joint_damage", 1, {}, {}, false, {}};
+    VtuArray state{"joint_state", 1, {}, {}, true, {}};
+    VtuArray opening{"joint_opening", 1, {}, {}, false, {}}, slip{"joint_slip", 1, {}, {}, false, {}};
     // With a compressive cap (fracture/law.hpp): joint_crushing, the plastic closure of each cohesive element (m,
     // Simpson mean over its points; NaN on triangles and dry joints).
-    VtuArray crushing{"joint_crushing", 1, {}, {}, false};
+    VtuArray crushing{"joint_crushing", 1, {}, {}, false, {}};
     kind.i32.assign(nt, 0), damage.f64.assign(nt, -1.0), state.i32.assign(nt, -1);
     opening.f64.assign(nt, std::nan("")), slip.f64.assign(nt, std::nan("")), crushing.f64.assign(nt, std::nan(""));
     auto add_line = [&](const int* n, int cell_kind, double dmg, int st, double crush) {
@@ -998,6 +1015,7 @@ void Simulation::write_snapshot() {
         Interactions::joint_motion(n, model_.x.data(), o, sl);
         opening.f64.push_back(o), slip.f64.push_back(sl), crushing.f64.push_back(crush);
         for (int c = 0; c < 3; ++c) stress.f64.push_back(std::nan(""));
+        von_mises.f64.push_back(std::nan("")), principal.f64.push_back(std::nan("")), principal.f64.push_back(std::nan(""));
         mat.i32.push_back(-1), region.i32.push_back(-1), body.i32.push_back(-1);
     };
     if (const fracture::CohesiveSystem* j = inter_.joints())
@@ -1007,11 +1025,15 @@ void Simulation::write_snapshot() {
         add_line(inter_.dry_joints()[e].n.data(), 2, -1.0, inter_.dry_recorded(e) ? 1 : 0, std::nan(""));
     char name[64];
     std::snprintf(name, sizeof name, "snapshots/step_%09ld.vtu", steps_);
-    std::vector<VtuArray> cells{stress, mat, region, body};
+    std::vector<VtuArray> cells{stress, von_mises, principal, mat, region, body, kind};
     if (!lines.empty())
-        for (const auto* a : {&kind, &damage, &state, &opening, &slip}) cells.push_back(*a);
+        for (const auto* a : {&damage, &state, &opening, &slip}) cells.push_back(*a);
     if (inter_.joints() && inter_.joints()->has_cap()) cells.push_back(crushing);
-    write_file_atomic((std::filesystem::path(opt_.out_dir) / name).string(), vtu_document(model_.X, tri, lines, {disp, vel}, cells));
+    // The names behind the ids: region_names[region], material_names[material].
+    VtuStrings region_names{"region_names", model_.mesh.regions}, material_names{"material_names", {}};
+    for (const auto& m : spec_.materials) material_names.values.push_back(m.name);
+    write_file_atomic((std::filesystem::path(opt_.out_dir) / name).string(),
+                      vtu_document(model_.X, tri, lines, {disp, vel}, cells, {region_names, material_names}));
     snapshots_.emplace_back(time_, name);
     write_file_atomic((std::filesystem::path(opt_.out_dir) / "run.pvd").string(), pvd_document(snapshots_));
 }
@@ -1401,6 +1423,9 @@ int run_case(const std::string& case_file, const std::vector<std::string>& overr
     RunOptions opt = options;
     if (opt.out_dir.empty()) opt.out_dir = (std::filesystem::path("runs") / spec.name).string();
     Model model = build_scene(spec);
+    // A fresh run into a folder used before: the previous run's snapshots and run.pvd go first (a restart, which
+    // continues a run, must keep them).
+    remove_previous_snapshots(opt.out_dir);
     Simulation sim(spec, std::move(model), opt);
     sim.run();
     if (sim.interrupted_signal()) {

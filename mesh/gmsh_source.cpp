@@ -4,7 +4,10 @@
 #include <gmsh.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
+#include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <map>
 #include <unordered_map>
@@ -22,11 +25,20 @@ int g_sessions = 0;
 void throw_on_gmsh_error(const std::string& what) {
     std::vector<std::string> log;
     gmsh::logger::get(log);
+    // Gmsh often logs the cause first and a summary ("Error loading 'x.msh'") last: every error line is kept,
+    // cause first, so the message says why and not only that reading failed.
+    std::string errors;
+    int n = 0;
     for (const auto& line : log)
         if (line.rfind("Error", 0) == 0) {
             const auto colon = line.find(':');
-            throw MeshError(what + ": " + (colon == std::string::npos ? line : line.substr(colon + 2)));
+            std::string text = colon == std::string::npos ? line : line.substr(colon + 1);
+            text.erase(0, text.find_first_not_of(' '));
+            if (errors.find(text) != std::string::npos) continue;
+            if (++n > 4) break;
+            errors += (errors.empty() ? "" : "; ") + text;
         }
+    if (!errors.empty()) throw MeshError(what + ": Gmsh: " + errors);
 }
 
 GmshSession::GmshSession(bool verbose) {
@@ -46,6 +58,40 @@ GmshSession::~GmshSession() {
         gmsh::finalize();
     }
 }
+
+namespace {
+// What the current Gmsh model holds instead of triangles, for the "no triangles" message: element counts by type
+// and dimension, and the physical groups with their dimension.
+std::string model_contents() {
+    std::string elems;
+    for (int dim = 0; dim <= 3; ++dim) {
+        std::vector<int> types;
+        gmsh::model::mesh::getElementTypes(types, dim, -1);
+        for (int type : types) {
+            std::vector<std::size_t> etags, ntags;
+            gmsh::model::mesh::getElementsByType(type, etags, ntags, -1);
+            std::string ename;
+            int edim = 0, order = 0, nn = 0, nprim = 0;
+            std::vector<double> local;
+            gmsh::model::mesh::getElementProperties(type, ename, edim, order, nn, local, nprim);
+            elems += (elems.empty() ? "" : ", ") + std::to_string(etags.size()) + " '" + ename + "' (" +
+                     std::to_string(dim) + "D)";
+        }
+    }
+    std::vector<std::pair<int, int>> phys;
+    gmsh::model::getPhysicalGroups(phys);
+    std::string groups;
+    for (const auto& [dim, tag] : phys) {
+        std::string name;
+        gmsh::model::getPhysicalName(dim, tag, name);
+        groups += (groups.empty() ? "" : ", ") + (name.empty() ? "#" + std::to_string(tag) : "'" + name + "'") + " (" +
+                  std::to_string(dim) + "D)";
+    }
+    return "it holds " + (elems.empty() ? std::string("no elements at all") : elems) + "; physical groups: " +
+           (groups.empty() ? std::string("none") : groups) +
+           " (a .geo must define surfaces, e.g. Plane Surface, and a .msh must hold a 2D mesh: gmsh -2)";
+}
+}  // namespace
 
 Mesh extract_current_model() {
     Mesh m;
@@ -77,7 +123,7 @@ Mesh extract_current_model() {
             raw.push_back({{ntags[3 * e], ntags[3 * e + 1], ntags[3 * e + 2]}, tag});
         (void)dim;
     }
-    if (raw.empty()) throw MeshError("the Gmsh model holds no 3-node triangles (was a 2D mesh generated?)");
+    if (raw.empty()) throw MeshError("the Gmsh model holds no 3-node triangles: " + model_contents());
 
     // Regions: 2D physical groups by entity. If the model defines none, every triangle is in "body".
     std::vector<std::pair<int, int>> phys;
@@ -256,13 +302,53 @@ Mesh mesh_rectangle(double x0, double y0, double width, double height, double si
 }
 
 namespace {
+// The file must exist, be a regular file and be readable; the message says which of these fails and why.
 void require_readable(const std::string& path) {
+    std::error_code ec;
+    const auto st = std::filesystem::status(path, ec);
+    if (!std::filesystem::exists(st)) throw MeshError("cannot read '" + path + "': no such file");
+    if (std::filesystem::is_directory(st)) throw MeshError("cannot read '" + path + "': it is a directory, not a file");
     std::ifstream f(path);
-    if (!f) throw MeshError("cannot open '" + path + "'");
+    if (!f) throw MeshError("cannot read '" + path + "': " + std::strerror(errno));
+    if (std::filesystem::file_size(path, ec) == 0 && !ec) throw MeshError("cannot read '" + path + "': the file is empty");
 }
 }  // namespace
 
 namespace {
+// Why a .msh file may have failed to load, from its section structure (Gmsh's own message for a truncated file is
+// only "Error loading"): not a .msh at all, an unsupported version, or a section without its $End line.
+std::string msh_diagnosis(const std::string& path) {
+    std::ifstream f(path);
+    std::string line, open_section, first;
+    long n = 0, open_line = 0;
+    while (std::getline(f, line)) {
+        ++n;
+        if (!line.empty() && line.back() == '\r') line.pop_back();
+        if (first.empty() && !line.empty()) first = line;
+        if (line.rfind("$End", 0) == 0) {
+            if (open_section.empty() || line.substr(4) != open_section)
+                return "line " + std::to_string(n) + ": '" + line + "' closes no open section";
+            open_section.clear();
+        } else if (!line.empty() && line[0] == '$') {
+            if (!open_section.empty())
+                return "line " + std::to_string(n) + ": section $" + line.substr(1) + " starts inside $" + open_section +
+                       " (opened at line " + std::to_string(open_line) + ")";
+            open_section = line.substr(1), open_line = n;
+            if (open_section == "MeshFormat" && std::getline(f, line)) {
+                ++n;
+                const std::string version = line.substr(0, line.find(' '));
+                if (version != "2.2" && version.rfind("4", 0) != 0)
+                    return "format version " + version + " (line " + std::to_string(n) + "): formats 2.2 and 4.1 are read";
+            }
+        }
+    }
+    if (first.rfind("$MeshFormat", 0) != 0) return "it does not start with $MeshFormat: not a Gmsh .msh file";
+    if (!open_section.empty())
+        return "the file ends inside section $" + open_section + " (opened at line " + std::to_string(open_line) +
+               ", no $End" + open_section + "): truncated?";
+    return "";
+}
+
 // Opens a .geo or .msh through the API, meshes in 2D when asked, and extracts the Mesh; every Gmsh failure
 // becomes a MeshError naming the file.
 Mesh open_and_extract(const std::string& path, bool generate, double size_factor) {
@@ -271,7 +357,12 @@ Mesh open_and_extract(const std::string& path, bool generate, double size_factor
     if (generate) gmsh::option::setNumber("Mesh.MeshSizeFactor", size_factor);
     try {
         gmsh::open(path);
-        throw_on_gmsh_error("reading '" + path + "'");
+        try {
+            throw_on_gmsh_error("reading '" + path + "'");
+        } catch (const MeshError& e) {
+            const std::string why = generate ? "" : msh_diagnosis(path);
+            throw MeshError(why.empty() ? std::string(e.what()) : std::string(e.what()) + " (" + why + ")");
+        }
         if (generate) {
             gmsh::model::mesh::generate(2);
             throw_on_gmsh_error("meshing '" + path + "'");
@@ -287,7 +378,7 @@ Mesh open_and_extract(const std::string& path, bool generate, double size_factor
     try {
         return extract_current_model();
     } catch (const MeshError& e) {
-        throw MeshError(path + ": " + e.what());
+        throw MeshError("reading '" + path + "': " + e.what());
     }
 }
 }  // namespace

@@ -30,6 +30,15 @@ struct PhysicalGroup {
     std::vector<int> nodes;                 // sorted, unique
     std::vector<std::array<int, 2>> edges;  // dim 1 only
     std::vector<int> triangles;             // dim 2 only
+    // Which node copies the group takes once the topology splits nodes between bodies (mesh/topology.hpp):
+    std::string within;       // non-empty (case [groups] with `within`): only the copies on that group's bodies
+    bool every_copy = false;  // true (case [groups] box without `within`): every copy of every node, no check
+    // Set by build_topology on the split mesh's groups (body ids as in tri_body):
+    std::vector<int> bodies;          // the bodies whose copies the group holds (empty: every copy, no body rule)
+    std::vector<int> left_out_bodies; // bodies that share a node of the group but whose copies it does not hold
+    std::vector<int> split_bodies;    // no body rule and a node split between these bodies: the group holds
+                                      // every copy, which drags all of them (a case may not load or support it)
+    int split_node = -1;              // split mesh: one copy of such a node (for the message's location)
 };
 
 struct Mesh {

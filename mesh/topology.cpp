@@ -453,11 +453,41 @@ Topology build_topology(const Mesh& m, const TopologyOptions& opt) {
             return first;
         return -1;
     };
+    // The bodies each node copy belongs to (several only where tied bodies share it).
+    const int n_split = static_cast<int>(topo.node_origin.size());
+    std::vector<std::vector<int>> copy_bodies(n_split);
+    for (int t = 0; t < nt; ++t)
+        for (int i = 0; i < 3; ++i) {
+            auto& b = copy_bodies[out.tri[3 * t + i]];
+            if (std::find(b.begin(), b.end(), out.tri_body[t]) == b.end()) b.push_back(out.tri_body[t]);
+        }
+    // The bodies a group is attached to: a surface group's triangles, a curve group's edges (the triangles on
+    // either side), a case group's `within` group. Empty: no rule (a point group, a box without `within`).
+    auto owner_bodies = [&](const PhysicalGroup& g) {
+        std::set<int> own;
+        const PhysicalGroup* cur = &g;
+        for (int depth = 0; cur && depth < 8; ++depth) {
+            if (cur->dim == 2)
+                for (int t : cur->triangles) own.insert(out.tri_body[t]);
+            if (cur->dim == 1)
+                for (const auto& ed : cur->edges) {
+                    const int e = find_edge(ed[0], ed[1]);
+                    if (e < 0) continue;
+                    for (int side = 0; side < 2; ++side)
+                        if (topo.edge_tri[2 * e + side] >= 0) own.insert(out.tri_body[topo.edge_tri[2 * e + side]]);
+                }
+            if (!own.empty() || cur->within.empty()) break;
+            cur = m.find_group(cur->within);
+        }
+        return std::vector<int>(own.begin(), own.end());
+    };
     for (const auto& g : m.groups) {
         PhysicalGroup h;
         h.name = g.name;
         h.dim = g.dim;
         h.triangles = g.triangles;
+        h.within = g.within;
+        h.every_copy = g.every_copy;
         if (g.dim == 2 && !g.triangles.empty()) {
             // A surface group keeps only the node copies of its own triangles: a support on the upper block must
             // not drag the lower block's copies of the nodes they shared before splitting.
@@ -465,9 +495,44 @@ Topology build_topology(const Mesh& m, const TopologyOptions& opt) {
                 for (int k = 0; k < 3; ++k) h.nodes.push_back(out.tri[3 * t + k]);
             std::sort(h.nodes.begin(), h.nodes.end());
             h.nodes.erase(std::unique(h.nodes.begin(), h.nodes.end()), h.nodes.end());
+            h.bodies = owner_bodies(g);
+        } else if (const std::vector<int> own = g.every_copy ? std::vector<int>{} : owner_bodies(g); !own.empty()) {
+            // A curve group (or a case group with `within`) takes the copies on its own bodies only: a curve of the
+            // upper block that ends at a corner of the lower block must not drag the lower block's copy there.
+            h.bodies = own;
+            std::set<int> left_out;
+            for (int k : g.nodes) {
+                const std::size_t before = h.nodes.size();
+                for (int c = copies_start[k]; c < copies_start[k + 1]; ++c) {
+                    bool mine = false;
+                    for (int b : copy_bodies[c]) mine = mine || std::binary_search(own.begin(), own.end(), b);
+                    if (mine) h.nodes.push_back(c);
+                    else left_out.insert(copy_bodies[c].begin(), copy_bodies[c].end());
+                }
+                if (h.nodes.size() == before)  // a node off the group's bodies (not reached by a mesh group)
+                    for (int c = copies_start[k]; c < copies_start[k + 1]; ++c) h.nodes.push_back(c);
+            }
+            for (int b : left_out)
+                if (!std::binary_search(own.begin(), own.end(), b)) h.left_out_bodies.push_back(b);
         } else {
-            for (int k : g.nodes)
-                for (int c = copies_start[k]; c < copies_start[k + 1]; ++c) h.nodes.push_back(c);
+            // No body rule: every copy. A node whose copies lie on bodies that share no copy (a dry or bonded
+            // joint runs through it) is dragged on all of them; the case loader refuses to load or support it.
+            std::set<int> split;
+            for (int k : g.nodes) {
+                std::set<int> all;
+                bool one_copy_holds_all = false;
+                for (int c = copies_start[k]; c < copies_start[k + 1]; ++c) {
+                    h.nodes.push_back(c);
+                    all.insert(copy_bodies[c].begin(), copy_bodies[c].end());
+                }
+                for (int c = copies_start[k]; c < copies_start[k + 1]; ++c)
+                    one_copy_holds_all = one_copy_holds_all || copy_bodies[c].size() == all.size();
+                if (!g.every_copy && all.size() > 1 && !one_copy_holds_all) {
+                    split.insert(all.begin(), all.end());
+                    if (h.split_node < 0) h.split_node = copies_start[k];
+                }
+            }
+            h.split_bodies.assign(split.begin(), split.end());
         }
         for (const auto& ed : g.edges) {
             const int e = find_edge(ed[0], ed[1]);

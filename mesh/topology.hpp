@@ -25,10 +25,19 @@
 //   contact_capable       sorted triangle ids that have a node on a free-boundary or dry edge (or, with
 //                         contact_by_node = false, an edge of those classes). Triangles of cohesive elements
 //                         join the contact set when their element breaks; that is the engine's job.
-//   Groups of the split mesh: a point or curve group holds every copy of its nodes, a surface group only the
-//   copies its own triangles use (so a support on one block does not drag its neighbour's interface nodes); a dim-1 group holds, for each of its
-//   edges, the edge as seen from each adjacent triangle (both copies on an interface, once where nodes are shared),
-//   in the group's orientation; triangle groups are unchanged.
+//   Groups of the split mesh (PhysicalGroup::bodies / left_out_bodies / split_bodies say what was done):
+//     surface group   the copies its own triangles use (a support on one block does not drag its neighbour's
+//                     interface nodes);
+//     curve group     the copies on the bodies its edges border (the triangles on either side of each edge): a
+//                     curve of the upper block that ends at a corner shared with the lower block does not take the
+//                     lower block's copy there; a curve along a joint borders both bodies and takes both copies;
+//     case group with `within` (PhysicalGroup::within): the copies on the bodies of that group, by the same rules;
+//     point group, case `nearest` without `within`: every copy; a node whose copies lie on bodies that share no
+//                     copy (a dry or bonded joint runs through it) is recorded in split_bodies, since the group
+//                     cannot say which body it means (the case loader refuses to load or support such a group);
+//     case `box` without `within` (every_copy): every copy of every node in the box, on every body.
+//   A dim-1 group holds, for each of its edges, the edge as seen from each adjacent triangle (both copies on an
+//   interface, once where nodes are shared), in the group's orientation; triangle groups are unchanged.
 //
 // A node is split into as many copies as there are fans of triangles around it that stay connected through
 // interior edges; a crackable edge that ends inside a continuum (possible only next to tied, non-crackable material)

@@ -8,6 +8,7 @@
 #include <fstream>
 #include <iomanip>
 #include <limits>
+#include <string>
 #include <vector>
 
 namespace fdem::mesh {
@@ -18,6 +19,17 @@ void write_ints(std::ofstream& f, const char* name, const std::vector<int>& v) {
     for (std::size_t i = 0; i < v.size(); ++i) f << (i % 16 ? " " : "          ") << v[i] << (i % 16 == 15 ? "\n" : "");
     if (v.size() % 16) f << "\n";
     f << "        </DataArray>\n";
+}
+
+// A FieldData string array in VTK's ASCII encoding: each character's code, each string ended by 0.
+void write_strings(std::ofstream& f, const char* name, const std::vector<std::string>& values) {
+    f << "        <DataArray type=\"String\" Name=\"" << name << "\" NumberOfTuples=\"" << values.size()
+      << "\" format=\"ascii\">\n         ";
+    for (const auto& v : values) {
+        for (unsigned char c : v) f << " " << static_cast<int>(c);
+        f << " 0";
+    }
+    f << "\n        </DataArray>\n";
 }
 }  // namespace
 
@@ -31,7 +43,15 @@ void write_topology_vtu(const std::string& path, const Topology& topo) {
         f << std::setprecision(std::numeric_limits<double>::max_digits10);
         f << "<?xml version=\"1.0\"?>\n"
           << "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n"
-          << "  <UnstructuredGrid>\n"
+          << "  <UnstructuredGrid>\n";
+        // The names behind the ids (ParaView: Information panel, "Field Data").
+        f << "      <FieldData>\n";
+        write_strings(f, "region_names", m.regions);
+        write_strings(f, "cell_kind_names", {"triangle", "cohesive element", "dry joint", "other edge"});
+        std::vector<std::string> class_names;
+        for (int c = 0; c < kEdgeClassCount; ++c) class_names.push_back(to_string(static_cast<EdgeClass>(c)));
+        write_strings(f, "edge_class_names", class_names);
+        f << "      </FieldData>\n"
           << "    <Piece NumberOfPoints=\"" << np << "\" NumberOfCells=\"" << nt + ne << "\">\n"
           << "      <Points>\n        <DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n";
         for (int k = 0; k < np; ++k) f << "          " << m.xy[2 * k] << " " << m.xy[2 * k + 1] << " 0\n";
@@ -55,7 +75,8 @@ void write_topology_vtu(const std::string& path, const Topology& topo) {
                     if (topo.node_origin[m.tri[3 * ta + i]] == topo.edge_nodes[2 * e + end]) conn.push_back(m.tri[3 * ta + i]);
             offsets.push_back(static_cast<int>(conn.size()));
             types.push_back(3);  // VTK_LINE
-            kind.push_back(1);
+            const EdgeClass ec = topo.edge_class[e];
+            kind.push_back(ec == EdgeClass::crackable || ec == EdgeClass::bonded ? 1 : ec == EdgeClass::dry ? 2 : 3);
             region.push_back(-1);
             body.push_back(-1);
             capable.push_back(-1);

@@ -206,7 +206,7 @@ def header(title, r, variant_text, s, fname):
 #   is a single node at the beam's left end at the top of the wall (h = {LOAD_HEIGHT} m): horizontal velocity prescribed,
 #   vertical free, the beam rotates. Both follow the rigid-block limit of cases/README.md §A, H = N/2 plus the self-weight
 #   share, which the brief's other sentence (cases/README.md §A) ("N includes the self-weight") contradicts: see make_cases.py and
-#   RESULTS.md §6 (the other reading: --set stages.0.loads.0.force=[0.0,-(N - {W_WALL + W_BEAM:.1f})]; the load at the
+#   RESULTS.md §6 (the other reading: --set stages.1.loads.1.force=[0.0,-(N - {W_WALL + W_BEAM:.1f})]; the load at the
 #   beam's mid-depth: --set groups.actuator.nearest=[0.0,1.1]).
 {variant_text}
 # Assumed values (not published): Poisson 0.2, density 2400 kg/m^3 (cases/README.md §A); beam 200 mm deep and base 100 mm deep,

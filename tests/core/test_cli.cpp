@@ -78,16 +78,16 @@ TEST_CASE("malformed case files give exit code 1 and name the key and the line",
         {"typo in a key", replace(kGood, "thickness = 0.1", "thicknes = 0.1"), "case.thicknes", 3},
         {"wrong type", replace(kGood, "width = 1.0", "width = \"wide\""), "geometry.width", 8},
         {"missing key", replace(kGood, "density = 2400.0\n", ""), "materials.stone.density", 0},
-        {"unknown group", replace(kGood, "group = \"bottom\"", "group = \"botom\""), "stages.0.supports.0.group", 0},
-        {"stage that never ends", replace(kGood, "duration = 0.001", "name2 = 1"), "stages.0", 0},
+        {"unknown group", replace(kGood, "group = \"bottom\"", "group = \"botom\""), "stages.1.supports.1.group", 0},
+        {"stage that never ends", replace(kGood, "duration = 0.001", "name2 = 1"), "stages.1", 0},
         {"unknown material", replace(kGood, "body = \"stone\"", "body = \"granite\""), "regions.body", 18},
         {"bad plane", replace(kGood, "plane = \"stress\"", "plane = \"stres\""), "case.plane", 4},
         {"unknown geometry type", replace(kGood, "type = \"rectangle\"", "type = \"circle\""), "geometry.type", 7},
         {"TOML syntax error", replace(kGood, "width = 1.0", "width = = 1.0"), "", 8},
-        {"monitor of unknown type", replace(kGood, "type = \"displacement\"", "type = \"strain\""), "monitors.0.type", 22},
+        {"monitor of unknown type", replace(kGood, "type = \"displacement\"", "type = \"strain\""), "monitors.1.type", 22},
         {"until on a missing monitor", replace(kGood, "duration = 0.001", "until = { monitor = \"nope\", value = 1.0 }\nmax_duration = 1.0"),
-         "stages.0.until.monitor", 0},
-        {"negative ramp", replace(kGood, "force = [100.0, 0.0]", "force = [100.0, 0.0]\n  ramp = -1.0"), "stages.0.loads.0.ramp", 0},
+         "stages.1.until.monitor", 0},
+        {"negative ramp", replace(kGood, "force = [100.0, 0.0]", "force = [100.0, 0.0]\n  ramp = -1.0"), "stages.1.loads.1.ramp", 0},
     };
     for (const auto& b : bad) {
         SECTION(b.what) {
@@ -120,16 +120,38 @@ TEST_CASE("bad command lines give exit code 1", "[unit]") {
     CHECK(testing::run_fdem("--help", dir).code == 0);
 }
 
+TEST_CASE("overrides: --set counts elements of arrays of tables from 1 as the logs and the messages do", "[unit]") {
+    const auto dir = testing::tmp_dir("cli_set_index");
+    const auto path = testing::write_text(dir / "case.toml",
+                                          replace(kGood, "force = [100.0, 0.0]\n",
+                                                  "force = [100.0, 0.0]\n[[stages]]\nname = \"second\"\nduration = 0.002\n"));
+    // stages.1 is the first stage, stages.2 the second; supports.1 the first support of a stage.
+    auto spec = fdem::load_case(path, {"stages.1.duration=0.005", "stages.2.duration=0.007",
+                                       "stages.1.loads.1.force=[300.0, 0.0]"});
+    REQUIRE(spec.stages.size() == 2);
+    CHECK(spec.stages[0].duration.value_or(0) == 0.005);
+    CHECK(spec.stages[1].duration.value_or(0) == 0.007);
+    REQUIRE(spec.stages[0].loads.size() == 1);
+    CHECK(spec.stages[0].loads[0].force[0] == 300.0);
+    // 0 and one past the end are refused with the range and the convention in the message.
+    for (const std::string bad : {"stages.0.duration=1", "stages.3.duration=1", "stages.1.loads.0.ramp=1"}) {
+        const auto r = testing::run_fdem("check \"" + path + "\" --set " + bad, dir);
+        INFO(bad << "\n" << r.err);
+        CHECK(r.code == 1);
+        CHECK(r.err.find("count from 1") != std::string::npos);
+    }
+}
+
 TEST_CASE("joint keys of a shipped case: a bad compressive_strength or shear_softening is refused naming the key",
           "[unit]") {
     const auto dir = testing::tmp_dir("cli_joint_keys");
     const std::string path = std::string(FDEM_CASES_DIR) + "/vermeltfoort/checks/joint_panel_121.toml";
-    const auto ok = testing::run_fdem("check \"" + path + "\" --set interfaces.0.compressive_strength=1.15e7", dir);
+    const auto ok = testing::run_fdem("check \"" + path + "\" --set interfaces.1.compressive_strength=1.15e7", dir);
     INFO(ok.err);
     CHECK(ok.code == 0);
-    for (const std::string set : {"interfaces.0.compressive_strength=-1", "interfaces.1.compressive_strength=0",
+    for (const std::string set : {"interfaces.1.compressive_strength=-1", "interfaces.2.compressive_strength=0",
                                   "materials.brick.fracture.compressive_strength=\"high\"",
-                                  "interfaces.2.shear_softening=\"friction\""}) {
+                                  "interfaces.3.shear_softening=\"friction\""}) {
         const auto r = testing::run_fdem("check \"" + path + "\" --set " + set, dir);
         INFO(set << ": " << r.err);
         CHECK(r.code == 1);
@@ -200,13 +222,13 @@ TEST_CASE("help after a command and the short and --option=VALUE forms of the op
     }
     // --out=DIR, -s, -t and -q: the run lands in DIR with the overridden value, and nothing is printed.
     const auto out = dir / "eq";
-    auto r = testing::run_fdem("run \"" + path + "\" -q -t 1 -s stages.0.duration=0.0005 --out=\"" + out.string() + "\"", dir);
+    auto r = testing::run_fdem("run \"" + path + "\" -q -t 1 -s stages.1.duration=0.0005 --out=\"" + out.string() + "\"", dir);
     INFO(r.err);
     REQUIRE(r.code == 0);
     CHECK(r.out.empty());
     CHECK(testing::read_text(out / "summary.json").find("\"duration_s\": 0.0005") != std::string::npos);
     // -o DIR and --set=KEY=VALUE, --threads=N
-    r = testing::run_fdem("run \"" + path + "\" --quiet --threads=1 --set=stages.0.duration=0.0004 -o \"" + (dir / "o").string() + "\"", dir);
+    r = testing::run_fdem("run \"" + path + "\" --quiet --threads=1 --set=stages.1.duration=0.0004 -o \"" + (dir / "o").string() + "\"", dir);
     REQUIRE(r.code == 0);
     CHECK(testing::read_text(dir / "o" / "summary.json").find("\"duration_s\": 0.0004") != std::string::npos);
     // Values missing or where none belongs: exit 1 naming the option.
@@ -267,7 +289,7 @@ TEST_CASE("reference quantity first_peak is the peak before the first break, not
     const std::string path = std::string(FDEM_CASES_DIR) + "/lourenco2005/stone_tension_100mm.toml";
     CHECK(testing::read_text(path).find("quantity = \"first_peak\"") != std::string::npos);
     const auto out = dir / "run";
-    const auto r = testing::run_fdem("run \"" + path + "\" --threads 1 --set stages.0.local_damping=0 --set "
+    const auto r = testing::run_fdem("run \"" + path + "\" --threads 1 --set stages.1.local_damping=0 --set "
                                      "'reference.quantity=\"first_peak\"' --out \"" + out.string() + "\"", dir);
     INFO(r.out << r.err);
     REQUIRE(r.code == 0);

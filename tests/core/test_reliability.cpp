@@ -119,7 +119,7 @@ TEST_CASE("the tilting wall with history rows every 1e-4 s passes its first 5 ms
     const auto dir = testing::tmp_dir("reliab_tilting_dense");
     const auto r = testing::run_fdem(std::string("run \"") + FDEM_CASES_DIR +
                                          "/tilting/tilting_wall.toml\" --threads 1 --quiet --set output.history_interval=1e-4 "
-                                         "--set stages.0.max_duration=0.003 --set stages.1.duration=0.002 --out \"" +
+                                         "--set stages.1.max_duration=0.003 --set stages.2.duration=0.002 --out \"" +
                                          (dir / "run").string() + "\"",
                                      dir);
     INFO(r.err);

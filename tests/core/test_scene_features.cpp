@@ -229,22 +229,22 @@ TEST_CASE("scene features: bad time functions and initial conditions are exit 1 
     };
     const Bad cases[] = {
         {stage + "  [[stages.loads]]\n  group = \"body\"\n  force = [1.0, 0.0]\n  function = { type = \"cos\", omega = 1.0 }\n",
-         "stages.0.loads.0.function.type"},
+         "stages.1.loads.1.function.type"},
         {stage + "  [[stages.loads]]\n  group = \"body\"\n  force = [1.0, 0.0]\n  function = { type = \"sin\" }\n",
-         "stages.0.loads.0.function.omega"},
+         "stages.1.loads.1.function.omega"},
         {stage + "  [[stages.loads]]\n  group = \"body\"\n  force = [1.0, 0.0]\n  function = { type = \"table\", points = [[0.1, 1.0], [0.0, 0.0]] }\n",
-         "stages.0.loads.0.function.points"},
+         "stages.1.loads.1.function.points"},
         {stage + "  [[stages.supports]]\n  group = \"left\"\n  fix = \"x\"\n  function = { type = \"sin\", omega = 1.0 }\n",
-         "stages.0.supports.0.function"},
-        {"[[initial]]\ngroup = \"body\"\nrotation = 10.0\n" + stage, "initial.0.center"},
-        {"[[initial]]\ngroup = \"nowhere\"\nvelocity = [1.0, 0.0]\n" + stage, "initial.0.group"},
-        {"[[initial]]\ngroup = \"body\"\nspin = 1.0\n" + stage, "initial.0.spin"},
+         "stages.1.supports.1.function"},
+        {"[[initial]]\ngroup = \"body\"\nrotation = 10.0\n" + stage, "initial.1.center"},
+        {"[[initial]]\ngroup = \"nowhere\"\nvelocity = [1.0, 0.0]\n" + stage, "initial.1.group"},
+        {"[[initial]]\ngroup = \"body\"\nspin = 1.0\n" + stage, "initial.1.spin"},
         {stage + "  [[stages.supports]]\n  group = \"right\"\n  vx = 0.01\n  servo = { ratio = 1.5, time = 0.01 }\n",
-         "stages.0.supports.0.servo.ratio"},
+         "stages.1.supports.1.servo.ratio"},
         {stage + "  [[stages.supports]]\n  group = \"right\"\n  vx = 0.01\n  servo = { ratio = 0.01 }\n",
-         "stages.0.supports.0.servo.time"},
+         "stages.1.supports.1.servo.time"},
         {stage + "  [[stages.supports]]\n  group = \"right\"\n  fix = \"x\"\n  servo = { ratio = 0.01, time = 0.01 }\n",
-         "stages.0.supports.0.servo"},
+         "stages.1.supports.1.servo"},
     };
     int i = 0;
     for (const Bad& b : cases) {

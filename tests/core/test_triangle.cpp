@@ -91,7 +91,7 @@ fix = "xy"
 )";
     // duration replaced: damped relaxation to equilibrium.
     auto sim = testing::make_simulation(text, "patch",
-                                        {"stages.0.duration=0.5", "stages.0.local_damping=0.7"});
+                                        {"stages.1.duration=0.5", "stages.1.local_damping=0.7"});
     Model& md = sim.model();
     const double F[4] = {1.002, 0.0007, -0.0004, 0.9985};  // uniform deformation gradient (finite strain)
     auto exact = [&](int k, int c) {
@@ -302,7 +302,7 @@ gravity = [0.0, -9.81]
     const auto dir = testing::tmp_dir("unstable");
     const std::string path = testing::write_text(dir / "case.toml", text);
     const auto r = testing::run_fdem("run \"" + path + "\" --quiet --out \"" + (dir / "run").string() +
-                                     "\" --set numerics.safety=3 --set stages.0.duration=0.01", dir);
+                                     "\" --set numerics.safety=3 --set stages.1.duration=0.01", dir);
     CHECK(r.code == 2);
     CHECK(r.err.find("run failed") != std::string::npos);
     CHECK(r.err.find("step") != std::string::npos);

@@ -506,10 +506,10 @@ TEST_CASE("engine mode II with shear_softening = cohesion: the softening ends on
     };
     auto run = [&](const std::string& mode) {
         auto sim = make_fracture_sim("fracture_engine_mode2_" + mode, toml, {{"mode2_shear.geo", geo}},
-                                     {"interfaces.0.shear_softening=\"" + mode + "\"",
+                                     {"interfaces.1.shear_softening=\"" + mode + "\"",
                                       // 0.4 mm of slip: the cohesion's range s_t = (G_II - (2/3) c s_p) / (kappa c)
                                       // is 0.29 mm past s_p = 22 um
-                                      "stages.1.duration=0.04"});
+                                      "stages.2.duration=0.04"});
         Run r;
         sim.begin_stage(0);
         while (!sim.stage_finished()) sim.step();
@@ -624,8 +624,8 @@ TEST_CASE("engine compressive cap: none reached changes nothing, reached the joi
         return Out{sim.model().x, e, audit.mismatch(e), up / nu - lo / nl, broken_count(sim), vol, j->has_cap()};
     };
     const auto none = press("none", {});
-    const auto high = press("high", {"interfaces.0.compressive_strength=2.0e6"});
-    const auto low = press("low", {"interfaces.0.compressive_strength=" + std::to_string(f_c)});
+    const auto high = press("high", {"interfaces.1.compressive_strength=2.0e6"});
+    const auto low = press("low", {"interfaces.1.compressive_strength=" + std::to_string(f_c)});
     // Not reached (the joint carries 1 MPa): every position is the same bit.
     CHECK(high.x == none.x);
     CHECK(high.e.fracture == 0.0);
@@ -675,8 +675,8 @@ TEST_CASE("engine compressive cap: joints that break while crushed are named whe
     testing::write_text(dir / "mode2_shear.geo", testing::read_text(cases_dir() / "mode2_shear.geo"));
     testing::write_text(dir / "case.toml", toml);
     const auto r = testing::run_fdem("run \"" + (dir / "case.toml").string() + "\" --out \"" + (dir / "run").string() +
-                                         "\" --quiet --threads 1 --set interfaces.0.compressive_strength=2e5"
-                                         " --set stages.1.duration=0.1",
+                                         "\" --quiet --threads 1 --set interfaces.1.compressive_strength=2e5"
+                                         " --set stages.2.duration=0.1",
                                      dir);
     INFO(r.out << r.err);
     CHECK(r.code == 2);
@@ -692,7 +692,7 @@ TEST_CASE("engine fdem run with fracture writes broken_* history columns and one
           "[engine][regression]") {
     const std::string geo = replace_once(testing::read_text(cases_dir() / "bar_structured.geo"), "nx = 16; ny = 8;", "nx = 4; ny = 2;");
     const std::string toml = testing::read_text(cases_dir() / "bar_structured.toml");
-    const std::vector<std::string> overrides = {"stages.0.duration=0.012"};  // the bar separates at 0.0102 s
+    const std::vector<std::string> overrides = {"stages.1.duration=0.012"};  // the bar separates at 0.0102 s
     // In-process reference.
     auto sim = make_fracture_sim("fracture_engine_cli_ref", toml, {{"bar_structured.geo", geo}}, overrides);
     sim.run();
@@ -705,7 +705,7 @@ TEST_CASE("engine fdem run with fracture writes broken_* history columns and one
     testing::write_text(dir / "case.toml", toml);
     const auto out = dir / "run";
     const auto r = testing::run_fdem("run \"" + (dir / "case.toml").string() + "\" --out \"" + out.string() +
-                                         "\" --quiet --threads 1 --set stages.0.duration=0.012",
+                                         "\" --quiet --threads 1 --set stages.1.duration=0.012",
                                      dir);
     INFO(r.out << r.err);
     REQUIRE(r.code == 0);
@@ -767,7 +767,7 @@ TEST_CASE("engine fdem run with fracture writes broken_* history columns and one
     // carry the joint_crushing array (zero everywhere) that the run without a cap does not write.
     const auto out2 = dir / "run_cap";
     const auto r2 = testing::run_fdem("run \"" + (dir / "case.toml").string() + "\" --out \"" + out2.string() +
-                                          "\" --quiet --threads 1 --set stages.0.duration=0.012"
+                                          "\" --quiet --threads 1 --set stages.1.duration=0.012"
                                           " --set materials.stone.fracture.compressive_strength=1e9",
                                       dir);
     INFO(r2.out << r2.err);

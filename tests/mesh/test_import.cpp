@@ -3,9 +3,12 @@
 
 #include <gmsh.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <set>
 #include <sstream>
 
 #include "helpers.hpp"
@@ -219,4 +222,68 @@ TEST_CASE("elements other than 3-node triangles and surfaces outside every group
     // The same model with both surfaces grouped reads.
     const std::string ok = write_geo("ok.geo", "Physical Surface(\"all\") = {1, 2};\n");
     CHECK(mesh_geo_file(ok).n_triangles() > 0);
+}
+
+TEST_CASE("a curve group of the upper block that ends at the lower block's corner holds the upper block's copies only",
+          "[unit]") {
+    // Two stacked 1 x 1 m blocks (surface 1 below, surface 2 above) share line 3 (y = 1). Line 7 is the upper
+    // block's left edge, from (0, 2) down to point 4 at (0, 1): the lower block's top-left corner.
+    const std::string path = write_geo("two_blocks.geo", "Physical Surface(\"blocks\") = {1, 2};\n"
+                                                         "Physical Curve(\"upper_left\") = {7};\n"
+                                                         "Physical Curve(\"joint\") = {3};\n"
+                                                         "Physical Point(\"corner\") = {4};\n");
+    const Mesh m = mesh_geo_file(path);
+    REQUIRE(m.n_bodies() == 2);
+    TopologyOptions o;
+    o.interfaces = {{"blocks", "blocks", InterfaceKind::dry}};
+    const Topology topo = build_topology(m, o);
+    const Mesh& s = topo.mesh;
+    // Bodies by position: the upper block's triangles have centroids above y = 1.
+    auto centroid_y = [&](int t) { return (s.xy[2 * s.tri[3 * t] + 1] + s.xy[2 * s.tri[3 * t + 1] + 1] + s.xy[2 * s.tri[3 * t + 2] + 1]) / 3; };
+    int upper = -1, lower = -1;
+    for (int t = 0; t < s.n_triangles(); ++t) (centroid_y(t) > 1 ? upper : lower) = s.tri_body[t];
+    REQUIRE(upper >= 0);
+    REQUIRE(lower >= 0);
+    REQUIRE(upper != lower);
+    auto bodies_of_copy = [&](int c) {
+        std::set<int> b;
+        for (int t = 0; t < s.n_triangles(); ++t)
+            for (int i = 0; i < 3; ++i)
+                if (s.tri[3 * t + i] == c) b.insert(s.tri_body[t]);
+        return b;
+    };
+    std::vector<int> corner_copies;  // the copies of the node at (0, 1)
+    for (int c = 0; c < s.n_nodes(); ++c)
+        if (std::abs(s.xy[2 * c]) < 1e-12 && std::abs(s.xy[2 * c + 1] - 1) < 1e-12) corner_copies.push_back(c);
+    REQUIRE(corner_copies.size() == 2);  // split by the dry joint
+
+    const PhysicalGroup& g = *s.find_group("upper_left");
+    CHECK(g.bodies == std::vector<int>{upper});
+    CHECK(g.left_out_bodies == std::vector<int>{lower});
+    CHECK(g.split_bodies.empty());
+    for (int c : g.nodes) CHECK(bodies_of_copy(c) == std::set<int>{upper});
+    int corner_in_group = 0;
+    for (int c : corner_copies) corner_in_group += std::count(g.nodes.begin(), g.nodes.end(), c) > 0;
+    CHECK(corner_in_group == 1);  // before: both copies, so a support on the edge dragged the lower block's corner
+    // Every node of line 7 is in it, one copy each: 1 m at the points' mesh size 0.5 m gives 3 nodes.
+    CHECK(g.nodes.size() == 3);
+
+    // A curve along the joint borders both blocks and keeps both copies.
+    const PhysicalGroup& j = *s.find_group("joint");
+    CHECK(j.bodies.size() == 2);
+    CHECK(j.left_out_bodies.empty());
+    for (int c : corner_copies) CHECK(std::count(j.nodes.begin(), j.nodes.end(), c) == 1);
+    // The point group cannot say which block it means: both copies, recorded as split between the two bodies.
+    const PhysicalGroup& p = *s.find_group("corner");
+    CHECK(p.nodes == corner_copies);
+    CHECK(p.split_bodies == std::vector<int>{std::min(upper, lower), std::max(upper, lower)});
+    REQUIRE(p.split_node >= 0);
+    CHECK(std::abs(s.xy[2 * p.split_node + 1] - 1) < 1e-12);
+
+    // Tied blocks share the node: one copy, nothing left out, nothing split.
+    o.interfaces = {{"blocks", "blocks", InterfaceKind::tied}};
+    const Topology tied = build_topology(m, o);
+    CHECK(tied.mesh.find_group("corner")->split_bodies.empty());
+    CHECK(tied.mesh.find_group("corner")->nodes.size() == 1);
+    CHECK(tied.mesh.find_group("upper_left")->left_out_bodies.empty());
 }

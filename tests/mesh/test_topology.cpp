@@ -82,7 +82,8 @@ int check_invariants(const Mesh& in, const Topology& topo, bool crack_tips = fal
         REQUIRE(ce.body_b == m.tri_body[ce.tri_b]);
         ++checks;
     }
-    // Point and curve groups hold every copy of their nodes; surface groups exactly the nodes of their triangles.
+    // Surface groups hold exactly the nodes of their triangles; curve groups every copy on the bodies their edges
+    // border; point groups every copy of their nodes.
     for (std::size_t g = 0; g < in.groups.size(); ++g) {
         std::set<int> want(in.groups[g].nodes.begin(), in.groups[g].nodes.end()), got;
         for (int k : m.groups[g].nodes) got.insert(topo.node_origin[k]);
@@ -92,6 +93,21 @@ int check_invariants(const Mesh& in, const Topology& topo, bool crack_tips = fal
             for (int t : m.groups[g].triangles)
                 for (int i = 0; i < 3; ++i) own.insert(m.tri[3 * t + i]);
             REQUIRE(std::set<int>(m.groups[g].nodes.begin(), m.groups[g].nodes.end()) == own);
+        } else if (in.groups[g].dim == 1 && !m.groups[g].edges.empty()) {
+            const std::vector<int>& bodies = m.groups[g].bodies;
+            std::set<int> border, expect;
+            for (const auto& ed : m.groups[g].edges)
+                for (int t = 0; t < m.n_triangles(); ++t) {
+                    int hits = 0;
+                    for (int i = 0; i < 3; ++i) hits += m.tri[3 * t + i] == ed[0] || m.tri[3 * t + i] == ed[1];
+                    if (hits == 2) border.insert(m.tri_body[t]);
+                }
+            REQUIRE(std::set<int>(bodies.begin(), bodies.end()) == border);
+            for (int t = 0; t < m.n_triangles(); ++t)
+                if (border.count(m.tri_body[t]))
+                    for (int i = 0; i < 3; ++i)
+                        if (want.count(topo.node_origin[m.tri[3 * t + i]])) expect.insert(m.tri[3 * t + i]);
+            REQUIRE(std::set<int>(m.groups[g].nodes.begin(), m.groups[g].nodes.end()) == expect);
         } else {
             long copies = 0;
             for (int k = 0; k < m.n_nodes(); ++k) copies += want.count(topo.node_origin[k]);

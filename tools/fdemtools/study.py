@@ -376,9 +376,9 @@ def add_parser(sub):
     s.add_argument("--sizes", help="mesh sizes in m (comma-separated)")
     s.add_argument("--size-key", default="geometry.mesh_size", help="case key of the mesh size")
     s.add_argument("--rates", help="loading rates (TOML values, comma-separated), set at --rate-key")
-    s.add_argument("--rate-key", help="case key of the loading rate, e.g. stages.1.supports.1.vx")
+    s.add_argument("--rate-key", help="case key of the loading rate, e.g. stages.2.supports.2.vx")
     s.add_argument("--damping", help="damping values (comma-separated), set at --damping-key")
-    s.add_argument("--damping-key", help="case key of the damping, e.g. stages.1.local_damping")
+    s.add_argument("--damping-key", help="case key of the damping, e.g. stages.2.local_damping")
     s.add_argument("--grid", action="append", metavar="KEY=V1,V2", help="a further grid dimension (repeatable)")
     s.add_argument("--reference", type=float, help="reference peak load in kN (default: case reference, else the "
                                                    "most accurate run)")

@@ -89,17 +89,25 @@ def parse_value(text: str):
         return text
 
 
+def list_index(p: str, n: int) -> int:
+    """The 0-based position of array element `p` of a dotted key: elements count from 1, as in fdem --set."""
+    i = int(p)
+    if not 1 <= i <= n:
+        raise IndexError(p)
+    return i - 1
+
+
 def apply_set(tree: dict, key: str, text: str) -> None:
     cur = tree
     parts = key.split(".")
     for p in parts[:-1]:
         if isinstance(cur, list):
-            cur = cur[int(p)]
+            cur = cur[list_index(p, len(cur))]
         else:
             cur = cur.setdefault(p, {})
     last = parts[-1]
     if isinstance(cur, list):
-        cur[int(last)] = parse_value(text)
+        cur[list_index(last, len(cur))] = parse_value(text)
     else:
         cur[last] = parse_value(text)
 
@@ -126,10 +134,10 @@ def rate_key(tree: dict) -> tuple:
         for i, sup in enumerate(stages[si].get("supports") or []):
             for comp in ("vx", "vy"):
                 if isinstance(sup.get(comp), (int, float)) and sup[comp] != 0:
-                    return f"stages.{si}.supports.{i}.{comp}", float(sup[comp])
+                    return f"stages.{si + 1}.supports.{i + 1}.{comp}", float(sup[comp])
             cyc = sup.get("cyclic")
             if isinstance(cyc, dict) and isinstance(cyc.get("rate"), (int, float)):
-                return f"stages.{si}.supports.{i}.cyclic.rate", float(cyc["rate"])
+                return f"stages.{si + 1}.supports.{i + 1}.cyclic.rate", float(cyc["rate"])
     return None, None
 
 
@@ -426,7 +434,7 @@ def rate_setting(tree: dict, case: str, given_key: str | None) -> tuple:
     try:
         cur = tree
         for p in given_key.split("."):
-            cur = cur[int(p)] if isinstance(cur, list) else cur[p]
+            cur = cur[list_index(p, len(cur))] if isinstance(cur, list) else cur[p]
         return given_key, float(cur)
     except (KeyError, IndexError, ValueError, TypeError):
         raise ToolError(f"--rate-key {given_key}: no such number in {case}") from None

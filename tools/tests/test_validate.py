@@ -123,9 +123,9 @@ def test_rate_and_settings_of_the_wall_cases():
     case = os.path.join(REPO, "cases", "lourenco2005", "k25_N100.toml")
     if not os.path.isfile(case):
         pytest.skip("wall cases not present")
-    tree = validate.read_case(case, [("stages.1.supports.0.vx", "0.05")])
+    tree = validate.read_case(case, [("stages.2.supports.1.vx", "0.05")])
     key, rate = validate.rate_key(tree)
-    assert key == "stages.1.supports.0.vx" and rate == 0.05
+    assert key == "stages.2.supports.1.vx" and rate == 0.05
     s = validate.numerical_settings(tree)
     assert s["mesh_size_m"] == 0.025
     assert "stone p_j=auto (ref 1e+10 Pa)" in s["penalties"] and "units/units normal_penalty=1e+10 Pa" in s["penalties"]

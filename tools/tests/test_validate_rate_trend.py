@@ -4,7 +4,7 @@ stand-in fdem whose curve shape comes from a [fake] table in the case file (no p
 Fake curve (control displacement u, load F, 41 history rows from u = 0 to u_end):
   F = P u / u_peak up to u_peak, then F = P (1 - softening (u - u_peak) / 1 mm), and past u_rise (when given)
   F = F(u_rise) + P rise (u - u_rise) / 1 mm (a second branch), with
-  P = peak_kN (1 + rate_sens vx) and vx the prescribed velocity (from --set stages.0.supports.0.vx, else the case);
+  P = peak_kN (1 + rate_sens vx) and vx the prescribed velocity (from --set stages.1.supports.1.vx, else the case);
   u_end = vx duration when [fake] gives a duration (the stage ends by time), else u_end.
 """
 import csv
@@ -36,7 +36,7 @@ def main(argv):
     with open(case, "rb") as f:
         tree = tomllib.load(f)
     fk = tree.get("fake", {})
-    vx = float(sets.get("stages.0.supports.0.vx", tree["stages"][0]["supports"][0]["vx"]))
+    vx = float(sets.get("stages.1.supports.1.vx", tree["stages"][0]["supports"][0]["vx"]))
     P = fk.get("peak_kN", 10.0) * 1e3 * (1 + fk.get("rate_sens", 0.0) * vx)
     u_end = vx * fk["duration"] if "duration" in fk else fk.get("u_end", 1e-3)
     u_peak, soft = fk.get("u_peak", 0.5e-3), fk.get("softening", 0.0)
@@ -77,7 +77,7 @@ name = "shear"
 {fake}
 """
 
-KEY = "stages.0.supports.0.vx"  # the rate key validate detects in CASE
+KEY = "stages.1.supports.1.vx"  # the rate key validate detects in CASE
 
 
 @pytest.fixture
@@ -142,8 +142,8 @@ def test_rate_case_all_one_rerun_per_case_and_resume(tmp_path, cli, fake):
     md = (out / "report.md").read_text()
     rows = qs_table_rows(md)
     assert len(rows) == 3 and [r.split("|")[1].strip() for r in rows] == ["c0", "c1", "c2"]
-    assert "| c0 | `stages.0.supports.0.vx` | 0.01 | 0.005 | 10 | 10 | +0.0 % | quasi-static | completed | - |" in md
-    assert "| c1 | `stages.0.supports.0.vx` | 0.01 | 0.005 | 22 | 21 | -4.5 % | NOT quasi-static | completed |" in md
+    assert "| c0 | `stages.1.supports.1.vx` | 0.01 | 0.005 | 10 | 10 | +0.0 % | quasi-static | completed | - |" in md
+    assert "| c1 | `stages.1.supports.1.vx` | 0.01 | 0.005 | 22 | 21 | -4.5 % | NOT quasi-static | completed |" in md
     assert "1 of 3 checked cases quasi-static; largest change -4.5 %." in md
     rep = {r["case"]: r for r in read_csv(out / "report.csv")}
     assert float(rep["c2"]["peak_half_rate_kN"]) == pytest.approx(31.5, rel=1e-12)
