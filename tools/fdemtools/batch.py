@@ -226,14 +226,14 @@ class Batch:
         names = [run_name(p) for p in points]
         if len(set(names)) != len(names):
             raise ToolError("two grid points give the same run name (repeated values?)")
+        if slurm is not None and slurm.dry_run:  # prints the job script, writes nothing
+            from .slurm import run_tasks
+            return run_tasks([self.task(n, p) for n, p in zip(names, points)], slurm,
+                             os.path.join(self.out, "slurm"), is_finished, self.log)
         os.makedirs(self.out, exist_ok=True)
         manifest = {"case": self.case, "fdem": self.fdem, "threads": self.threads,
                     "fixed": [f"{k}={v}" for k, v in self.fixed], "grid": grid or [],
                     "runs": [{"name": n, "params": p} for n, p in zip(names, points)]}
-        if slurm is not None and slurm.dry_run:
-            from .slurm import run_tasks
-            return run_tasks([self.task(n, p) for n, p in zip(names, points)], slurm,
-                             os.path.join(self.out, "slurm"), is_finished, self.log)
         write_json(os.path.join(self.out, "batch.json"), manifest)
         if slurm is not None:
             from .slurm import run_tasks

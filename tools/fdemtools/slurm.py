@@ -56,6 +56,7 @@ class Options:
     no_wait: bool = False
     collect_only: bool = False
     poll: float = 30.0  # s between two looks at the queue
+    max_wait: float | None = None  # s: stop following after this long (the tasks go on)
     dry_run: bool = False
 
 
@@ -70,7 +71,7 @@ class Task:
     params: dict = field(default_factory=dict)
 
 
-SLURM_ONLY = ("partition", "time", "mem", "account", "sbatch_arg", "no_wait", "collect")
+SLURM_ONLY = ("partition", "time", "mem", "account", "sbatch_arg", "no_wait", "collect", "max_wait")
 
 
 def add_arguments(p, dry_run: bool = False) -> None:
@@ -92,6 +93,9 @@ def add_arguments(p, dry_run: bool = False) -> None:
                         "can restart from a checkpoint (default 120)")
     g.add_argument("--poll", type=float, default=30.0, metavar="S",
                    help="slurm: seconds between two looks at the queue (default 30)")
+    g.add_argument("--max-wait", type=float, metavar="S",
+                   help="slurm: stop following after S seconds with exit 1 (the tasks go on; the same command "
+                        "later collects them)")
     g.add_argument("--no-wait", action="store_true",
                    help="slurm: submit and return; the same command later follows the array and collects")
     g.add_argument("--collect", action="store_true",
@@ -124,6 +128,8 @@ def options_from_args(args, job_name: str) -> Options | None:
         raise ToolError(f"--term-before must be >= 0 s, got {args.term_before}")
     if not args.poll > 0:
         raise ToolError(f"--poll must be > 0 s, got {args.poll}")
+    if args.max_wait is not None and not args.max_wait > 0:
+        raise ToolError(f"--max-wait must be > 0 s, got {args.max_wait}")
     if args.no_wait and args.collect:
         raise ToolError("--no-wait and --collect exclude each other")
     jobs = getattr(args, "jobs", None)
@@ -131,7 +137,7 @@ def options_from_args(args, job_name: str) -> Options | None:
         raise ToolError(f"--jobs must be >= 1, got {jobs}")
     return Options(cpus_per_task=cpus, partition=args.partition, time=args.time, mem=args.mem, account=args.account,
                    extra=list(args.sbatch_arg or []), term_before=args.term_before, array_limit=jobs,
-                   job_name=job_name, no_wait=args.no_wait, collect_only=args.collect, poll=args.poll,
+                   job_name=job_name, no_wait=args.no_wait, collect_only=args.collect, poll=args.poll, max_wait=args.max_wait,
                    dry_run=bool(getattr(args, "dry_run", False)))
 
 
@@ -480,6 +486,10 @@ def follow(tasks: list, where: dict, fol: Follower, opts: Options, log) -> None:
             quiet += 1
         if not running and not pending:
             return
+        if opts.max_wait is not None and time.monotonic() - t0 > opts.max_wait:
+            raise ToolError(f"stopped following after {opts.max_wait:g} s (--max-wait) with {len(running)} task(s) "
+                            f"running and {pending} pending in job(s) {', '.join(fol.jobs)}; they go on: run the "
+                            "same command again (add --collect to submit nothing) to follow and collect them")
         time.sleep(opts.poll)
 
 
@@ -492,9 +502,10 @@ def write_tasks_csv(recs: list, slurm_dir: str) -> None:
               ["run", "name", "job", "slurm_state", "exit_code", "elapsed_s", "run_dir"], rows)
 
 
-def report_failures(recs: list, slurm_dir: str, out=sys.stderr) -> int:
+def report_failures(recs: list, slurm_dir: str, out=None) -> int:
     """Per run that did not complete: its Slurm state, fdem's exit code, the run's status and the last lines of its
     log (and of Slurm's own output of the task when that has anything). Returns how many."""
+    out = out or sys.stderr
     bad = [r for r in recs if r.get("status") != "completed"]
     for r in bad:
         ec = r.get("exit_code")
