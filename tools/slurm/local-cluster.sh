@@ -16,6 +16,8 @@
 # are root: SlurmUser = SlurmdUser = the calling user, no cgroups (proctrack/linuxproc, task/none), no accounting
 # database (sacct is then unavailable: fdem-tools reads the states from squeue and from its own exit files).
 # One node named after this host with the CPUs and memory `slurmd -C` reports, one partition `debug`.
+# FDEM_SLURM_NICE (default 0): the daemons, and so every job they start, run at this nice value (the tests use 10,
+# so that they yield the CPU on a shared machine).
 set -euo pipefail
 
 cmd=${1:-}
@@ -163,9 +165,10 @@ PartitionName=debug Nodes=$host Default=YES MaxTime=INFINITE State=UP
 EOF
   export SLURM_CONF="$DIR/slurm.conf"
 
-  slurmctld -D -c -f "$SLURM_CONF" >"$DIR/log/slurmctld.out" 2>&1 &
+  local nice=${FDEM_SLURM_NICE:-0}
+  nice -n "$nice" slurmctld -D -c -f "$SLURM_CONF" >"$DIR/log/slurmctld.out" 2>&1 &
   echo $! >"$DIR/slurmctld.pid"
-  slurmd -D -f "$SLURM_CONF" >"$DIR/log/slurmd.out" 2>&1 &
+  nice -n "$nice" slurmd -D -f "$SLURM_CONF" >"$DIR/log/slurmd.out" 2>&1 &
   echo $! >"$DIR/slurmd.pid"
 
   # ready when the node is idle (30 s at most)
