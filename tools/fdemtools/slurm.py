@@ -137,7 +137,8 @@ def options_from_args(args, job_name: str) -> Options | None:
         raise ToolError(f"--jobs must be >= 1, got {jobs}")
     return Options(cpus_per_task=cpus, partition=args.partition, time=args.time, mem=args.mem, account=args.account,
                    extra=list(args.sbatch_arg or []), term_before=args.term_before, array_limit=jobs,
-                   job_name=job_name, no_wait=args.no_wait, collect_only=args.collect, poll=args.poll, max_wait=args.max_wait,
+                   job_name=job_name, no_wait=args.no_wait, collect_only=args.collect, poll=args.poll,
+                   max_wait=args.max_wait,
                    dry_run=bool(getattr(args, "dry_run", False)))
 
 
@@ -183,7 +184,8 @@ def job_script(tasks: list, opts: Options, slurm_dir: str) -> str:
     L += ['  *) echo "fdem-tools: no run for array task \'${SLURM_ARRAY_TASK_ID:-}\'" >&2; exit 1 ;;',
           "esac",
           'mkdir -p "$(dirname "$LOG")" "$EXIT_DIR"',
-          'if compgen -G "$RUN/' + CHECKPOINT_GLOB + '" > /dev/null && "${CMD[0]}" run --help 2>&1 | grep -q -e --restart; then',
+          f'if compgen -G "$RUN/{CHECKPOINT_GLOB}" > /dev/null && '
+          '"${CMD[0]}" run --help 2>&1 | grep -q -e --restart; then',
           '    CMD+=(--restart "$RUN")',
           "fi",
           "{ printf '$'; printf ' %q' \"${CMD[@]}\"; printf '\\n'; } > \"$LOG\"",
@@ -384,7 +386,7 @@ def run_tasks(tasks: list, opts: Options, slurm_dir: str, is_finished, log=print
     if opts.dry_run:
         todo = [t for t in tasks if not finished[t.run_dir]]
         if not todo:
-            print(f"# fdem-tools: every run of this grid has completed already; nothing to submit")
+            print("# fdem-tools: every run of this grid has completed already; nothing to submit")
             return None
         script_path = subs.next_script()
         sys.stdout.write(job_script(todo, opts, slurm_dir))
@@ -473,12 +475,8 @@ def follow(tasks: list, where: dict, fol: Follower, opts: Options, log) -> None:
         failed = len(states) - len(done) - len(running) - pending
         counts = (len(done), len(running), pending, failed)
         if counts != last or quiet >= 10:
-            left = ""
-            times = [el for el in done if el is not None]
-            if times and (running or pending):
-                mean = sum(times) / len(times)
-                work = pending * mean + sum(max(mean - (el or 0.0), 0.0) for el in running)
-                left = f", about {hms(work / max(1, len(running)))} left"
+            est = time_left([el for el in done if el is not None], running, pending)
+            left = "" if est is None else f", about {hms(est)} left"
             log(f"slurm: job(s) {', '.join(fol.jobs)}: {counts[0]} done, {counts[1]} running, {counts[2]} pending, "
                 f"{counts[3]} failed; elapsed {hms(time.monotonic() - t0)}{left}")
             last, quiet = counts, 0
@@ -491,6 +489,17 @@ def follow(tasks: list, where: dict, fol: Follower, opts: Options, log) -> None:
                             f"running and {pending} pending in job(s) {', '.join(fol.jobs)}; they go on: run the "
                             "same command again (add --collect to submit nothing) to follow and collect them")
         time.sleep(opts.poll)
+
+
+def time_left(done: list, running: list, pending: int) -> float | None:
+    """Seconds left: with m the mean run time of the finished tasks, the work left is m per pending task plus
+    m - elapsed (at least 0) per running one, shared by the tasks running at once. None before a task has finished
+    or when nothing is left."""
+    if not done or not (running or pending):
+        return None
+    m = sum(done) / len(done)
+    work = pending * m + sum(max(m - (el or 0.0), 0.0) for el in running)
+    return work / max(1, len(running))
 
 
 def write_tasks_csv(recs: list, slurm_dir: str) -> None:

@@ -147,7 +147,8 @@ def test_dry_run_is_a_job_script_sbatch_accepts(cluster, tmp_path):
 def test_batch_dry_run_prints_shell_quoted_commands(tmp_path):
     """Local pool --dry-run (issue 31): one command per run that a shell splits back into fdem's exact argv."""
     out = tmp_path / "b b"
-    rc, o, err = tools_cli("batch", CANTILEVER, "--grid", 'case.description="x y",\'q"z\'', "--out-dir", out, "--dry-run")
+    rc, o, err = tools_cli("batch", CANTILEVER, "--grid", 'case.description="x y",\'q"z\'', "--out-dir", out,
+                           "--dry-run")
     assert rc == 0, err
     lines = o.splitlines()
     assert len(lines) == 2
@@ -200,7 +201,8 @@ def test_failing_run_reported_with_its_slurm_state(cluster, tmp_path):
     same_runs(out, local)
     with open(os.path.join(out, "slurm", "tasks.csv"), newline="") as f:
         states = {r["name"]: (r["slurm_state"], r["exit_code"]) for r in csv.DictReader(f)}
-    assert states[bad] == ("FAILED", "2") and states[batch.run_name({"geometry.mesh_size": "0.05"})] == ("COMPLETED", "0")
+    good = batch.run_name({"geometry.mesh_size": "0.05"})
+    assert states[bad] == ("FAILED", "2") and states[good] == ("COMPLETED", "0")
 
 
 def test_resume_after_scancel_submits_only_the_cancelled_run(cluster, local_dry, tmp_path):
@@ -273,6 +275,42 @@ def test_options_need_the_slurm_scheduler(tmp_path, cluster):
     assert rc == 1 and "--cpus-per-task" in err
     rc, o, err = tools_cli("batch", case, "--grid", "a=1", "--fdem", FAKE, "--scheduler", "slurm", "--timeout", "5")
     assert rc == 1 and "--time" in err
+
+
+def test_time_left_estimate():
+    # finished in 10 and 14 s (mean 12); running for 4 and 20 s; 3 pending: (3 * 12 + 8 + 0) / 2 = 22 s
+    assert slurm.time_left([10.0, 14.0], [4.0, 20.0], 3) == 22.0
+    assert slurm.time_left([], [4.0], 3) is None and slurm.time_left([10.0], [], 0) is None
+    assert slurm.time_left([10.0], [], 2) == 20.0  # nothing running yet: one at a time
+
+
+def test_validate_and_study_through_slurm_equal_the_local_pool(cluster, tmp_path):
+    """The other two commands on the same plumbing, with the stand-in fdem (instant runs, deterministic wall
+    times): validate's report.csv and quasi_static.csv and study mesh's mesh_study.csv are the local pool's, byte
+    for byte."""
+    fam = tmp_path / "fam"
+    fam.mkdir()
+    for stem in ("wall_a", "wall_b"):
+        (fam / f"{stem}.toml").write_text("[[stages]]\n  [[stages.supports]]\n  vx = 0.01\n")
+    v = ["validate", fam, "--fdem", FAKE, "--rate-case", "all", "--set", "geometry.mesh_size=0.05"]
+    rc, o, err = tools_cli(*v, "--out-dir", tmp_path / "v_local", "--jobs", "1")
+    assert rc == 0, err
+    rc, o, err = tools_cli(*v, "--out-dir", tmp_path / "v_slurm", "--scheduler", "slurm", *POLL)
+    assert rc == 0, o + err
+    subs = submissions(tmp_path / "v_slurm")
+    assert len(subs) == 1 and [t["label"] for t in subs[0]["tasks"]] == [
+        "wall_a", "wall_b", "wall_a__half_rate", "wall_b__half_rate"]
+    for f in ("report.csv", "quasi_static.csv"):
+        assert (tmp_path / "v_slurm" / f).read_bytes() == (tmp_path / "v_local" / f).read_bytes(), f
+    case = tmp_path / "case.toml"
+    case.write_text("# fake\n")
+    m = ["study", "mesh", case, "--fdem", FAKE, "--sizes", "0.1,0.05"]
+    rc, o, err = tools_cli(*m, "--out-dir", tmp_path / "m_local")
+    assert rc == 0, err
+    rc, o, err = tools_cli(*m, "--out-dir", tmp_path / "m_slurm", "--scheduler", "slurm", *POLL)
+    assert rc == 0, o + err
+    assert (tmp_path / "m_slurm" / "mesh_study.csv").read_bytes() == \
+        (tmp_path / "m_local" / "mesh_study.csv").read_bytes()
 
 
 def test_time_and_array_index_parsing():
