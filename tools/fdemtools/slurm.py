@@ -17,7 +17,8 @@ When such a run folder holds a checkpoint (a file `checkpoint*`) and `fdem run -
 restarts the run from it (`fdem run CASE ... --restart RUN_DIR`); otherwise the run is done again from the start.
 The task decides this when it starts, so the job script is the same either way.
 States: squeue -t all (the controller keeps finished tasks for MinJobAge, 300 s by default), else sacct, else the
-exit file (COMPLETED for exit 0, FAILED otherwise), else UNKNOWN.
+exit file (COMPLETED for exit 0, FAILED otherwise), else CANCELLED when squeue still lists other tasks of the job
+(a task cancelled while pending leaves no record of its own), else UNKNOWN.
 """
 from __future__ import annotations
 
@@ -365,6 +366,8 @@ class Follower:
         rc = self.exit_code(job, idx)
         if rc is not None:
             return ("COMPLETED" if rc == 0 else "FAILED"), None
+        if self.sq.get(job):  # the controller knows the job but not this task, which never ended by itself:
+            return "CANCELLED", None  # it was cancelled while pending (Slurm then keeps no record of the task)
         return "UNKNOWN", None
 
 

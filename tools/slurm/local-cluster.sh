@@ -4,7 +4,8 @@
 #   tools/slurm/local-cluster.sh start [DIR]   start munged, slurmctld and slurmd; prints `export SLURM_CONF=...`
 #   tools/slurm/local-cluster.sh env [DIR]     print the same export line again (eval "$(... env)")
 #   tools/slurm/local-cluster.sh status [DIR]  sinfo of the cluster
-#   tools/slurm/local-cluster.sh stop [DIR]    stop the three daemons (by the process ids saved at start)
+#   tools/slurm/local-cluster.sh stop [DIR]    cancel the jobs left in its queue, then stop the three daemons (by
+#                                              the process ids saved at start)
 #
 # DIR (default $FDEM_SLURM_DIR, else /tmp/fdem-slurm-<uid>) holds everything: the munge key and socket,
 # slurm.conf, the controller's state, the spool and the logs (DIR/log/*.log). Nothing outside DIR is written and no
@@ -63,6 +64,18 @@ stop_daemon() {  # stop_daemon NAME: SIGTERM to the process id saved at start, S
     fi
   fi
   rm -f "$DIR/$name.pid"
+}
+
+cancel_jobs() {  # cancel what is left in this cluster's queue and wait (15 s at most) until it has ended
+  alive slurmctld || return 0
+  export SLURM_CONF="$DIR/slurm.conf"
+  scancel --user="$(id -un)" 2>/dev/null || true
+  local i
+  for i in $(seq 150); do
+    [ -z "$(squeue -h -o %i 2>/dev/null)" ] && return 0
+    sleep 0.1
+  done
+  say "jobs still in the queue after 15 s: $(squeue -h -o %i 2>/dev/null | tr '\n' ' ')"
 }
 
 stop_all() {
@@ -197,6 +210,7 @@ EOF
 case "$cmd" in
   start) start ;;
   stop)
+    cancel_jobs
     stop_all
     say "stopped ($DIR kept: logs in $DIR/log)"
     ;;
