@@ -9,6 +9,7 @@ import csv
 import json
 import os
 import shlex
+import shutil
 import subprocess
 import tempfile
 import time
@@ -62,6 +63,7 @@ def cluster():
         assert s.returncode == 0, s.stderr
         for name in ("munged", "slurmctld", "slurmd"):
             assert not os.path.exists(os.path.join(d, name + ".pid")), f"{name} not stopped"
+        shutil.rmtree(d)  # kept only when the stop failed (its logs are in d/log)
 
 
 def tools_cli(*args, env=None):
