@@ -7,7 +7,7 @@ set -euo pipefail
 FDEM_ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 FDEM_BUILD=${FDEM_BUILD:-$FDEM_ROOT/build}
 FDEM_PACKAGES=(build-essential cmake ninja-build libeigen3-dev libgmsh-dev catch2 libtomlplusplus-dev
-               python3-numpy python3-scipy python3-matplotlib python3-pytest python3-vtk9)
+               python3-numpy python3-scipy python3-matplotlib python3-pytest python3-vtk9 slurm-wlm munge)
 
 fdem_install_missing() {
   local missing=() p

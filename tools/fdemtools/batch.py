@@ -6,6 +6,7 @@ Layout of a batch folder:
                         the same after a restart whatever the order of the grid
   logs/<name>.log       fdem's output for that run
   results.csv           one row per grid point: settings, status, run time, size, peak load, reference error
+  slurm/                with --scheduler slurm: job scripts, jobs.json, Slurm's task output (see slurm.py)
 A run counts as finished when its summary.json says "completed"; a restarted batch skips those and runs the
 others again (failed, interrupted or never started). Each grid value is passed verbatim to `fdem run --set
 KEY=VALUE`, so it is a TOML value: 0.025, "name", [0.01, 0].
@@ -16,6 +17,7 @@ import hashlib
 import itertools
 import json
 import os
+import shlex
 import shutil
 import subprocess
 import sys
@@ -88,10 +90,13 @@ def run_name(params: dict) -> str:
     return f"{name}__{digest}"
 
 
-def fdem_binary(given: str | None) -> str:
+def fdem_binary(given: str | None, must_exist: bool = True) -> str:
+    """The fdem executable (absolute path). must_exist=False (dry runs): the path as it would be used."""
     path = given or os.environ.get("FDEM_BIN") or os.path.join(REPO, "build", "fdem", "fdem")
     resolved = shutil.which(path) if os.sep not in path else path
     if not resolved or not os.path.isfile(resolved) or not os.access(resolved, os.X_OK):
+        if not must_exist:
+            return os.path.abspath(path) if os.sep in path else path
         raise ToolError(f"fdem executable '{path}' not found (build it, set FDEM_BIN or give --fdem)")
     return os.path.abspath(resolved)
 
@@ -152,12 +157,14 @@ class Batch:
             cmd += ["--set", f"{k}={v}"]
         return cmd
 
-    def _one(self, name: str, params: dict) -> dict:
+    def _one(self, name: str, params: dict, label: str | None = None) -> dict:
+        """Runs one grid point; label names it in the progress lines (default: its run name)."""
+        label = label or name
         run_dir = os.path.join(self.out, "runs", name)
         rec = {"name": name, "params": params, "run_dir": run_dir, "resumed": False}
         if is_finished(run_dir):
             rec.update(resumed=True, exit_code=0)
-            self.log(f"  {name}: already completed, skipped")
+            self.log(f"  {label}: already completed, skipped")
             return rec
         if self._stopping:
             rec["exit_code"] = None
@@ -167,7 +174,7 @@ class Batch:
         cmd = self.command(params, run_dir)
         t0 = time.monotonic()
         with open(log_path, "w") as lf:
-            lf.write("$ " + " ".join(cmd) + "\n")
+            lf.write("$ " + shlex.join(cmd) + "\n")
             lf.flush()
             try:
                 p = subprocess.Popen(cmd, stdout=lf, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL)
@@ -187,7 +194,7 @@ class Batch:
         rec["exit_code"] = rc
         rec["elapsed_s"] = time.monotonic() - t0
         s = read_summary(run_dir) or {}
-        self.log(f"  {name}: exit {rc}, status {s.get('status', 'no summary')} ({rec['elapsed_s']:.1f} s)"
+        self.log(f"  {label}: exit {rc}, status {s.get('status', 'no summary')} ({rec['elapsed_s']:.1f} s)"
                  + ("" if rc == 0 else f", log {log_path}"))
         return rec
 
@@ -205,15 +212,34 @@ class Batch:
             except subprocess.TimeoutExpired:
                 p.kill()
 
-    def run(self, points: list, jobs: int = 1, grid: list | None = None) -> list:
+    def task(self, name: str, params: dict, label: str | None = None):
+        """The run of one grid point as a Slurm array task (same command, run folder and log as _one)."""
+        from .slurm import Task
+        run_dir = os.path.join(self.out, "runs", name)
+        return Task(name=name, label=label or name, run_dir=run_dir,
+                    log=os.path.join(self.out, "logs", name + ".log"), cmd=self.command(params, run_dir),
+                    params=params)
+
+    def run(self, points: list, jobs: int = 1, grid: list | None = None, slurm=None) -> list | None:
+        """Runs the grid on the local pool, or with slurm (slurm.Options) as a job array: then None when the
+        options say not to wait (--no-wait, --dry-run)."""
         names = [run_name(p) for p in points]
         if len(set(names)) != len(names):
             raise ToolError("two grid points give the same run name (repeated values?)")
+        if slurm is not None and slurm.dry_run:  # prints the job script, writes nothing
+            from .slurm import run_tasks
+            return run_tasks([self.task(n, p) for n, p in zip(names, points)], slurm,
+                             os.path.join(self.out, "slurm"), is_finished, self.log)
         os.makedirs(self.out, exist_ok=True)
         manifest = {"case": self.case, "fdem": self.fdem, "threads": self.threads,
                     "fixed": [f"{k}={v}" for k, v in self.fixed], "grid": grid or [],
                     "runs": [{"name": n, "params": p} for n, p in zip(names, points)]}
         write_json(os.path.join(self.out, "batch.json"), manifest)
+        if slurm is not None:
+            from .slurm import run_tasks
+            recs = run_tasks([self.task(n, p) for n, p in zip(names, points)], slurm,
+                             os.path.join(self.out, "slurm"), is_finished, self.log)
+            return None if recs is None else [collect(r) for r in recs]
         todo = sum(not is_finished(os.path.join(self.out, "runs", n)) for n in names)
         self.log(f"batch: {len(points)} runs, {len(points) - todo} already completed, {todo} to run "
                  f"({jobs} at a time, {self.threads} thread(s) each) in {self.out}")
@@ -292,21 +318,37 @@ def cmd_batch(args):
     fixed = [parse_assignment(s, "--set") for s in args.set or []]
     points = expand_grid(grid)
     out = args.out_dir or os.path.join("runs", "batch_" + os.path.splitext(os.path.basename(args.case))[0])
-    if args.dry_run:
-        for p in points:
-            print(run_name(p), " ".join(f"--set {k}={v}" for k, v in p.items()))
+    from .slurm import options_from_args, job_name, report_failures
+    slurm = options_from_args(args, job_name("fdem", out))
+    threads = slurm.cpus_per_task if slurm else args.threads
+    if args.dry_run and not slurm:
+        print_commands(Batch(args.case, out, fdem_binary(args.fdem, must_exist=False), threads=threads, fixed=fixed),
+                       points)
         return 0
-    b = Batch(args.case, out, fdem_binary(args.fdem), threads=args.threads, fixed=fixed, timeout=args.timeout)
-    recs = b.run(points, jobs=args.jobs or default_jobs(args.threads), grid=[[k, v] for k, v in grid])
+    b = Batch(args.case, out, fdem_binary(args.fdem, must_exist=not args.dry_run), threads=threads, fixed=fixed,
+              timeout=args.timeout)
+    recs = b.run(points, jobs=args.jobs or default_jobs(args.threads), grid=[[k, v] for k, v in grid], slurm=slurm)
+    if recs is None:  # submitted without waiting, or a dry run
+        return 0
     table = results_table(recs, os.path.join(b.out, "results.csv"))
     print(table)
     print(f"wrote {os.path.join(b.out, 'results.csv')}")
     failed = [r for r in recs if r["status"] != "completed"]
     if failed:
-        print(f"fdem-tools batch: {len(failed)} of {len(recs)} runs did not complete (see logs/); "
+        print(f"fdem-tools batch: {len(failed)} of {len(recs)} runs did not complete "
+              f"({'see logs/' if not slurm else 'Slurm state and log of each below'}); "
               "run the same command again to retry them", file=sys.stderr)
+        if slurm:
+            report_failures(recs, os.path.join(b.out, "slurm"))
         return 2
     return 0
+
+
+def print_commands(b: Batch, points: list) -> None:
+    """--dry-run on the local pool: one shell-quoted fdem command per run (copy-paste ready)."""
+    for p in points:
+        name = run_name(p)
+        print(shlex.join(b.command(p, os.path.join(b.out, "runs", name))))
 
 
 def add_parser(sub):
@@ -324,5 +366,9 @@ def add_parser(sub):
     p.add_argument("--threads", type=int, default=1, help="OpenMP threads per run (default 1)")
     p.add_argument("--fdem", help="fdem executable (default: $FDEM_BIN, else build/fdem/fdem)")
     p.add_argument("--timeout", type=float, help="kill a run after this many seconds")
-    p.add_argument("--dry-run", action="store_true", help="list the runs and their settings, run nothing")
+    p.add_argument("--dry-run", action="store_true",
+                   help="print the fdem command of every run, shell-quoted (with --scheduler slurm: the job script "
+                        "and the sbatch command), run nothing")
+    from .slurm import add_arguments
+    add_arguments(p)
     p.set_defaults(func=cmd_batch)

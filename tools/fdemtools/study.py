@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import math
 import os
+import sys
 
 import numpy as np
 
@@ -131,9 +132,24 @@ def pareto_front(times, errors) -> list:
 
 
 def _batch(args, points, out, grid):
+    """The study's runs on the local pool or, with --scheduler slurm, as a job array; None when nothing is to be
+    evaluated now (--dry-run, --no-wait)."""
+    from .batch import print_commands
+    from .slurm import job_name, options_from_args, report_failures
     fixed = [parse_assignment(s, "--set") for s in args.set or []]
-    b = Batch(args.case, out, fdem_binary(args.fdem), threads=args.threads, fixed=fixed, timeout=args.timeout)
-    return b.run(points, jobs=args.jobs or 1, grid=grid)
+    slurm = options_from_args(args, job_name("fdem-study", out))
+    threads = slurm.cpus_per_task if slurm else args.threads
+    if args.dry_run and not slurm:
+        print_commands(Batch(args.case, out, fdem_binary(args.fdem, must_exist=False), threads=threads, fixed=fixed),
+                       points)
+        return None
+    b = Batch(args.case, out, fdem_binary(args.fdem, must_exist=not args.dry_run), threads=threads, fixed=fixed,
+              timeout=args.timeout)
+    recs = b.run(points, jobs=args.jobs or 1, grid=grid, slurm=slurm)
+    if recs is not None and slurm and any(r["status"] != "completed" for r in recs):
+        print("fdem-tools study: runs that did not complete (Slurm state and log of each):", file=sys.stderr)
+        report_failures(recs, os.path.join(b.out, "slurm"))
+    return recs
 
 
 def cmd_mesh(args):
@@ -147,6 +163,8 @@ def cmd_mesh(args):
     var_label, var_scale = ("mesh size (mm)", 1e3) if size_key else (f"{args.key} (as given)", 1.0)
     out = args.out_dir or os.path.join("runs", "study_mesh_" + os.path.splitext(os.path.basename(args.case))[0])
     recs = _batch(args, [{args.key: s} for s in sizes], out, [[args.key, sizes]])
+    if recs is None:
+        return 0
     rows = []
     for h, r in zip(hs, recs):
         q = run_quantities(r)
@@ -257,6 +275,8 @@ def cmd_speed(args):
     points = expand_grid([(k, v) for k, v, _ in dims])
     out = args.out_dir or os.path.join("runs", "study_speed_" + os.path.splitext(os.path.basename(args.case))[0])
     recs = _batch(args, points, out, [[k, v] for k, v, _ in dims])
+    if recs is None:
+        return 0
     ok = [r for r in recs if r["status"] == "completed" and r.get("peak_load_N") is not None
           and r.get("wall_time_s") is not None]
     if not ok:
@@ -349,6 +369,8 @@ def _common(p):
     p.add_argument("--threads", type=int, default=1, help="OpenMP threads per run (default 1)")
     p.add_argument("--fdem", help="fdem executable (default: $FDEM_BIN, else build/fdem/fdem)")
     p.add_argument("--timeout", type=float, help="kill a run after this many seconds")
+    from .slurm import add_arguments
+    add_arguments(p, dry_run=True)
 
 
 def add_parser(sub):

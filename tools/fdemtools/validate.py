@@ -58,6 +58,7 @@ from __future__ import annotations
 import csv
 import glob
 import os
+import shlex
 import sys
 import time
 import tomllib
@@ -65,7 +66,7 @@ from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 
-from .batch import Batch, collect, default_jobs, fdem_binary, parse_assignment, run_name
+from .batch import Batch, collect, default_jobs, fdem_binary, is_finished, parse_assignment, run_name
 from .eeep import eeep
 from .common import SIGN_CHOICES, ToolError, load_curve, load_run, stage_curve, write_csv
 
@@ -485,7 +486,10 @@ def run_family(args) -> int:
     cases = family_cases(family, args.glob)
     fixed = [parse_assignment(s, "--set") for s in args.set or []]
     out = os.path.abspath(args.out_dir or os.path.join("runs", "validate_" + os.path.basename(family)))
-    fdem = fdem_binary(args.fdem)
+    from .slurm import job_name, options_from_args, report_failures, run_tasks
+    slurm = options_from_args(args, job_name("fdem-validate", out))
+    threads = args.threads = slurm.cpus_per_task if slurm else args.threads  # the report states it
+    fdem = fdem_binary(args.fdem, must_exist=not args.dry_run)
     refs = read_reference(family)
     trees = {c: read_case(c, fixed) for c in cases}
     log = lambda m: print(m, flush=True)  # noqa: E731
@@ -495,31 +499,47 @@ def run_family(args) -> int:
     tasks = []
     for c in cases:
         stem = _stem(c)
-        tasks.append((stem, Batch(c, os.path.join(out, stem), fdem, threads=args.threads, fixed=fixed, log=log), {}))
+        tasks.append((stem, Batch(c, os.path.join(out, stem), fdem, threads=threads, fixed=fixed, log=log), {}))
     checks = []
     if not args.no_rate_check:
         for c in rate_cases(cases, args.rate_case, family):
             key, rate = rate_setting(trees[c], c, args.rate_key)
             stem = _stem(c)
             checks.append({"case": stem, "key": key, "rate": rate, "half": rate / 2})
-            tasks.append((stem + "__half_rate", Batch(c, os.path.join(out, stem), fdem, threads=args.threads,
+            tasks.append((stem + "__half_rate", Batch(c, os.path.join(out, stem), fdem, threads=threads,
                                                       fixed=fixed, log=log), {key: repr(rate / 2)}))
 
-    print(f"validate: {len(cases)} cases of {family} + {len(checks)} half-rate rerun(s), "
-          f"{args.jobs} at a time, {args.threads} thread(s) each, in {out}", flush=True)
-    for _, b, _ in tasks:
-        os.makedirs(b.out, exist_ok=True)
+    if args.dry_run and not slurm:
+        for _, b, p in tasks:
+            print(shlex.join(b.command(p, os.path.join(b.out, "runs", run_name(p)))))
+        return 0
     t0 = time.monotonic()
-    ex = ThreadPoolExecutor(max_workers=max(1, args.jobs))
-    try:
-        futs = [ex.submit(b._one, run_name(p), p) for _, b, p in tasks]
-        recs = [collect(f.result()) for f in futs]
-    except BaseException:
+    if slurm:
+        if not slurm.dry_run:
+            print(f"validate: {len(cases)} cases of {family} + {len(checks)} half-rate rerun(s) as a Slurm job array, "
+                  f"{threads} thread(s) each, in {out}", flush=True)
+            for _, b, _ in tasks:
+                os.makedirs(b.out, exist_ok=True)
+        recs = run_tasks([b.task(run_name(p), p, label) for label, b, p in tasks], slurm,
+                         os.path.join(out, "slurm"), is_finished, log)
+        if recs is None:  # --dry-run or --no-wait
+            return 0
+        recs = [collect(r) for r in recs]
+    else:
+        print(f"validate: {len(cases)} cases of {family} + {len(checks)} half-rate rerun(s), "
+              f"{args.jobs} at a time, {threads} thread(s) each, in {out}", flush=True)
         for _, b, _ in tasks:
-            b.stop()
-        ex.shutdown(wait=True, cancel_futures=True)
-        raise
-    ex.shutdown(wait=True)
+            os.makedirs(b.out, exist_ok=True)
+        ex = ThreadPoolExecutor(max_workers=max(1, args.jobs))
+        try:
+            futs = [ex.submit(b._one, run_name(p), p, label) for label, b, p in tasks]
+            recs = [collect(f.result()) for f in futs]
+        except BaseException:
+            for _, b, _ in tasks:
+                b.stop()
+            ex.shutdown(wait=True, cancel_futures=True)
+            raise
+        ex.shutdown(wait=True)
 
     by_task = {}
     for (label, b, p), rec in zip(tasks, recs):
@@ -604,6 +624,8 @@ def run_family(args) -> int:
     if bad:
         print(f"fdem-tools validate: {len(bad)} run(s) did not complete (see the logs/ of each case); "
               "run the same command again to retry them", file=sys.stderr)
+        if slurm:
+            report_failures(recs, os.path.join(out, "slurm"))
         return 2
     return 0
 
@@ -703,7 +725,7 @@ def cmd_validate(args):
         raise ToolError(f"--smooth must be a window >= 0 mm, got {args.smooth}")
     if args.peak_up_to is not None and not args.peak_up_to > 0:
         raise ToolError(f"--peak-up-to must be a displacement > 0 mm, got {args.peak_up_to}")
-    if args.jobs is None:
+    if args.jobs is None and args.scheduler == "local":
         args.jobs = default_jobs(args.threads)
     return run_family(args)
 
@@ -749,4 +771,6 @@ def add_parser(sub):
     p.add_argument("--load-sign", choices=SIGN_CHOICES, default="auto",
                    help="sign of the load: auto (default: the case's output.curve.sign, else the sign that makes the "
                         "loading work positive), 1 (as recorded) or -1 (turned)")
+    from .slurm import add_arguments
+    add_arguments(p, dry_run=True)
     p.set_defaults(func=cmd_validate)

@@ -7,40 +7,59 @@ in a known way: peak = 10 kN * (1 + mesh_size) * (1 + rate) * (1 + damping); wal
 A setting `fail=true` makes it exit 2 with a failed summary; `slow=SECONDS` makes it sleep first; `die=TEXT` makes
 it print "error: TEXT" as the engine does for bad input and exit 1 before writing any summary. With `ref=1` the summary
 carries a [reference] result (monitor F, quantity peak, value 10 kN, computed = the peak).
+Like fdem, SIGTERM stops it with status "interrupted" and exit 143; it then also writes a checkpoint file
+(checkpoint.bin). `run --help` lists `--restart RUN_DIR` only when $FAKE_FDEM_RESTART is 1; `--restart DIR` is
+logged (key "--restart") and skips the `slow` sleep.
 """
 import json
 import os
+import signal
 import sys
 import time
 
 
 def main(argv):
+    if argv[:2] == ["run", "--help"]:
+        print("usage: fake_fdem.py run CASE --out DIR [--set KEY=VALUE] [--threads N] [--quiet]"
+              + (" [--restart RUN_DIR]" if os.environ.get("FAKE_FDEM_RESTART") == "1" else ""))
+        return 0
     if len(argv) < 2 or argv[0] != "run":
         return 1
-    out, sets = None, {}
+    out, sets, restart = None, {}, None
     i = 2
     while i < len(argv):
         if argv[i] == "--out":
             out = argv[i + 1]; i += 2
+        elif argv[i] == "--restart":
+            restart = argv[i + 1]; i += 2
         elif argv[i] == "--set":
             k, v = argv[i + 1].split("=", 1); sets[k] = v; i += 2
         elif argv[i] == "--threads":
             i += 2
         else:
             i += 1
+    summ = {"case": "fake", "status": "running", "curve": {"x": "u", "y": "F"}, "columns": {"u": "m", "F": "N"}}
+
+    def stop(signum, frame):
+        os.makedirs(out, exist_ok=True)
+        with open(os.path.join(out, "checkpoint.bin"), "w") as f:
+            f.write("fake checkpoint\n")
+        with open(os.path.join(out, "summary.json"), "w") as f:
+            json.dump(dict(summ, status="interrupted"), f)
+        sys.exit(128 + signum)
+    signal.signal(signal.SIGTERM, stop)
     log = os.environ.get("FAKE_FDEM_LOG")
     if log:
         with open(log, "a") as f:
-            f.write(json.dumps(sets, sort_keys=True) + "\n")
+            f.write(json.dumps(dict(sets, **({"--restart": restart} if restart else {})), sort_keys=True) + "\n")
     if "die" in sets:
         print("fdem: reading the case")
         print(f"error: {sets['die']}", file=sys.stderr)
         return 1
     os.makedirs(out, exist_ok=True)
-    summ = {"case": "fake", "status": "running", "curve": {"x": "u", "y": "F"}, "columns": {"u": "m", "F": "N"}}
     with open(os.path.join(out, "summary.json"), "w") as f:
         json.dump(summ, f)
-    if "slow" in sets:
+    if "slow" in sets and not restart:
         time.sleep(float(sets["slow"]))
     h = float(sets.get("geometry.mesh_size", 0.1))
     rate = float(sets.get("rate", 0.0))
