@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "core/engine_helpers.hpp"
+#include "fdem/errors.hpp"
 #include "fdem/scene.hpp"
 #include "fracture/cohesive_system.hpp"
 
@@ -81,4 +82,32 @@ TEST_CASE("engine composite law: a joint sheared under high compression keeps si
     CHECK(low_softening < sigma * mu + 0.05 * c);
     // The cap is not reached: no compressive damage.
     CHECK(crush == 0.0);
+}
+
+// Bad input (exit code 1 through InputError): the cap keys are all three or none, and belong to the composite law.
+TEST_CASE("engine composite law: case errors name the key for a partial cap and for cap keys without the law",
+          "[unit]") {
+    const auto dir = testing::tmp_dir("fracture_composite_errors");
+    testing::write_text(dir / "mode2_shear.geo", testing::read_text(cases_dir() / "mode2_shear.geo"));
+    const std::string path = testing::write_text(dir / "case.toml", testing::read_text(cases_dir() / "mode2_shear.toml"));
+    auto message = [&](const std::vector<std::string>& overrides) {
+        try {
+            fdem::load_case(path, overrides);
+        } catch (const fdem::InputError& e) {
+            return std::string(e.what());
+        }
+        return std::string();
+    };
+    const std::string partial = message({"interfaces.0.law=\"composite\"", "interfaces.0.compressive_strength=1e7"});
+    INFO(partial);
+    CHECK(partial.find("interfaces.0.law") != std::string::npos);
+    CHECK(partial.find("all three cap keys") != std::string::npos);
+    const std::string stray = message({"interfaces.0.cap_shear_factor=9.0"});
+    INFO(stray);
+    CHECK(stray.find("interfaces.0.cap_shear_factor") != std::string::npos);
+    CHECK(stray.find("only with law = \"composite\"") != std::string::npos);
+    const std::string soft = message({"interfaces.0.law=\"composite\"", "interfaces.0.shear_softening=\"cohesion\""});
+    INFO(soft);
+    CHECK(soft.find("interfaces.0.shear_softening") != std::string::npos);
+    CHECK(message({"interfaces.0.law=\"composite\""}).empty());  // no cap at all is fine
 }
