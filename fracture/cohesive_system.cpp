@@ -252,8 +252,9 @@ void CohesiveSystem::add_forces(const double* x, double* f) {
     for (int i = 0; i < 3; ++i) {
       const double o = dx[i] * nx + dy[i] * ny;
       const double s = dx[i] * tx + dy[i] * ty;
-      const PointResponse r = ci < 0 ? evaluate_point(L, o, s, history_[3 * e + i])
-                                     : evaluate_composite(composite_law_[ci], o, s, composite_history_[3 * std::size_t(ci) + i]);
+      const PointResponse r =
+          ci < 0 ? evaluate_point(L, o, s, history_[3 * e + i])
+                 : evaluate_composite(composite_law_[ci], o, s, composite_history_[3 * std::size_t(ci) + i]);
       history_[3 * e + i] = r.history;
       const double w = kSimpson[i] * area;
       Tx[i] = w * (r.sigma * nx + r.tau * tx);

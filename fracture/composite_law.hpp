@@ -5,7 +5,8 @@
 // with the compressive cap of Lourenco & Rots (1997) [LR97]. [PDEM] describes the law in words (Figure 4 is a
 // drawing); the formulas below are this project's reading of that description, one line per statement of [PDEM] §2:
 //   "bilinear stress-displacement behaviour in tension, shear and compression, considering the mode-I, mode-II and
-//    compressive fracture energy"                                   -> linear rise, linear softening, areas G_I, G_II, G_c
+//    compressive fracture energy"                                   -> linear rise, linear softening, areas G_I,
+//                                                                      G_II, G_c
 //   "a single damage parameter ... to couple tension and shear"     -> one D for f_t and c
 //   "one-way coupling ... between shear and compression"            -> the shear stress enters the cap; crushing does
 //                                                                      not damage the tension/shear bond
@@ -13,7 +14,8 @@
 //   "tau_0 = c_0 + tan(theta_0) sigma, tau_res = c_res + tan(theta_res) sigma" -> Mohr-Coulomb, c_res = 0
 //   "no stiffness degradation ... for shear stiffness"              -> elastic-plastic shear, unloading with k_s
 //   "the Cap Model proposed in [31]" (= [LR97])                     -> C_nn sigma^2 + C_ss tau^2 + C_n sigma = f_m^2
-//                                                                      with C_nn = 1, C_n = 0, C_ss = C_s ([LR97], cap f_3)
+//                                                                      with C_nn = 1, C_n = 0, C_ss = C_s
+//                                                                      ([LR97], cap f_3)
 //
 // One integration point sees an opening o (m, > 0 when the faces separate) and a slip s (m); tension positive; stresses
 // in Pa, energies in J/m^2. Parameters (SI): k_n, k_s (Pa/m); f_t (Pa), G_I (J/m^2); c_0 (Pa), theta_0, theta_res
@@ -66,19 +68,19 @@ namespace fdem::fracture {
 
 // Constants of one element's composite law (from CohesiveProps by make_composite_law).
 struct CompositeLaw {
-  double k_n;          // normal stiffness, Pa/m
-  double k_s;          // shear stiffness, Pa/m
-  double f_t;          // tensile strength, Pa
-  double o_peak;       // o_p = f_t / k_n, m
-  double o_ult;        // o_u = 2 G_I / f_t, m
-  double cohesion;     // c_0, Pa
-  double tan0;         // tan(theta_0), -
-  double tan_res;      // tan(theta_res), -
-  double slip_ult;     // kappa_u = 2 G_II / c_0: plastic slip at which the cohesion is gone, m
-  double f_m;          // compressive strength of the cap, Pa; 0 = no cap (linear compression)
-  double c_peak;       // u_p = f_m / k_n, m
-  double c_ult;        // u_u = 2 G_c / f_m, m
-  double C_s;          // shear factor of the cap, -
+    double k_n;       // normal stiffness, Pa/m
+    double k_s;       // shear stiffness, Pa/m
+    double f_t;       // tensile strength, Pa
+    double o_peak;    // o_p = f_t / k_n, m
+    double o_ult;     // o_u = 2 G_I / f_t, m
+    double cohesion;  // c_0, Pa
+    double tan0;      // tan(theta_0), -
+    double tan_res;   // tan(theta_res), -
+    double slip_ult;  // kappa_u = 2 G_II / c_0: plastic slip at which the cohesion is gone, m
+    double f_m;       // compressive strength of the cap, Pa; 0 = no cap (linear compression)
+    double c_peak;    // u_p = f_m / k_n, m
+    double c_ult;     // u_u = 2 G_c / f_m, m
+    double C_s;       // shear factor of the cap, -
 };
 
 // k_n, k_s in Pa/m; f_t, c_0, f_m in Pa; angles in degrees; G_I, G_II, G_c in J/m^2; C_s dimensionless.
@@ -88,13 +90,13 @@ CompositeLaw make_composite_law(double k_n, double k_s, double f_t, double G_I, 
 
 // History of one integration point.
 struct CompositeHistory {
-  double damage = 0.0;        // D in [0, 1], tension-shear damage (irreversible)
-  double plastic_slip = 0.0;  // s_p, m
-  double crush = 0.0;         // D_c in [0, 1], compressive damage (irreversible)
-  double damage_I = 0.0;      // part of D raised by opening (for the mode of a break), -
-  double damage_II = 0.0;     // part of D raised by plastic slip, -
-  double o = 0.0, s = 0.0;    // opening and slip at the last evaluation, m
-  double sigma = 0.0, tau = 0.0;  // stresses at the last evaluation, Pa
+    double damage = 0.0;            // D in [0, 1], tension-shear damage (irreversible)
+    double plastic_slip = 0.0;      // s_p, m
+    double crush = 0.0;             // D_c in [0, 1], compressive damage (irreversible)
+    double damage_I = 0.0;          // part of D raised by opening (for the mode of a break), -
+    double damage_II = 0.0;         // part of D raised by plastic slip, -
+    double o = 0.0, s = 0.0;        // opening and slip at the last evaluation, m
+    double sigma = 0.0, tau = 0.0;  // stresses at the last evaluation, Pa
 };
 
 // The law at one point: (o, s) and the history -> stresses, energies; h is updated in place. The PointResponse's

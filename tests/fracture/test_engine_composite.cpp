@@ -5,7 +5,6 @@
 // the friction sigma tan(theta_res) stays ([PDEM] §2: c_res = 0, theta kept); the cap (f_m 10.5 MPa, C_s 9) is not
 // reached (sigma^2 + 9 tau^2 = 65 < 110 MPa^2 at the peak).
 #include <catch2/catch.hpp>
-
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -22,13 +21,16 @@ namespace {
 
 namespace fs = std::filesystem;
 
-fs::path cases_dir() { return fs::path(__FILE__).parent_path() / "cases"; }
+fs::path cases_dir() {
+    return fs::path(__FILE__).parent_path() / "cases";
+}
 
 // As tests/fracture/test_engine_fracture.cpp: the case and its .geo in tmp/<name>/, built with its topology.
 fdem::Simulation make_sim(const std::string& name, const std::vector<std::string>& overrides) {
     const auto dir = testing::tmp_dir(name);
     testing::write_text(dir / "mode2_shear.geo", testing::read_text(cases_dir() / "mode2_shear.geo"));
-    const std::string path = testing::write_text(dir / "case.toml", testing::read_text(cases_dir() / "mode2_shear.toml"));
+    const std::string path =
+        testing::write_text(dir / "case.toml", testing::read_text(cases_dir() / "mode2_shear.toml"));
     fdem::CaseSpec spec = fdem::load_case(path, overrides);
     fdem::Model model = fdem::build_scene(spec);
     fdem::RunOptions opt;
@@ -70,9 +72,10 @@ TEST_CASE("engine composite law: a joint sheared under high compression keeps si
         if (broken == 0 && past_peak) low_softening = std::min(low_softening, tau);
         if (broken > 0 && t_first_break < 0.0) t_first_break = sim.time(), tau_at_break = tau;
     }
-    std::printf("composite law under sigma = %.3g Pa: peak tau %.6g Pa (c + sigma tan = %.6g), lowest tau while "
-                "softening %.6g Pa (sigma tan = %.6g), first break at %.4g s with tau %.6g Pa, largest D_c %.3g\n",
-                sigma, peak, c + sigma * mu, low_softening, sigma * mu, t_first_break, tau_at_break, crush);
+    std::printf(
+        "composite law under sigma = %.3g Pa: peak tau %.6g Pa (c + sigma tan = %.6g), lowest tau while "
+        "softening %.6g Pa (sigma tan = %.6g), first break at %.4g s with tau %.6g Pa, largest D_c %.3g\n",
+        sigma, peak, c + sigma * mu, low_softening, sigma * mu, t_first_break, tau_at_break, crush);
     // Peak on the Mohr-Coulomb line of the intact joint (1 %, the reaction's dynamics).
     CHECK(peak / (c + sigma * mu) == Approx(1.0).epsilon(0.01));
     // While the cohesion softens the joint keeps the friction (2 % for the wobble) and does reach it: the last of the
@@ -89,7 +92,8 @@ TEST_CASE("engine composite law: case errors name the key for a partial cap and 
           "[unit]") {
     const auto dir = testing::tmp_dir("fracture_composite_errors");
     testing::write_text(dir / "mode2_shear.geo", testing::read_text(cases_dir() / "mode2_shear.geo"));
-    const std::string path = testing::write_text(dir / "case.toml", testing::read_text(cases_dir() / "mode2_shear.toml"));
+    const std::string path =
+        testing::write_text(dir / "case.toml", testing::read_text(cases_dir() / "mode2_shear.toml"));
     auto message = [&](const std::vector<std::string>& overrides) {
         try {
             fdem::load_case(path, overrides);
