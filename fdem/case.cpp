@@ -547,6 +547,28 @@ void read_joint(Reader& r, JointSpec& j, bool allow_stiffness) {
     // Compressive cap f_c (fracture/law.hpp): optional; without it the compression is an unbounded penalty.
     j.compressive_strength = r.number("compressive_strength", false, "a compressive strength f_c > 0 in Pa", positive)
                                  .value_or(std::nan(""));
+    // law = "composite" (fracture/composite_law.hpp, [PDEM] §2): bilinear tension / shear / compression, friction
+    // kept, the cap sigma^2 + C_s tau^2 = f_m^2 of [LR97] (compressive_strength = f_m, compressive_energy = G_c,
+    // cap_shear_factor = C_s: all three or none). The cap keys below belong to it alone.
+    j.composite = r.string("law", false, "the joint law", {"K25", "composite"}).value_or("K25") == "composite";
+    j.compressive_energy =
+        r.number("compressive_energy", false, "a compressive fracture energy G_c > 0 in J/m^2", positive)
+            .value_or(std::nan(""));
+    j.cap_shear_factor = r.number("cap_shear_factor", false, "a cap shear factor C_s > 0 (dimensionless)", positive)
+                             .value_or(std::nan(""));
+    if (!j.composite && (!std::isnan(j.compressive_energy) || !std::isnan(j.cap_shear_factor))) {
+        const char* key = !std::isnan(j.compressive_energy) ? "compressive_energy" : "cap_shear_factor";
+        r.number(key, false, std::string(key) + " only with law = \"composite\"", [](double) { return false; });
+    }
+    if (j.composite) {
+        if (j.keep_friction)
+            r.number("shear_softening", false, "no shear_softening with law = \"composite\" (it keeps the friction)");
+        const int cap_keys = !std::isnan(j.compressive_strength) + !std::isnan(j.compressive_energy) +
+                             !std::isnan(j.cap_shear_factor);
+        if (cap_keys != 0 && cap_keys != 3)
+            r.number("law", false, "law = \"composite\" with all three cap keys (compressive_strength, compressive_energy, "
+                                   "cap_shear_factor) or none");  // a string: reported with this expectation
+    }
     if (allow_stiffness) {
         j.normal_stiffness = r.number("normal_stiffness", false, "a normal stiffness k_n > 0 in Pa/m", positive).value_or(std::nan(""));
         j.shear_stiffness = r.number("shear_stiffness", false, "a shear stiffness k_s > 0 in Pa/m", positive).value_or(std::nan(""));

@@ -36,6 +36,9 @@ struct JointSpec {
     double shear_stiffness = std::nan("");        // k_s, Pa/m
     bool keep_friction = false;                   // shear_softening = "cohesion": friction kept while c softens
     double compressive_strength = std::nan("");   // Pa, compressive cap f_c (optional; NaN = none)
+    bool composite = false;                       // law = "composite" (fracture/composite_law.hpp)
+    double compressive_energy = std::nan("");     // J/m^2, G_c of the composite law's cap (NaN = none)
+    double cap_shear_factor = std::nan("");       // -, C_s of the composite law's cap (NaN = none)
     int line = 0;
 };
 

@@ -41,6 +41,9 @@ fracture::CohesiveProps to_props(const JointSpec& j, double E) {
     p.k_s = j.shear_stiffness;
     p.keep_friction = j.keep_friction;
     p.compressive_strength = j.compressive_strength;
+    p.composite = j.composite;  // law = "composite"
+    p.compressive_energy = j.compressive_energy;
+    p.cap_shear_factor = j.cap_shear_factor;
     return p;
 }
 

@@ -146,6 +146,14 @@ CohesiveSystem::CohesiveSystem(std::vector<CohesiveElement> elems, std::vector<C
     law_[e] = make_law(props_[elems_[e].props], length_[e]);
     has_cap_ = has_cap_ || law_[e].compressive_strength > 0.0;
   }
+  // law = "composite": its constants and histories beside the [K25] ones.
+  composite_index_.assign(ne, -1);
+  for (int e = 0; e < ne; ++e)
+    if (props_[elems_[e].props].composite) {
+      composite_index_[e] = int(composite_law_.size());
+      composite_law_.push_back(make_composite_law(props_[elems_[e].props], length_[e]));
+    }
+  composite_history_.assign(3 * composite_law_.size(), CompositeHistory{});
   history_.resize(3 * std::size_t(ne));
   for (int e = 0; e < ne; ++e)
     for (int i = 0; i < 3; ++i) history_[3 * e + i] = initial_history(law_[e]);
@@ -236,6 +244,7 @@ void CohesiveSystem::add_forces(const double* x, double* f) {
     const double dy[3] = {d0y, 0.5 * (d0y + d1y), d1y};
 
     const JointLaw& L = law_[e];
+    const int ci = composite_index_[e];  // law = "composite" when >= 0
     const double area = length_[e] * thickness_;
     double Tx[3], Ty[3];
     double energy = 0.0, dissipated = 0.0, friction = 0.0, DI = 0.0, DII = 0.0;
@@ -243,7 +252,9 @@ void CohesiveSystem::add_forces(const double* x, double* f) {
     for (int i = 0; i < 3; ++i) {
       const double o = dx[i] * nx + dy[i] * ny;
       const double s = dx[i] * tx + dy[i] * ty;
-      const PointResponse r = evaluate_point(L, o, s, history_[3 * e + i]);
+      const PointResponse r =
+          ci < 0 ? evaluate_point(L, o, s, history_[3 * e + i])
+                 : evaluate_composite(composite_law_[ci], o, s, composite_history_[3 * std::size_t(ci) + i]);
       history_[3 * e + i] = r.history;
       const double w = kSimpson[i] * area;
       Tx[i] = w * (r.sigma * nx + r.tau * tx);
@@ -370,6 +381,13 @@ double CohesiveSystem::damage(int e) const {
 double CohesiveSystem::crushing(int e) const {
   const PointHistory* h = &history_[3 * std::size_t(e)];
   return -(kSimpson[0] * h[0].closure + kSimpson[1] * h[1].closure + kSimpson[2] * h[2].closure);
+}
+
+double CohesiveSystem::crush_damage(int e) const {
+  const int ci = composite_index_[e];
+  if (ci < 0) return 0.0;
+  const CompositeHistory* h = &composite_history_[3 * std::size_t(ci)];
+  return std::max(h[0].crush, std::max(h[1].crush, h[2].crush));
 }
 
 JointState CohesiveSystem::state(int e) const {

@@ -18,6 +18,7 @@
 #include <iosfwd>
 #include <vector>
 
+#include "fracture/composite_law.hpp"
 #include "fracture/law.hpp"
 #include "fracture/properties.hpp"
 
@@ -117,6 +118,10 @@ class CohesiveSystem {
   // without a cap), and whether any class has a cap.
   double crushing(int e) const;
   bool has_cap() const { return has_cap_; }
+  // law = "composite": compressive damage D_c of element e, max over its points (0 for other laws), and whether any
+  // class uses the composite law.
+  double crush_damage(int e) const;
+  bool has_composite() const { return !composite_law_.empty(); }
   void damage_per_element(double* out) const;
   void state_per_element(std::uint8_t* out) const;
   const BreakCounts& counts() const { return counts_; }
@@ -149,6 +154,11 @@ class CohesiveSystem {
   std::size_t stale_slots_ = 0;  // slots of elements broken since the last build_gather()
   void build_gather();
   BreakCounts counts_;
+  // law = "composite" (composite_law.hpp): composite_index_[e] >= 0 indexes composite_law_ and the 3 points
+  // composite_history_[3 ci + i] of a composite element; -1 for the [K25] law (law_, history_ alone).
+  std::vector<int> composite_index_;
+  std::vector<CompositeLaw> composite_law_;
+  std::vector<CompositeHistory> composite_history_;
 };
 
 // cracks.csv: one row per broken element.

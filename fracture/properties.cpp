@@ -47,6 +47,7 @@ void stiffnesses(const CohesiveProps& p, double h, double& K_n, double& K_s) {
 }  // namespace
 
 std::vector<std::string> check(const CohesiveProps& p, double h_max, double sigma_c) {
+  if (p.composite) return check_composite(p, h_max);  // law = "composite": its own checks (composite_law.cpp)
   std::vector<std::string> out;
   need_positive(out, "tensile strength f_t", "Pa", p.tensile_strength);
   need_positive(out, "cohesion c", "Pa", p.cohesion);
@@ -114,6 +115,12 @@ double auto_penalty(const CohesiveProps& p, double h_max) {
 JointLaw make_law(const CohesiveProps& p, double h) {
   double K_n = 0.0, K_s = 0.0;
   stiffnesses(p, h, K_n, K_s);
+  if (p.composite) {  // law = "composite": the stiffnesses only (composite_law.hpp holds the law)
+    JointLaw L{};
+    L.normal_stiffness = K_n;
+    L.shear_stiffness = K_s;
+    return L;
+  }
   JointLaw L = make_joint_law(K_n, K_s, p.tensile_strength, p.G_I, p.cohesion,
                               std::tan(p.friction_deg * kPi / 180.0), p.G_II);
   L.keep_friction = p.keep_friction;

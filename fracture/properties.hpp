@@ -29,6 +29,10 @@ struct CohesiveProps {
   double k_s = unset;                    // shear stiffness of a zero-thickness interface, Pa/m (> 0)
   bool keep_friction = false;            // only the cohesion softens, friction is kept (law.hpp; [LR97])
   double compressive_strength = unset;   // f_c, Pa (> 0): compressive cap (law.hpp); unset = no cap
+  // law = "composite" (fracture/composite_law.hpp; [PDEM] §2): compressive_strength is then the cap's f_m.
+  bool composite = false;                // the composite law instead of the [K25] law
+  double compressive_energy = unset;     // G_c, J/m^2 (> 0): compressive fracture energy of the cap (composite only)
+  double cap_shear_factor = unset;       // C_s, - (> 0): cap sigma^2 + C_s tau^2 = f_m^2 (composite only)
 };
 
 // Problems with one class, one line each (empty when fine), for the engine to report against the case file.
@@ -45,7 +49,14 @@ std::vector<std::string> check(const CohesiveProps& props, double h_max, double 
 inline constexpr double kAutoPenaltyMargin = 1.5;
 double auto_penalty(const CohesiveProps& props, double h_max);
 
-// The law constants of an element of length h (m) of this class (props must pass check()).
+// The law constants of an element of length h (m) of this class (props must pass check()). For a composite class
+// only the stiffnesses are set (stable_dt reads them); the law itself is make_composite_law below.
 JointLaw make_law(const CohesiveProps& props, double h);
+
+// law = "composite" (fracture/composite_law.hpp, implemented in composite_law.cpp): the problems of a composite class
+// (check() forwards to it) and the constants of one of its elements of length h (m).
+struct CompositeLaw;
+std::vector<std::string> check_composite(const CohesiveProps& props, double h_max);
+CompositeLaw make_composite_law(const CohesiveProps& props, double h);
 
 }  // namespace fdem::fracture

@@ -53,16 +53,24 @@ CYCLIC_HEADER = f"""# Cyclic protocol: two cycles at each amplitude, 0 -> +a -> 
 CYCLIC_AMPLITUDES = [0.0005, 0.001, 0.0015, 0.002, 0.003]  # m, two cycles each (the peak is at about 1 mm)
 
 
-def mortar_joint(regions, comment, ft, gii):
+G_C = 5000.0       # J/m^2, compressive fracture energy of the mortar joints' cap (Pulatsu et al. DEM, Table 1)
+C_S = 9.0          # -, shear factor of the cap sigma^2 + C_s tau^2 = f_m^2 (the same table; Lourenco & Rots 1997)
+
+
+def mortar_joint(regions, comment, ft, gii, fm):
     """One bonded [[interfaces]] block with the unit-mortar properties (the same for all three mortar joints)."""
     return f"""[[interfaces]]           # {comment}
 regions = {regions}
 kind = "bonded"
+law = "composite"        # the joint law of the DEM reproduction (fracture/composite_law.hpp, see the header)
 tensile_strength = {ft:g}    # Pa
-cohesion = {1.4 * ft:g}          # Pa
-friction = 35.0          # deg
+cohesion = {1.4 * ft:g}          # Pa, c_0 = 1.4 f_t (c_res = 0)
+friction = 35.0          # deg, theta_0 = theta_res
 GI = 12.0                # J/m^2
 GII = {gii:g}                # J/m^2
+compressive_strength = {fm:g}  # Pa, f_m of the cap
+compressive_energy = {G_C:g}   # J/m^2, G_c
+cap_shear_factor = {C_S:g}       # C_s
 normal_stiffness = 8.2e10  # Pa/m
 shear_stiffness = 3.6e10   # Pa/m
 """
@@ -74,8 +82,9 @@ def case(r, cyclic=False, top="held"):
     exp = float(r["experiment_kN"]) * 1e3
     ft = float(r["f_t_interface_MPa"]) * 1e6
     gii = float(r["GII_interface_N_per_m"])
+    fm = float(r["compressive_strength_MPa"]) * 1e6
     beam_w = 9.81 * 7850.0 * 0.99 * 0.1 * 0.1
-    mortar_joints = "\n".join(mortar_joint(reg, c, ft, gii) for reg, c in (
+    mortar_joints = "\n".join(mortar_joint(reg, c, ft, gii, fm) for reg, c in (
         ('["units", "units"]', "unit-mortar joints"),
         ('["units", "base"]', "bottom bed joint (mortar onto the clamped course)"),
         ('["units", "beam"]', "top bed joint (mortar onto the clamped course)")))
@@ -115,10 +124,13 @@ local_damping_filter = {DAMPING_FILTER}  # s: damping signed by v minus its movi
 #   the DEM reproductions; the rest of the brick is elastic): f_t 2.0 MPa, c = 1.4 f_t,
 #   friction 45 deg, G_I 80 N/m, G_II 500 N/m; unit-mortar interfaces (simplified micro-model: bricks expanded by half
 #   a joint, zero-thickness bonded interfaces): k_n 82 GPa/m, k_s 36 GPa/m, f_t {r['f_t_interface_MPa']} MPa, c = 1.4 f_t,
-#   friction 35 deg, G_I 12 N/m, G_II {r['GII_interface_N_per_m']} N/m.
-# Not applied: the interface compressive cap ({r['compressive_strength_MPa']} MPa; engine option compressive_strength on the three
-#   interfaces), left off with the choice of joint law it belongs to (open, cases/vermeltfoort/RESULTS.md); with the
-#   committed law it changes only the 2.12 MPa wall, by -2 %.
+#   friction 35 deg, G_I 12 N/m, G_II {r['GII_interface_N_per_m']} N/m, compressive cap f_m {r['compressive_strength_MPa']} MPa with G_c {G_C:g} N/m and
+#   C_s {C_S:g}.
+# Joint law (issue 27): law = "composite" on the mortar joints and the bricks' mid-lines, the contact law of that DEM
+#   reproduction (fracture/composite_law.hpp): bilinear softening in tension, shear and compression (G_I, G_II, G_c),
+#   one damage for tension and shear, c_res = 0 with the friction angle kept, no shear stiffness degradation, secant
+#   unloading, and on the mortar joints the cap sigma^2 + C_s tau^2 = f_m^2 (Lourenco & Rots 1997). The bricks'
+#   mid-lines have no cap (the source gives the units none). No value calibrated.
 # Boundary conditions: N is a force on beam_top (minus the steel beam's weight; the wall's own weight, {W_FACTOR / 1e3:.2f} kN,
 #   is left on top of N). {TOP_HEADER[top]}
 # Assumed values: brick density 1800 kg/m^3, beam and base E {BEAM_E:g} Pa (steel modelled softer, see make_cases.py),
@@ -158,9 +170,10 @@ nu = 0.15
 density = 1800.0         # kg/m^3 (assumed)
 viscous_damping = {BRICK_VISCOUS}    # fraction of critical element damping (see the header)
   [materials.brick.fracture]
+  law = "composite"          # (see the header; no cap)
   tensile_strength = 2.0e6   # Pa
-  cohesion = 2.8e6           # Pa, 1.4 f_t
-  friction = 45.0            # deg
+  cohesion = 2.8e6           # Pa, 1.4 f_t (c_res = 0)
+  friction = 45.0            # deg, theta_0 = theta_res
   GI = 80.0                  # J/m^2
   GII = 500.0                # J/m^2
   penalty = {PENALTY:g}          # Pa (assumed)

@@ -95,26 +95,40 @@ TEST_CASE("dry-stone wall, N = 100 kN, [K25] style: peak within 25 % of the expe
     check_peak_against_test("lourenco2005/k25_N100.toml", "k25_N100", 0.25);
 }
 
-// Issue 5 acceptance for the mortared walls: each peak within +-15 % of cases/README.md §B's measured value. The 0.30 MPa
-// wall (J4D/J5D, 50 kN) is the one in its band (48.26 kN, -3.5 %, vermeltfoort/RESULTS.md; about 45 s on 1
-// thread); it runs bonded mortar joints, the bricks' mid-line cracks and the held beam end to end. The 1.21 and 2.12
-// MPa walls are 38-40 % low and stay out of this label until they are in their bands (RESULTS.md says why).
-TEST_CASE("mortared wall, 0.30 MPa (Vermeltfoort J4D/J5D): peak within 15 % of the experiment", "[regression]") {
+// Issue 27 acceptance for the mortared walls (cases/README.md §B): the three held walls (top beam neither rotating nor moving
+// vertically after the precompression) with the published values and the composite joint law (law = "composite",
+// fracture/composite_law.hpp), no calibration, each peak within +-15 % of 50 / 120 / 175 kN. Measured on 25 Nov
+// (vermeltfoort/RESULTS.md, "Composite law"): 0.30 MPa in its band; the 1.21 and 2.12 MPa walls about 38 % and 36 %
+// low, so THE LAST TWO TESTS FAIL until the model ingredient RESULTS.md names is resolved (kept failing on purpose:
+// they state the acceptance, they are not loosened). About 1 minute of CPU each on 1 thread.
+TEST_CASE("mortared wall, 0.30 MPa (Vermeltfoort J4D/J5D), composite law: peak within 15 % of the experiment",
+          "[regression]") {
     check_peak_against_test("vermeltfoort/vermeltfoort_030.toml", "vermeltfoort_030", 0.15);
 }
 
+TEST_CASE("mortared wall, 1.21 MPa (Vermeltfoort J6D), composite law: peak within 15 % of the experiment",
+          "[regression]") {
+    check_peak_against_test("vermeltfoort/vermeltfoort_121.toml", "vermeltfoort_121_peak", 0.15);
+}
+
+TEST_CASE("mortared wall, 2.12 MPa (Vermeltfoort J7D), composite law: peak within 15 % of the experiment",
+          "[regression]") {
+    check_peak_against_test("vermeltfoort/vermeltfoort_212.toml", "vermeltfoort_212", 0.15);
+}
+
 // The engine's energy balance W_ext = K + E_el + E_joint + E_contact + D_damp + D_visc + D_frac + D_fric, read from the
-// "energy" object of summary.json. Damaged mortar joints that vibrate pump energy (the [K25] law's Mohr-Coulomb
-// coupling has no potential, fracture/README.md): the 1.21 MPa wall with only local damping 0.05 against the moving
-// mean closes its books to 16 %; with the committed element viscous damping of the bricks to 2.3 % (2.26 % measured,
-// vermeltfoort/RESULTS.md). The engine warns above 5 %, the limit checked here. About 50 s on 1 thread.
+// "energy" object of summary.json. Damaged mortar joints that vibrate pumped energy with the [K25] law (its
+// Mohr-Coulomb coupling has no potential, fracture/README.md): the 1.21 MPa wall closed its books to 2.3 % only with
+// the bricks' element viscous damping. With the composite law (since 25 Nov; dissipative plastic slip) it closes them
+// to 0.20 % with 158.7 J of fracture dissipation (vermeltfoort/RESULTS.md). The engine warns above 5 %, the limit
+// checked here. About 50 s on 1 thread.
 TEST_CASE("mortared wall, 1.21 MPa (Vermeltfoort J6D): the energy balance closes within 5 % through the cracking",
           "[regression]") {
     const std::string s = run_case("vermeltfoort/vermeltfoort_121.toml", "vermeltfoort_121");
     const double balance = summary_number(s, "energy", "balance_error");
     const double fracture = summary_number(s, "energy", "fracture");
     INFO("balance error " << 100 * balance << " %, fracture dissipation " << fracture << " J");
-    CHECK(fracture > 10.0);  // the joints did crack (78.6 J), so the check covers the damaged joints
+    CHECK(fracture > 10.0);  // the joints did crack (158.7 J), so the check covers the damaged joints
     CHECK(balance < 0.05);
 }
 
