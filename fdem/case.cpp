@@ -668,6 +668,16 @@ CaseSpec load_case(const std::string& path, const std::vector<std::string>& over
                                                                   "serves as the contact penalty of the crack faces)");
                 fr.finish();
             }
+            // Compression softening of the triangles (fdem/plasticity.hpp).
+            if (const toml::table* ct = r.table("crushing", false, "a [materials.NAME.crushing] table")) {
+                Reader cr(ctx, *ct, p + ".crushing");
+                m.crushing.present = true;
+                m.crushing.line = cr.line();
+                m.crushing.compressive_strength =
+                    cr.number("compressive_strength", true, "a compressive strength f_c > 0 in Pa", positive).value_or(std::nan(""));
+                m.crushing.Gc = cr.number("Gc", true, "a compressive fracture energy G_c > 0 in J/m^2", positive).value_or(std::nan(""));
+                cr.finish();
+            }
             r.finish();
             spec.materials.push_back(m);
         }

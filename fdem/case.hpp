@@ -53,6 +53,15 @@ struct InterfaceSpec {
     int line = 0;
 };
 
+// Compression softening of a material's triangles ([materials.NAME.crushing], fdem/plasticity.hpp): the M-DEM
+// macro-blocks' crushing. NaN = not given.
+struct CrushingSpec {
+    bool present = false;
+    double compressive_strength = std::nan("");  // f_c, Pa (> 0)
+    double Gc = std::nan("");                    // compressive fracture energy G_c, J/m^2 (> 0)
+    int line = 0;
+};
+
 struct Material {
     std::string name;
     double E = 0;                // Young's modulus, Pa
@@ -61,6 +70,7 @@ struct Material {
     double viscous_damping = 0;  // fraction of the element's critical viscous damping xi, - (FORMULATION §2)
     JointSpec fracture;          // [materials.NAME.fracture]: present = the material may crack inside
     int line = 0;
+    CrushingSpec crushing;       // [materials.NAME.crushing]: present = its triangles soften in compression
 };
 
 struct GeometrySpec {

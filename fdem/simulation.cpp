@@ -157,6 +157,7 @@ Simulation::Simulation(CaseSpec spec, Model model, RunOptions options)
     block_bad_.assign(nb, -1);
     mon_ext_.assign(spec_.monitors.size(), {0, 0, 0});
     mon_first_peak_.assign(spec_.monitors.size(), 0.0);
+    crush_.setup(spec_, model_);
     compute_dt();
     // Derived quantities must be finite (issue 26: a huge mass_scale gave dt = 1e148 s, NaN energies and "completed").
     for (int k = 0; k < nn; ++k)
@@ -551,7 +552,9 @@ void Simulation::step() {
         const int e1 = std::min(nt, (b + 1) * kBlock);
         for (int e = b * kBlock; e < e1; ++e) {
             double p;
-            const double J = triangle_forces(tris[e], mats[tris[e].mat], x, v, tf + 6 * static_cast<std::size_t>(e), p);
+            const int cs = crush_.slot(e);  // crushing triangles: fdem/plasticity.hpp (state updated per triangle)
+            const double J = cs < 0 ? triangle_forces(tris[e], mats[tris[e].mat], x, v, tf + 6 * static_cast<std::size_t>(e), p)
+                                    : crush_.forces(cs, tris[e], x, v, tf + 6 * static_cast<std::size_t>(e), p);
             if (!(J > 0) && bad < 0) bad = e;
             pv += p;
         }
@@ -865,7 +868,8 @@ Energies Simulation::energies() const {
     for (int b = 0; b < ntb; ++b) {
         double s = 0;
         for (int t = b * kBlock; t < std::min(nt, (b + 1) * kBlock); ++t)
-            s += triangle_energy(model_.tris[t], model_.mat[model_.tris[t].mat], xe);
+            s += crush_.slot(t) < 0 ? triangle_energy(model_.tris[t], model_.mat[model_.tris[t].mat], xe)
+                                    : crush_.energy(crush_.slot(t), model_.tris[t], xe);
         pe[b] = s;
     }
     for (double s : pk) e.kinetic += s;
@@ -876,7 +880,7 @@ Energies Simulation::energies() const {
     e.viscous = D_visc_ + D_mass_ - (stepped ? mass_half_ : 0.0) + inter_.contact_damping_dissipation();
     e.joint = inter_.joint_energy();
     e.contact = inter_.contact_energy(xe);
-    e.fracture = inter_.fracture_dissipation();
+    e.fracture = inter_.fracture_dissipation() + crush_.dissipated();  // crushing work booked with fracture
     e.friction = inter_.friction_dissipation();
     return e;
 }
@@ -945,7 +949,8 @@ void Simulation::write_snapshot() {
     stress.f64.resize(3 * nt), mat.i32.resize(nt), region.i32.resize(nt), body.i32.resize(nt);
     std::vector<int> tri(3 * nt);
     for (int e = 0; e < nt; ++e) {
-        triangle_stress(model_.tris[e], model_.mat[model_.tris[e].mat], model_.x.data(), &stress.f64[3 * e]);
+        if (crush_.slot(e) < 0) triangle_stress(model_.tris[e], model_.mat[model_.tris[e].mat], model_.x.data(), &stress.f64[3 * e]);
+        else crush_.stress(crush_.slot(e), model_.tris[e], model_.x.data(), &stress.f64[3 * e]);
         mat.i32[e] = model_.tri_material[e];
         region.i32[e] = model_.mesh.tri_region[e];
         body.i32[e] = model_.mesh.tri_body.empty() ? 0 : model_.mesh.tri_body[e];
@@ -985,6 +990,15 @@ void Simulation::write_snapshot() {
     if (!lines.empty())
         for (const auto* a : {&kind, &damage, &state, &opening, &slip}) cells.push_back(*a);
     if (inter_.joints() && inter_.joints()->has_cap()) cells.push_back(crushing);
+    if (crush_.active()) {
+        // block_crushing: kappa / kappa_u of each crushing triangle (0 intact, 1 no strength left; fdem/plasticity.hpp),
+        // NaN on elastic triangles and line cells.
+        VtuArray bc{"block_crushing", 1, {}, {}, false};
+        bc.f64.assign(nt + lines.size() / 2, std::nan(""));
+        for (int e = 0; e < nt; ++e)
+            if (crush_.slot(e) >= 0) bc.f64[e] = crush_.softening(crush_.slot(e));
+        cells.push_back(bc);
+    }
     write_file_atomic((std::filesystem::path(opt_.out_dir) / name).string(), vtu_document(model_.X, tri, lines, {disp, vel}, cells));
     snapshots_.emplace_back(time_, name);
     write_file_atomic((std::filesystem::path(opt_.out_dir) / "run.pvd").string(), pvd_document(snapshots_));
