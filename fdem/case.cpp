@@ -507,8 +507,10 @@ void read_joint(Reader& r, JointSpec& j, bool allow_stiffness) {
     j.cohesion = r.number("cohesion", true, "a cohesion c >= 0 in Pa", [](double v) { return v >= 0; }).value_or(std::nan(""));
     j.friction = r.number("friction", true, "a friction angle in [0, 90) deg", angle).value_or(std::nan(""));
     j.residual_friction = r.number("residual_friction", false, "a residual friction angle in [0, 90) deg (default: friction)", angle).value_or(j.friction);
-    j.GI = r.number("GI", true, "a mode I fracture energy > 0 in J/m^2", positive).value_or(std::nan(""));
-    j.GII = r.number("GII", true, "a mode II fracture energy > 0 in J/m^2", positive).value_or(std::nan(""));
+    // law = "mohr_coulomb" (fracture/mc_law.hpp, the M-DEM spring layers): no softening, so no G_I, G_II.
+    j.mohr_coulomb = r.string("law", false, "the joint law", {"k25", "mohr_coulomb"}).value_or("k25") == "mohr_coulomb";
+    j.GI = r.number("GI", !j.mohr_coulomb, "a mode I fracture energy > 0 in J/m^2", positive).value_or(std::nan(""));
+    j.GII = r.number("GII", !j.mohr_coulomb, "a mode II fracture energy > 0 in J/m^2", positive).value_or(std::nan(""));
     // penalty: a number (p_j, Pa) or "auto": p_j from the element size, fracture/README.md "Mesh-aware penalty".
     const char* kPenalty = "a joint penalty p_j > 0 in Pa or \"auto\"";
     if (const toml::node* pn = r.node("penalty", false, kPenalty); pn && pn->is_string()) {
@@ -519,6 +521,9 @@ void read_joint(Reader& r, JointSpec& j, bool allow_stiffness) {
     }
     j.penalty_ref = r.number("penalty_ref", false, "a reference joint penalty > 0 in Pa (with penalty = \"auto\")", positive)
                         .value_or(std::nan(""));
+    if (j.mohr_coulomb && j.penalty_auto)
+        r.number("penalty", false, "a joint penalty p_j > 0 in Pa (\"auto\" needs G_I, G_II: not with law = \"mohr_coulomb\")",
+                 [](double) { return false; });
     if (!std::isnan(j.penalty_ref) && !j.penalty_auto)
         r.number("penalty_ref", false, "penalty_ref only with penalty = \"auto\"", [](double) { return false; });
     // "strength" ([K25]): the whole shear strength c + |sigma| tan(phi) softens; "cohesion" ([LR97]): only c does,

@@ -35,6 +35,7 @@ struct JointSpec {
     double normal_stiffness = std::nan("");       // k_n, Pa/m
     double shear_stiffness = std::nan("");        // k_s, Pa/m
     bool keep_friction = false;                   // shear_softening = "cohesion": friction kept while c softens
+    bool mohr_coulomb = false;                    // law = "mohr_coulomb": fracture/mc_law.hpp (no G_I, G_II)
     double compressive_strength = std::nan("");   // Pa, compressive cap f_c (optional; NaN = none)
     int line = 0;
 };

@@ -39,3 +39,37 @@ McResponse evaluate_mc(const McLaw& L, double o, double s, const McHistory& old)
 }
 
 }  // namespace fdem::fracture
+
+namespace fdem::fracture {
+
+JointLaw make_mc_joint_law(double K_n, double K_s, double f_t, double cohesion, double tan_friction) {
+  JointLaw L{};
+  L.normal_stiffness = K_n;
+  L.shear_stiffness = K_s;
+  L.tensile_strength = f_t;
+  L.cohesion = cohesion;
+  L.tan_friction = tan_friction;
+  L.inv_shear_stiffness = 1.0 / K_s;
+  L.mohr_coulomb = true;
+  return L;
+}
+
+PointResponse evaluate_mc_point(const JointLaw& L, double o, double s, const PointHistory& old) {
+  const McLaw m{L.normal_stiffness, L.shear_stiffness, L.tensile_strength, L.cohesion, L.tan_friction};
+  McHistory h;
+  h.slip_plastic = old.slip_friction;
+  h.cracked = old.trial > 0.5;
+  const McResponse q = evaluate_mc(m, o, s, h);
+  PointResponse r{};
+  r.sigma = q.sigma;
+  r.tau = q.tau;
+  r.damage_I = 0.0;
+  r.damage_II = 0.0;
+  r.energy = q.energy;
+  r.dissipated = q.dissipated;
+  r.friction_dissipated = q.friction_dissipated;
+  r.history = PointHistory{0.0, q.history.cracked ? 1.0 : 0.0, 0.0, q.history.slip_plastic, 0.0};
+  return r;
+}
+
+}  // namespace fdem::fracture

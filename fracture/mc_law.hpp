@@ -43,3 +43,13 @@ struct McResponse {
 McResponse evaluate_mc(const McLaw& L, double o, double s, const McHistory& old);
 
 }  // namespace fdem::fracture
+
+#include "fracture/law.hpp"
+
+namespace fdem::fracture {
+
+// law = "mohr_coulomb" in the cohesive system: a JointLaw whose evaluate_point defers to evaluate_mc. The element's
+// PointHistory carries the state: slip_friction = s_p, trial = 1 once cracked (0 before); damage stays 0.
+JointLaw make_mc_joint_law(double K_n, double K_s, double f_t, double cohesion, double tan_friction);
+
+}  // namespace fdem::fracture
