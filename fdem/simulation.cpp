@@ -1170,6 +1170,8 @@ void Simulation::run() {
         log("no interface or fracture rules: the " + std::to_string(model_.mesh.n_bodies()) + " bodies of the mesh are tied into one continuum");
     if (inter_.has_joints())
         log("cohesive elements: " + std::to_string(inter_.joints()->size()));
+    if (crush_.active())
+        log("crushing (compression softening, fdem/plasticity.hpp): " + std::to_string(crush_.kappa.size()) + " triangles; work booked under D_frac");
     for (const std::string& note : inter_.penalty_notes()) log(note);
     if (inter_.has_dry_joints())
         log("dry joint record: " + std::to_string(inter_.dry_joint_count()) + " segments, recorded in cracks.csv when an end opens by more than " +
