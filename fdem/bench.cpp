@@ -75,7 +75,9 @@ int main(int argc, char** argv) {
             spec.name = "plate";
             spec.thickness = 0.1;
             spec.geometry.type = "rectangle";
-            spec.materials.push_back({"m", 1e9, 0.25, 1000, 0, 0});
+            fdem::Material mat;
+            mat.name = "m", mat.E = 1e9, mat.nu = 0.25, mat.density = 1000;
+            spec.materials.push_back(mat);
             spec.region_material["body"] = "m";
             fdem::StageSpec st;
             st.name = "shake";

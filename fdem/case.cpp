@@ -526,8 +526,15 @@ void read_joint(Reader& r, JointSpec& j, bool allow_stiffness) {
     j.cohesion = r.number("cohesion", true, "a cohesion c >= 0 in Pa", [](double v) { return v >= 0; }).value_or(std::nan(""));
     j.friction = r.number("friction", true, "a friction angle in [0, 90) deg", angle).value_or(std::nan(""));
     j.residual_friction = r.number("residual_friction", false, "a residual friction angle in [0, 90) deg (default: friction)", angle).value_or(j.friction);
-    j.GI = r.number("GI", true, "a mode I fracture energy > 0 in J/m^2", positive).value_or(std::nan(""));
-    j.GII = r.number("GII", true, "a mode II fracture energy > 0 in J/m^2", positive).value_or(std::nan(""));
+    // law: "k25" (default, also "K25": the [K25] softening law, fracture/law.hpp), "composite" (below) or
+    // "mohr_coulomb" (fracture/mc_law.hpp, the M-DEM spring layers: no softening, so no G_I, G_II).
+    const std::string law = r.string("law", false, "the joint law: \"k25\" (default), \"composite\" or \"mohr_coulomb\"",
+                                     {"k25", "K25", "composite", "mohr_coulomb"})
+                                .value_or("k25");
+    j.mohr_coulomb = law == "mohr_coulomb";
+    j.composite = law == "composite";
+    j.GI = r.number("GI", !j.mohr_coulomb, "a mode I fracture energy > 0 in J/m^2", positive).value_or(std::nan(""));
+    j.GII = r.number("GII", !j.mohr_coulomb, "a mode II fracture energy > 0 in J/m^2", positive).value_or(std::nan(""));
     // penalty: a number (p_j, Pa) or "auto": p_j from the element size, fracture/README.md "Mesh-aware penalty".
     const char* kPenalty = "a joint penalty p_j > 0 in Pa or \"auto\"";
     if (const toml::node* pn = r.node("penalty", false, kPenalty); pn && pn->is_string()) {
@@ -538,6 +545,9 @@ void read_joint(Reader& r, JointSpec& j, bool allow_stiffness) {
     }
     j.penalty_ref = r.number("penalty_ref", false, "a reference joint penalty > 0 in Pa (with penalty = \"auto\")", positive)
                         .value_or(std::nan(""));
+    if (j.mohr_coulomb && j.penalty_auto)
+        r.number("penalty", false, "a joint penalty p_j > 0 in Pa (\"auto\" needs G_I, G_II: not with law = \"mohr_coulomb\")",
+                 [](double) { return false; });
     if (!std::isnan(j.penalty_ref) && !j.penalty_auto)
         r.number("penalty_ref", false, "penalty_ref only with penalty = \"auto\"", [](double) { return false; });
     // "strength" ([K25]): the whole shear strength c + |sigma| tan(phi) softens; "cohesion" ([LR97]): only c does,
@@ -550,7 +560,6 @@ void read_joint(Reader& r, JointSpec& j, bool allow_stiffness) {
     // law = "composite" (fracture/composite_law.hpp, [PDEM] §2): bilinear tension / shear / compression, friction
     // kept, the cap sigma^2 + C_s tau^2 = f_m^2 of [LR97] (compressive_strength = f_m, compressive_energy = G_c,
     // cap_shear_factor = C_s: all three or none). The cap keys below belong to it alone.
-    j.composite = r.string("law", false, "the joint law", {"K25", "composite"}).value_or("K25") == "composite";
     j.compressive_energy =
         r.number("compressive_energy", false, "a compressive fracture energy G_c > 0 in J/m^2", positive)
             .value_or(std::nan(""));
@@ -708,6 +717,16 @@ CaseSpec load_case(const std::string& path, const std::vector<std::string>& over
                     ctx.error(p + ".fracture.penalty", fr.line(), "missing; expected a joint penalty p_j > 0 in Pa (it also "
                                                                   "serves as the contact penalty of the crack faces)");
                 fr.finish();
+            }
+            // Compression softening of the triangles (fdem/plasticity.hpp).
+            if (const toml::table* ct = r.table("crushing", false, "a [materials.NAME.crushing] table")) {
+                Reader cr(ctx, *ct, p + ".crushing");
+                m.crushing.present = true;
+                m.crushing.line = cr.line();
+                m.crushing.compressive_strength =
+                    cr.number("compressive_strength", true, "a compressive strength f_c > 0 in Pa", positive).value_or(std::nan(""));
+                m.crushing.Gc = cr.number("Gc", true, "a compressive fracture energy G_c > 0 in J/m^2", positive).value_or(std::nan(""));
+                cr.finish();
             }
             r.finish();
             spec.materials.push_back(m);

@@ -35,6 +35,7 @@ struct JointSpec {
     double normal_stiffness = std::nan("");       // k_n, Pa/m
     double shear_stiffness = std::nan("");        // k_s, Pa/m
     bool keep_friction = false;                   // shear_softening = "cohesion": friction kept while c softens
+    bool mohr_coulomb = false;                    // law = "mohr_coulomb": fracture/mc_law.hpp (no G_I, G_II)
     double compressive_strength = std::nan("");   // Pa, compressive cap f_c (optional; NaN = none)
     bool composite = false;                       // law = "composite" (fracture/composite_law.hpp)
     double compressive_energy = std::nan("");     // J/m^2, G_c of the composite law's cap (NaN = none)
@@ -56,6 +57,15 @@ struct InterfaceSpec {
     int line = 0;
 };
 
+// Compression softening of a material's triangles ([materials.NAME.crushing], fdem/plasticity.hpp): the M-DEM
+// macro-blocks' crushing. NaN = not given.
+struct CrushingSpec {
+    bool present = false;
+    double compressive_strength = std::nan("");  // f_c, Pa (> 0)
+    double Gc = std::nan("");                    // compressive fracture energy G_c, J/m^2 (> 0)
+    int line = 0;
+};
+
 struct Material {
     std::string name;
     double E = 0;                // Young's modulus, Pa
@@ -64,6 +74,7 @@ struct Material {
     double viscous_damping = 0;  // fraction of the element's critical viscous damping xi, - ([M04] ch. 4)
     JointSpec fracture;          // [materials.NAME.fracture]: present = the material may crack inside
     int line = 0;
+    CrushingSpec crushing;       // [materials.NAME.crushing]: present = its triangles soften in compression
 };
 
 struct GeometrySpec {

@@ -40,6 +40,7 @@ fracture::CohesiveProps to_props(const JointSpec& j, double E) {
     p.k_n = j.normal_stiffness;
     p.k_s = j.shear_stiffness;
     p.keep_friction = j.keep_friction;
+    p.mohr_coulomb = j.mohr_coulomb;
     p.compressive_strength = j.compressive_strength;
     p.composite = j.composite;  // law = "composite"
     p.compressive_energy = j.compressive_energy;

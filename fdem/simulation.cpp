@@ -159,6 +159,7 @@ Simulation::Simulation(CaseSpec spec, Model model, RunOptions options)
     block_bad_.assign(nb, -1);
     mon_ext_.assign(spec_.monitors.size(), {0, 0, 0});
     mon_first_peak_.assign(spec_.monitors.size(), 0.0);
+    crush_.setup(spec_, model_);
     compute_dt();
     // Derived quantities must be finite (issue 26: a huge mass_scale gave dt = 1e148 s, NaN energies and "completed").
     for (int k = 0; k < nn; ++k)
@@ -558,7 +559,9 @@ void Simulation::step() {
         const int e1 = std::min(nt, (b + 1) * kBlock);
         for (int e = b * kBlock; e < e1; ++e) {
             double p;
-            const double J = triangle_forces(tris[e], mats[tris[e].mat], x, v, tf + 6 * static_cast<std::size_t>(e), p);
+            const int cs = crush_.slot(e);  // crushing triangles: fdem/plasticity.hpp (state updated per triangle)
+            const double J = cs < 0 ? triangle_forces(tris[e], mats[tris[e].mat], x, v, tf + 6 * static_cast<std::size_t>(e), p)
+                                    : crush_.forces(cs, tris[e], x, v, tf + 6 * static_cast<std::size_t>(e), p);
             if (!(J > 0) && bad < 0) bad = e;
             pv += p;
         }
@@ -893,7 +896,8 @@ Energies Simulation::energies() const {
     for (int b = 0; b < ntb; ++b) {
         double s = 0;
         for (int t = b * kBlock; t < std::min(nt, (b + 1) * kBlock); ++t)
-            s += triangle_energy(model_.tris[t], model_.mat[model_.tris[t].mat], xe);
+            s += crush_.slot(t) < 0 ? triangle_energy(model_.tris[t], model_.mat[model_.tris[t].mat], xe)
+                                    : crush_.energy(crush_.slot(t), model_.tris[t], xe);
         pe[b] = s;
     }
     for (double s : pk) e.kinetic += s;
@@ -904,7 +908,7 @@ Energies Simulation::energies() const {
     e.viscous = D_visc_ + D_mass_ - (stepped ? mass_half_ : 0.0) + inter_.contact_damping_dissipation();
     e.joint = inter_.joint_energy();
     e.contact = inter_.contact_energy(xe);
-    e.fracture = inter_.fracture_dissipation();
+    e.fracture = inter_.fracture_dissipation() + crush_.dissipated();  // crushing work booked with fracture
     e.friction = inter_.friction_dissipation();
     return e;
 }
@@ -980,7 +984,8 @@ void Simulation::write_snapshot() {
     for (int e = 0; e < nt; ++e) {
         const MaterialConst& mc = model_.mat[model_.tris[e].mat];
         double* s3 = &stress.f64[3 * e];
-        triangle_stress(model_.tris[e], mc, model_.x.data(), s3);
+        if (crush_.slot(e) < 0) triangle_stress(model_.tris[e], mc, model_.x.data(), s3);
+        else crush_.stress(crush_.slot(e), model_.tris[e], model_.x.data(), s3);
         double F[4];
         triangle_F(model_.tris[e], model_.x.data(), F);
         const double J = F[0] * F[3] - F[1] * F[2];
@@ -1029,6 +1034,15 @@ void Simulation::write_snapshot() {
     if (!lines.empty())
         for (const auto* a : {&damage, &state, &opening, &slip}) cells.push_back(*a);
     if (inter_.joints() && inter_.joints()->has_cap()) cells.push_back(crushing);
+    if (crush_.active()) {
+        // block_crushing: kappa / kappa_u of each crushing triangle (0 intact, 1 no strength left; fdem/plasticity.hpp),
+        // NaN on elastic triangles and line cells.
+        VtuArray bc{"block_crushing", 1, {}, {}, false, {}};
+        bc.f64.assign(nt + lines.size() / 2, std::nan(""));
+        for (int e = 0; e < nt; ++e)
+            if (crush_.slot(e) >= 0) bc.f64[e] = crush_.softening(crush_.slot(e));
+        cells.push_back(bc);
+    }
     // The names behind the ids: region_names[region], material_names[material].
     VtuStrings region_names{"region_names", model_.mesh.regions}, material_names{"material_names", {}};
     for (const auto& m : spec_.materials) material_names.values.push_back(m.name);
@@ -1204,6 +1218,8 @@ void Simulation::run() {
         log("no interface or fracture rules: the " + std::to_string(model_.mesh.n_bodies()) + " bodies of the mesh are tied into one continuum");
     if (inter_.has_joints())
         log("cohesive elements: " + std::to_string(inter_.joints()->size()));
+    if (crush_.active())
+        log("crushing (compression softening, fdem/plasticity.hpp): " + std::to_string(crush_.kappa.size()) + " triangles; work booked under D_frac");
     for (const std::string& note : inter_.penalty_notes()) log(note);
     if (inter_.has_dry_joints())
         log("dry joint record: " + std::to_string(inter_.dry_joint_count()) + " segments, recorded in cracks.csv when an end opens by more than " +

@@ -12,6 +12,7 @@
 #include "fdem/interactions.hpp"
 #include "fdem/model.hpp"
 #include "fdem/output.hpp"
+#include "fdem/plasticity.hpp"
 
 namespace fdem {
 
@@ -76,6 +77,7 @@ public:
     int interrupted_signal() const { return interrupted_signal_; }  // 0, or the signal that stopped run()
     const std::vector<double>& reactions() const { return reaction_; }
     const Interactions& interactions() const { return inter_; }
+    const Crushing& crushing() const { return crush_; }  // compression softening of the triangles (plasticity.hpp)
     // Largest |value| and final value of each monitor over the history rows written.
     std::vector<std::array<double, 3>> monitor_extrema() const { return mon_ext_; }  // min, max, final
     double reference_value(int monitor) const;  // the quantity [reference] names, of monitor `monitor`
@@ -145,6 +147,7 @@ private:
     Model model_;
     RunOptions opt_;
     Interactions inter_;
+    Crushing crush_;  // per-triangle crushing state of the materials with a crushing table (empty: none)
     int control_monitor_ = -1;  // monitor giving the control displacement of the damage records
     double dt_ = 0;
     double dt_limit_ = 0;

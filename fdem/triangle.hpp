@@ -35,32 +35,18 @@ struct MaterialConst {
     double lambda;  // Lame constant of the plane model, Pa
 };
 
-// Internal (elastic + viscous) forces of one triangle into f6. Returns J; `visc_power` gets the viscous
-// dissipation rate (W). J <= 0 means the triangle is inverted (the caller reports it).
-inline double triangle_forces(const TriangleRef& t, const MaterialConst& m, const double* x, const double* v,
-                              double* f6, double& visc_power) {
+// Nodal forces of one triangle from its deformation gradient F (row-major F00 F01 F10 F11, J = det F > 0) and
+// elastic Kirchhoff stress tau (xx, yy, xy): adds the viscous stress, then f_a = -t A0 P grad0(N_a) with
+// P = tau F^-T (see the header comment). Shared by the elastic triangle and the crushing model (fdem/plasticity.hpp).
+inline void triangle_forces_from_tau(const TriangleRef& t, const double* F, double J, const double* tau, const double* v,
+                                     double* f6, double& visc_power) {
     const int i0 = t.n[0], i1 = t.n[1], i2 = t.n[2];
-    const double x0 = x[2 * i0], y0 = x[2 * i0 + 1];
-    const double d00 = x[2 * i1] - x0, d10 = x[2 * i1 + 1] - y0;  // D column 0
-    const double d01 = x[2 * i2] - x0, d11 = x[2 * i2 + 1] - y0;  // D column 1
     const double a = t.Dinv[0], b = t.Dinv[1], c = t.Dinv[2], d = t.Dinv[3];
-    // F = D D0^-1
-    const double F00 = d00 * a + d01 * c, F01 = d00 * b + d01 * d;
-    const double F10 = d10 * a + d11 * c, F11 = d10 * b + d11 * d;
-    const double J = F00 * F11 - F01 * F10;
-    if (!(J > 0)) {
-        for (int k = 0; k < 6; ++k) f6[k] = 0;
-        visc_power = 0;
-        return J;
-    }
+    const double F00 = F[0], F01 = F[1], F10 = F[2], F11 = F[3];
+    double t00 = tau[0], t11 = tau[1], t01 = tau[2];
     const double iJ = 1.0 / J;
     // F^-T = (1/J) [F11 -F10; -F01 F00]
     const double G00 = F11 * iJ, G01 = -F10 * iJ, G10 = -F01 * iJ, G11 = F00 * iJ;
-    // tau = mu (B - I) + lambda ln J I
-    const double lnJ = std::log(J);
-    double t00 = m.mu * (F00 * F00 + F01 * F01 - 1.0) + m.lambda * lnJ;
-    double t11 = m.mu * (F10 * F10 + F11 * F11 - 1.0) + m.lambda * lnJ;
-    double t01 = m.mu * (F00 * F10 + F01 * F11);
     visc_power = 0;
     if (t.eta > 0) {
         const double* vv = v;
@@ -92,6 +78,32 @@ inline double triangle_forces(const TriangleRef& t, const MaterialConst& m, cons
     f6[3] = f1y;
     f6[4] = f2x;
     f6[5] = f2y;
+}
+
+// Internal (elastic + viscous) forces of one triangle into f6. Returns J; `visc_power` gets the viscous
+// dissipation rate (W). J <= 0 means the triangle is inverted (the caller reports it).
+inline double triangle_forces(const TriangleRef& t, const MaterialConst& m, const double* x, const double* v,
+                              double* f6, double& visc_power) {
+    const int i0 = t.n[0], i1 = t.n[1], i2 = t.n[2];
+    const double x0 = x[2 * i0], y0 = x[2 * i0 + 1];
+    const double d00 = x[2 * i1] - x0, d10 = x[2 * i1 + 1] - y0;  // D column 0
+    const double d01 = x[2 * i2] - x0, d11 = x[2 * i2 + 1] - y0;  // D column 1
+    const double a = t.Dinv[0], b = t.Dinv[1], c = t.Dinv[2], d = t.Dinv[3];
+    // F = D D0^-1
+    const double F00 = d00 * a + d01 * c, F01 = d00 * b + d01 * d;
+    const double F10 = d10 * a + d11 * c, F11 = d10 * b + d11 * d;
+    const double J = F00 * F11 - F01 * F10;
+    if (!(J > 0)) {
+        for (int k = 0; k < 6; ++k) f6[k] = 0;
+        visc_power = 0;
+        return J;
+    }
+    // tau = mu (B - I) + lambda ln J I
+    const double lnJ = std::log(J);
+    const double tau[3] = {m.mu * (F00 * F00 + F01 * F01 - 1.0) + m.lambda * lnJ,
+                           m.mu * (F10 * F10 + F11 * F11 - 1.0) + m.lambda * lnJ, m.mu * (F00 * F10 + F01 * F11)};
+    const double Fm[4] = {F00, F01, F10, F11};
+    triangle_forces_from_tau(t, Fm, J, tau, v, f6, visc_power);
     return J;
 }
 

@@ -58,6 +58,7 @@ double cohesion_softening_range(const JointLaw& law, double slip_peak) {
 }
 
 PointHistory initial_history(const JointLaw& law) {
+  if (law.mohr_coulomb) return PointHistory{0.0, 0.0, 0.0, 0.0, 0.0};  // fracture/mc_law.hpp: nothing happened yet
   const double dI = -law.opening_peak * law.inv_opening_range, dII = -law.slip_peak0 * law.inv_slip_range0;
   return PointHistory{0.0, dI > dII ? dI : dII, 0.0, 0.0, 0.0};
 }

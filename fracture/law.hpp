@@ -103,6 +103,7 @@ struct JointLaw {
   double inv_slip_range0;      // 1/s_t at zero normal stress, 1/m
   bool keep_friction = false;  // only the cohesion softens (see the header); set by make_law from CohesiveProps
   double compressive_strength = 0.0;  // f_c, Pa: compressive cap (see the header); 0 = none; set by make_law
+  bool mohr_coulomb = false;  // law = "mohr_coulomb": evaluate_point defers to fracture/mc_law.hpp
 };
 
 // Law constants from stiffnesses K_n, K_s (Pa/m), strengths f_t, c (Pa), tan(phi) and fracture energies (J/m^2).
@@ -151,7 +152,11 @@ double shear_softening_range(const JointLaw& law, double shear_strength_now, dou
 //   dissipated = (z(D_old) - z(D_new)) (E_0,a + E_0,new) / 2.
 // For a monotonic mode I path the sum is (2/3) f_t o_p + kappa f_t o_t = G_I to second order in the increment
 // (tested), so the engine's energy balance closes even when a joint breaks in a few tens of steps.
+// law = "mohr_coulomb" (fracture/mc_law.hpp): the point law of the M-DEM spring layers.
+PointResponse evaluate_mc_point(const JointLaw& L, double o, double s, const PointHistory& old);
+
 inline PointResponse evaluate_point(const JointLaw& L, double o_geo, double s, const PointHistory& old) {
+  if (L.mohr_coulomb) return evaluate_mc_point(L, o_geo, s, old);
   PointResponse r;
   // Elastic normal separation: the geometric one less the cap's plastic closure (0 without a cap: o == o_geo).
   double closure = old.closure;

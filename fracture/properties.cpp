@@ -2,6 +2,8 @@
 // DATA LAYOUT: none (cold data, one CohesiveProps per class).
 #include "fracture/properties.hpp"
 
+#include "fracture/mc_law.hpp"
+
 #include <cmath>
 #include <sstream>
 
@@ -53,8 +55,10 @@ std::vector<std::string> check(const CohesiveProps& p, double h_max, double sigm
   need_positive(out, "cohesion c", "Pa", p.cohesion);
   need_angle(out, "friction angle", p.friction_deg);
   need_angle(out, "residual friction angle", p.residual_friction_deg);
-  need_positive(out, "mode I fracture energy G_I", "J/m^2", p.G_I);
-  need_positive(out, "mode II fracture energy G_II", "J/m^2", p.G_II);
+  if (!p.mohr_coulomb) {
+    need_positive(out, "mode I fracture energy G_I", "J/m^2", p.G_I);
+    need_positive(out, "mode II fracture energy G_II", "J/m^2", p.G_II);
+  }
   if (!std::isnan(p.compressive_strength)) need_positive(out, "compressive strength f_c", "Pa", p.compressive_strength);
 
   const bool has_penalty = !std::isnan(p.penalty);
@@ -78,7 +82,7 @@ std::vector<std::string> check(const CohesiveProps& p, double h_max, double sigm
     out.push_back("expected compression sigma_c = " + fmt(sigma_c) + " Pa reaches the compressive strength f_c = " +
                   fmt(p.compressive_strength) + " Pa: the joints would crush under the load alone");
   }
-  if (!out.empty()) return out;  // the energy checks need every value above
+  if (!out.empty() || p.mohr_coulomb) return out;  // the energy checks need every value above (none without softening)
 
   // Too-compliant joints: the pre-peak work alone would exceed G (fracture/README.md).
   double K_n = 0.0, K_s = 0.0;
@@ -121,6 +125,7 @@ JointLaw make_law(const CohesiveProps& p, double h) {
     L.shear_stiffness = K_s;
     return L;
   }
+  if (p.mohr_coulomb) return make_mc_joint_law(K_n, K_s, p.tensile_strength, p.cohesion, std::tan(p.friction_deg * kPi / 180.0));
   JointLaw L = make_joint_law(K_n, K_s, p.tensile_strength, p.G_I, p.cohesion,
                               std::tan(p.friction_deg * kPi / 180.0), p.G_II);
   L.keep_friction = p.keep_friction;

@@ -28,6 +28,7 @@ struct CohesiveProps {
   double k_n = unset;                    // normal stiffness of a zero-thickness interface, Pa/m (> 0)
   double k_s = unset;                    // shear stiffness of a zero-thickness interface, Pa/m (> 0)
   bool keep_friction = false;            // only the cohesion softens, friction is kept (law.hpp; [LR97])
+  bool mohr_coulomb = false;             // law = "mohr_coulomb" (mc_law.hpp): no softening, G_I and G_II unused
   double compressive_strength = unset;   // f_c, Pa (> 0): compressive cap (law.hpp); unset = no cap
   // law = "composite" (fracture/composite_law.hpp; [PDEM] §2): compressive_strength is then the cap's f_m.
   bool composite = false;                // the composite law instead of the [K25] law

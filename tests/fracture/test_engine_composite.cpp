@@ -46,11 +46,11 @@ TEST_CASE("engine composite law: a joint sheared under high compression keeps si
     const double A = 0.1 * 0.1, sigma = 3.0e6, c = 0.4e6;  // m^2, Pa, Pa (the case's cohesion)
     const double mu = std::tan(35.0 * M_PI / 180.0);
     auto sim = make_sim("fracture_engine_composite",
-                        {"interfaces.0.law=\"composite\"", "interfaces.0.residual_friction=35.0",
-                         "interfaces.0.compressive_strength=10.5e6", "interfaces.0.compressive_energy=5000.0",
-                         "interfaces.0.cap_shear_factor=9.0", "stages.0.loads.0.pressure=3.0e6",
+                        {"interfaces.1.law=\"composite\"", "interfaces.1.residual_friction=35.0",
+                         "interfaces.1.compressive_strength=10.5e6", "interfaces.1.compressive_energy=5000.0",
+                         "interfaces.1.cap_shear_factor=9.0", "stages.1.loads.1.pressure=3.0e6",
                          // kappa_u = 2 G_II / c = 0.25 mm of plastic slip after s_p = 25 um: 0.04 s at 0.01 m/s
-                         "stages.1.duration=0.04"});
+                         "stages.2.duration=0.04"});
     sim.begin_stage(0);
     while (!sim.stage_finished()) sim.step();
     sim.begin_stage(1);
@@ -102,16 +102,16 @@ TEST_CASE("engine composite law: case errors name the key for a partial cap and 
         }
         return std::string();
     };
-    const std::string partial = message({"interfaces.0.law=\"composite\"", "interfaces.0.compressive_strength=1e7"});
+    const std::string partial = message({"interfaces.1.law=\"composite\"", "interfaces.1.compressive_strength=1e7"});
     INFO(partial);
-    CHECK(partial.find("interfaces.0.law") != std::string::npos);
+    CHECK(partial.find("interfaces.1.law") != std::string::npos);
     CHECK(partial.find("all three cap keys") != std::string::npos);
-    const std::string stray = message({"interfaces.0.cap_shear_factor=9.0"});
+    const std::string stray = message({"interfaces.1.cap_shear_factor=9.0"});
     INFO(stray);
-    CHECK(stray.find("interfaces.0.cap_shear_factor") != std::string::npos);
+    CHECK(stray.find("interfaces.1.cap_shear_factor") != std::string::npos);
     CHECK(stray.find("only with law = \"composite\"") != std::string::npos);
-    const std::string soft = message({"interfaces.0.law=\"composite\"", "interfaces.0.shear_softening=\"cohesion\""});
+    const std::string soft = message({"interfaces.1.law=\"composite\"", "interfaces.1.shear_softening=\"cohesion\""});
     INFO(soft);
-    CHECK(soft.find("interfaces.0.shear_softening") != std::string::npos);
-    CHECK(message({"interfaces.0.law=\"composite\""}).empty());  // no cap at all is fine
+    CHECK(soft.find("interfaces.1.shear_softening") != std::string::npos);
+    CHECK(message({"interfaces.1.law=\"composite\""}).empty());  // no cap at all is fine
 }
