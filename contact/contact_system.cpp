@@ -452,4 +452,56 @@ double ContactSystem::normal_energy_at(const double* x) const {
     return en;
 }
 
+// Checkpoint. The sizeof guard below fails the build when a field is added to ContactSystem (x86-64 libstdc++):
+// add the field to save_state and load_state if it carries from one step to the next, then update the size.
+void ContactSystem::save_state(StateWriter& w) const {
+#if defined(__x86_64__) && defined(__GLIBCXX__)
+    static_assert(sizeof(ContactSystem) == 1128, "ContactSystem changed: update save_state/load_state and this size");
+#endif
+    w.section("contact");
+    w.pod(static_cast<std::int32_t>(kHistPerPair));
+    w.pod(n_tri_), w.pod(n_nodes_);
+    w.vec(capable_);
+    w.pod(static_cast<std::uint64_t>(excluded_.size()));
+    for (const auto& e : excluded_) w.vec(e);
+    w.vec(released_);
+    w.pod(dirty_), w.pod(buffer_), w.pod(travel_);
+    w.vec(items_);
+    w.vec(pair_a_), w.vec(pair_b_), w.vec(pair_law_), w.vec(hist_);
+    w.pod(energy_normal_), w.pod(energy_tangential_), w.pod(dissipation_), w.pod(damping_);
+    w.pod(beta_), w.pod(energy_current_), w.pod(opt_.compute_energy);
+    w.pod(stats_.detections), w.pod(stats_.candidate_pairs), w.pod(stats_.active_pairs), w.pod(stats_.pair_evaluations);
+}
+
+void ContactSystem::load_state(StateReader& r) {
+    r.section("contact");
+    if (r.get<std::int32_t>() != kHistPerPair) throw StateError("contact: another number of friction history slots per pair");
+    if (r.get<int>() != n_tri_ || r.get<int>() != n_nodes_) throw StateError("contact: another mesh");
+    r.vec_sized(capable_, static_cast<std::size_t>(n_tri_), "contact-capable flags");
+    if (r.get<std::uint64_t>() != excluded_.size()) throw StateError("contact: excluded pairs of another mesh");
+    for (auto& e : excluded_) r.vec(e);
+    r.vec_sized(released_, released_.size(), "released vertices");
+    r.pod(dirty_), r.pod(buffer_), r.pod(travel_);
+    r.vec(items_);
+    r.vec(pair_a_), r.vec(pair_b_), r.vec(pair_law_), r.vec(hist_);
+    const std::size_t np = pair_a_.size();
+    if (pair_b_.size() != np || pair_law_.size() != np || hist_.size() != kHistPerPair * np)
+        throw StateError("contact: inconsistent pair arrays");
+    for (std::size_t p = 0; p < np; ++p)
+        if (pair_a_[p] < 0 || pair_a_[p] >= n_tri_ || pair_b_[p] < 0 || pair_b_[p] >= n_tri_ || pair_law_[p] < 0 ||
+            pair_law_[p] >= static_cast<int>(laws_.size()))
+            throw StateError("contact: pair index out of range");
+    for (int t : items_)
+        if (t < 0 || t >= n_tri_) throw StateError("contact: item index out of range");
+    r.pod(energy_normal_), r.pod(energy_tangential_), r.pod(dissipation_), r.pod(damping_);
+    r.pod(beta_), r.pod(energy_current_), r.pod(opt_.compute_energy);
+    r.pod(stats_.detections), r.pod(stats_.candidate_pairs), r.pod(stats_.active_pairs), r.pod(stats_.pair_evaluations);
+    // Per-step scratch sized as detect() leaves it.
+    pair_f_.assign(12 * np, 0.0);
+    pair_e_.assign(4 * np, 0.0);
+    pair_on_.assign(np, 0);
+    box_.assign(4 * static_cast<std::size_t>(n_tri_), 0.0);
+    geom_.resize(static_cast<std::size_t>(n_tri_));
+}
+
 }  // namespace fdem::contact

@@ -636,6 +636,17 @@ CaseSpec load_case(const std::string& path, const std::vector<std::string>& over
         const auto eq = o.find('=');
         spec.overrides.emplace_back(o.substr(0, eq), o.substr(eq + 1));
     }
+    {
+        // The resolved case's hash (FNV-1a 64 of its TOML text without the checkpoint keys, which do not change the
+        // results): a restart refuses a checkpoint of another case.
+        toml::table hashed = root;
+        if (toml::table* o = hashed["output"].as_table()) o->erase("checkpoint_interval"), o->erase("checkpoint_wall_interval");
+        std::ostringstream text;
+        text << toml::toml_formatter(hashed);
+        std::uint64_t h = 1469598103934665603ull;
+        for (const unsigned char c : text.str()) h = (h ^ c) * 1099511628211ull;
+        spec.resolved_hash = h;
+    }
 
     Reader top(ctx, root, "");
     auto positive = [](double v) { return v > 0; };
@@ -870,6 +881,10 @@ CaseSpec load_case(const std::string& path, const std::vector<std::string>& over
         Reader r(ctx, *t, "output");
         spec.history_interval = r.number("history_interval", false, "an interval > 0 in s", positive).value_or(0);
         spec.snapshot_interval = r.number("snapshot_interval", false, "an interval > 0 in s", positive).value_or(0);
+        spec.checkpoint_interval =
+            r.number("checkpoint_interval", false, "a checkpoint interval > 0 in s of simulated time", positive).value_or(0);
+        spec.checkpoint_wall_interval =
+            r.number("checkpoint_wall_interval", false, "a checkpoint interval > 0 in s of wall-clock time", positive).value_or(0);
         spec.joint_open = r.number("joint_open", false, "the opening of a dry joint that is recorded, > 0 in m", positive)
                               .value_or(spec.joint_open);
         spec.joint_slip = r.number("joint_slip", false, "the slip of a dry joint that is recorded, > 0 in m", positive)

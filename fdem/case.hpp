@@ -7,6 +7,7 @@
 #pragma once
 
 #include <array>
+#include <cstdint>
 #include <cmath>
 #include <map>
 #include <optional>
@@ -250,6 +251,13 @@ struct CaseSpec {
     std::optional<double> dt_override;  // s, a fixed time step (tests of the stability limit), bypasses the safety factor
     double history_interval = 0;   // s; 0 = every 100 steps
     double snapshot_interval = 0;  // s; 0 = only at the end of each stage
+    // Checkpoints (fdem/checkpoint.hpp): one every checkpoint_interval s of simulated time and/or every
+    // checkpoint_wall_interval s of wall-clock time; 0 = none (a stop by signal writes one all the same).
+    double checkpoint_interval = 0;       // s (simulated)
+    double checkpoint_wall_interval = 0;  // s (wall clock)
+    // Hash of the case as resolved (the TOML after --set overrides, without the [output] checkpoint keys): a
+    // checkpoint written for another case is refused on restart.
+    std::uint64_t resolved_hash = 0;
     // Joint record of dry joints (cracks.csv): a dry joint segment is recorded the first time its opening at an end
     // exceeds joint_open, and the first time the mean slip of its ends exceeds joint_slip.
     double joint_open = 1e-4;  // m

@@ -29,7 +29,9 @@ const char* kUsage =
     "usage:\n"
     "  fdem run CASE.toml [-o DIR] [-s KEY=VALUE ...] [-t N] [-q]\n"
     "      run a case; results go to DIR (default runs/<case name>): history.csv, summary.json,\n"
-    "      snapshots/*.vtu + run.pvd, run.log\n"
+    "      snapshots/*.vtu + run.pvd, run.log, checkpoint.bin\n"
+    "  fdem run CASE.toml --restart DIR [-s KEY=VALUE ...] [-t N] [-q]\n"
+    "      continue the run in DIR from its checkpoint.bin (same case, same --set options, same fdem build)\n"
     "  fdem check CASE.toml [-s KEY=VALUE ...]\n"
     "      validate a case and its mesh without running\n"
     "  fdem mesh CASE.toml [-o DIR] [-s KEY=VALUE ...]\n"
@@ -44,14 +46,20 @@ const char* kUsage =
     "  -o, --out DIR        run folder\n"
     "  -q, --quiet          nothing on stdout and no progress lines; errors and warnings still go to stderr,\n"
     "                       and run.log in the run folder has the whole log\n"
+    "  --restart DIR        continue the run in DIR from its last checkpoint; history.csv and cracks.csv go on\n"
+    "                       from the checkpoint's row\n"
     "  --progress S         when stderr is not a terminal (batch, cluster), a progress line in the log every\n"
     "                       S seconds of wall time (default 10): stage, time, steps/s, stage and run time left\n"
     "  -h, --help           this text\n"
     "\n"
-    "exit codes: 0 done, 1 bad input, 2 run failed (instability, inverted element, NaN), 3 internal error\n";
+    "signals: SIGINT, SIGTERM and SIGUSR1 (Slurm's --signal=USR1@SECONDS) finish the step, write a checkpoint and\n"
+    "  the outputs with status \"interrupted\"\n"
+    "exit codes: 0 done, 1 bad input, 2 run failed (instability, inverted element, NaN), 3 internal error,\n"
+    "  130 / 143 / 138 stopped by SIGINT / SIGTERM / SIGUSR1 (128 + the signal number)\n";
 
 struct Args {
-    std::string command, case_file, out;
+    std::string command, case_file, out, restart;
+    long stop_after_steps = 0;  // hidden testing option --stop-after-steps N
     std::vector<std::string> sets;
     int threads = 0;
     bool quiet = false;
@@ -85,6 +93,14 @@ Args parse_args(int argc, char** argv) {
             if (has_inline) throw fdem::InputError(opt + " takes no value, got '" + opt + "=" + inline_value + "'");
         };
         if (s == "--out" || s == "-o") a.out = value(s);
+        else if (s == "--restart") a.restart = value(s);
+        else if (s == "--stop-after-steps") {
+            const std::string v = value(s);
+            char* end = nullptr;
+            const long n = std::strtol(v.c_str(), &end, 10);
+            if (v.empty() || *end || n < 1) throw fdem::InputError(s + ": expected a whole number of steps >= 1, got '" + v + "'");
+            a.stop_after_steps = n;
+        }
         else if (s == "--set" || s == "-s") a.sets.push_back(value(s));
         else if (s == "--threads" || s == "-t" || s == "-j") {
             const std::string v = value(s);
@@ -134,6 +150,8 @@ int main(int argc, char** argv) {
         if (a.command != "run" && a.command != "check" && a.command != "mesh")
             throw fdem::InputError("unknown command '" + a.command + "' (commands: run, check, mesh; see fdem --help)");
         if (a.case_file.empty()) throw fdem::InputError("fdem " + a.command + ": no case file given");
+        if (a.command != "run" && (!a.restart.empty() || a.stop_after_steps > 0))
+            throw fdem::InputError("fdem " + a.command + ": --restart and --stop-after-steps belong to fdem run");
         if (a.command == "check") {
             const fdem::CaseSpec spec = fdem::load_case(a.case_file, a.sets);
             fdem::RunOptions quiet;
@@ -163,6 +181,8 @@ int main(int argc, char** argv) {
         }
         fdem::RunOptions opt;
         opt.out_dir = a.out;
+        opt.restart_dir = a.restart;
+        opt.stop_after_steps = a.stop_after_steps;
         opt.threads = a.threads;
         opt.quiet = a.quiet;
         // On a terminal, a progress line rewritten in place on stderr; otherwise (batch and cluster logs) a progress

@@ -170,6 +170,8 @@ Simulation::Simulation(CaseSpec spec, Model model, RunOptions options)
         throw InputError(spec_.file + ": the time step comes out as " + sci(dt_) +
                          " s: expected a finite step > 0 (check materials.*.E and density, case.thickness, numerics.mass_scale and numerics.dt)");
     wall_start_ = wall_clock();
+    last_checkpoint_wall_ = wall_start_;
+    if (spec_.checkpoint_interval > 0) next_checkpoint_ = spec_.checkpoint_interval;
     if (!opt_.out_dir.empty()) {
         std::filesystem::create_directories(std::filesystem::path(opt_.out_dir) / "snapshots");
         // History header: time, step, stage, monitors, energies.
@@ -1166,13 +1168,14 @@ bool Simulation::history_due(double t, long step) const {
 }
 
 namespace {
-// SIGINT/SIGTERM: the handler only records the signal; the run loop finishes the step, writes its outputs with
-// status "interrupted" and run_case returns 128 + the signal number (130, 143), the shell's convention.
+// SIGINT/SIGTERM/SIGUSR1: the handler only records the signal; the run loop finishes the step, writes a checkpoint and
+// its outputs with status "interrupted", and run_case returns 128 + the signal number (130, 143, 138), the shell's
+// convention. SIGUSR1 is what Slurm's --signal=USR1@SECONDS sends before the time limit.
 volatile std::sig_atomic_t g_stop_signal = 0;
 extern "C" void fdem_stop_handler(int sig) { g_stop_signal = sig; }
 
 struct StopHandlers {
-    struct sigaction old_int {}, old_term {};
+    struct sigaction old_int {}, old_term {}, old_usr1 {};
     StopHandlers() {
         g_stop_signal = 0;
         struct sigaction sa {};
@@ -1180,24 +1183,33 @@ struct StopHandlers {
         sigemptyset(&sa.sa_mask);
         sigaction(SIGINT, &sa, &old_int);
         sigaction(SIGTERM, &sa, &old_term);
+        sigaction(SIGUSR1, &sa, &old_usr1);
     }
     ~StopHandlers() {
         sigaction(SIGINT, &old_int, nullptr);
         sigaction(SIGTERM, &old_term, nullptr);
+        sigaction(SIGUSR1, &old_usr1, nullptr);
     }
     StopHandlers(const StopHandlers&) = delete;
     StopHandlers& operator=(const StopHandlers&) = delete;
 };
 }  // namespace
 
-// A stop asked for by a signal: the step is finished; history row, snapshot, files and summary are written.
-void Simulation::interrupt(int sig) {
+// A stop asked for by a signal: the step is finished; a checkpoint, then history row, snapshot, files and summary
+// are written (the checkpoint first: it holds the state before the extra row, which a restart truncates away).
+void Simulation::interrupt(int sig, const std::string& why) {
     interrupted_signal_ = sig;
+    if (!opt_.out_dir.empty()) write_checkpoint();
     wall_time_ = wall_clock() - wall_start_;
     if (opt_.progress) progress_line(true);
-    const std::string msg = std::string("interrupted by ") + (sig == SIGINT ? "SIGINT" : sig == SIGTERM ? "SIGTERM" : "a signal") +
-                            " in stage " + std::to_string(stage_ + 1) + " '" + spec_.stages[stage_].name + "' at step " +
-                            std::to_string(steps_) + ", t = " + sci(time_, 6) + " s";
+    const std::string by = !why.empty()       ? why
+                           : sig == SIGINT    ? "interrupted by SIGINT"
+                           : sig == SIGTERM   ? "interrupted by SIGTERM"
+                           : sig == SIGUSR1   ? "interrupted by SIGUSR1"
+                                              : "interrupted by a signal";
+    const std::string msg = by + " in stage " + std::to_string(stage_ + 1) + " '" + spec_.stages[stage_].name + "' at step " +
+                            std::to_string(steps_) + ", t = " + sci(time_, 6) + " s" +
+                            (opt_.out_dir.empty() ? std::string() : "; checkpoint written: continue with fdem run CASE --restart " + opt_.out_dir);
     log(msg);
     if (!opt_.out_dir.empty()) {
         record_dry_joints();
@@ -1234,11 +1246,16 @@ void Simulation::run() {
         log("warning: numerics.safety = " + sci(spec_.safety) + " > 1: the time step exceeds the stability limit");
     if (!opt_.out_dir.empty()) write_summary("running", "");
     last_progress_log_ = wall_clock();
-    for (std::size_t s = 0; s < spec_.stages.size(); ++s) {
-        begin_stage(static_cast<int>(s));
+    // After restore(), the current stage continues where the checkpoint left it (no begin_stage).
+    const std::size_t first = resumed_ ? static_cast<std::size_t>(stage_) : 0;
+    for (std::size_t s = first; s < spec_.stages.size(); ++s) {
+        if (!(resumed_ && s == first)) begin_stage(static_cast<int>(s));
         while (!stage_finished()) {
             step();
             if (g_stop_signal) return interrupt(g_stop_signal);
+            if (opt_.stop_after_steps > 0 && steps_ >= opt_.stop_after_steps)
+                return interrupt(SIGUSR1, "stopped after " + std::to_string(steps_) + " steps (--stop-after-steps)");
+            checkpoint_if_due();
         }
         if (opt_.progress) progress_line(true);
         const StageResult& r = stage_results_.back();
@@ -1437,12 +1454,19 @@ void Simulation::write_summary(const std::string& status, const std::string& mes
 int run_case(const std::string& case_file, const std::vector<std::string>& overrides, const RunOptions& options) {
     CaseSpec spec = load_case(case_file, overrides);
     RunOptions opt = options;
+    if (!opt.restart_dir.empty()) {
+        if (!opt.out_dir.empty() && std::filesystem::weakly_canonical(opt.out_dir) != std::filesystem::weakly_canonical(opt.restart_dir))
+            throw InputError("--restart " + opt.restart_dir + " continues the run in that folder: --out " + opt.out_dir +
+                             " names another one (leave --out out)");
+        opt.out_dir = opt.restart_dir;
+    }
     if (opt.out_dir.empty()) opt.out_dir = (std::filesystem::path("runs") / spec.name).string();
     Model model = build_scene(spec);
     // A fresh run into a folder used before: the previous run's snapshots and run.pvd go first (a restart, which
     // continues a run, must keep them).
-    remove_previous_snapshots(opt.out_dir);
+    if (opt.restart_dir.empty()) remove_previous_snapshots(opt.out_dir);
     Simulation sim(spec, std::move(model), opt);
+    if (!opt.restart_dir.empty()) sim.restore(opt.restart_dir);
     sim.run();
     if (sim.interrupted_signal()) {
         if (!opt.quiet) std::cout << "run folder: " << opt.out_dir << std::endl;

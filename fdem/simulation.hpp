@@ -13,6 +13,7 @@
 #include "fdem/model.hpp"
 #include "fdem/output.hpp"
 #include "fdem/plasticity.hpp"
+#include "fdem/state_io.hpp"
 
 namespace fdem {
 
@@ -27,6 +28,11 @@ struct RunOptions {
     bool progress = false;   // progress line on stderr, rewritten in place (a terminal)
     bool progress_log = false;        // progress lines in the log (run.log and stdout unless quiet): batch/cluster logs
     double progress_interval = 10.0;  // s of wall time between two progress lines in the log
+    // Testing aid (hidden option --stop-after-steps): after this many steps (0: never), write a checkpoint and stop
+    // as a SIGUSR1 does.
+    long stop_after_steps = 0;
+    // Continue the run in this folder from its checkpoint.bin (fdem run CASE --restart DIR; out_dir is DIR).
+    std::string restart_dir;
 };
 
 struct Energies {
@@ -82,6 +88,17 @@ public:
     std::vector<std::array<double, 3>> monitor_extrema() const { return mon_ext_; }  // min, max, final
     double reference_value(int monitor) const;  // the quantity [reference] names, of monitor `monitor`
 
+    // Checkpoint and restart (fdem/checkpoint.cpp). save_state/load_state write and read everything that carries from
+    // one step to the next (model state, stage, supports and loads, damping filters, energy books, monitors, output
+    // counters, and the contact and cohesive modules); write_checkpoint puts it in <run folder>/checkpoint.bin
+    // atomically; restore reads it back (refusing a checkpoint of another build or case with an InputError), truncates
+    // history.csv to the checkpoint's row, and makes run() continue from there.
+    void save_state(StateWriter& w) const;
+    void load_state(StateReader& r);
+    void write_checkpoint();
+    void restore(const std::string& run_dir);
+    std::string checkpoint_path() const;
+
 private:
     struct ActiveLoad {
         std::vector<int> nodes;
@@ -122,7 +139,12 @@ private:
     double protocol_integral(const ActiveSupport& s, double tau) const;
     double protocol_position(const ActiveSupport& s, double tau) const;
     void fail(const std::string& what);
-    void interrupt(int sig);
+    void interrupt(int sig, const std::string& why = "");
+    void checkpoint_if_due();
+    bool resumed_ = false;            // restore() ran: run() continues the current stage
+    double next_checkpoint_ = 1e300;  // s, simulated time of the next checkpoint (checkpoint_interval)
+    double last_checkpoint_wall_ = 0; // s, wall clock of the last checkpoint (checkpoint_wall_interval)
+    long checkpoints_written_ = 0;
     int interrupted_signal_ = 0;
     void check_energy(const Energies& e);
     std::string crushed_broken_note() const;  // "" or why contact may push crushed, broken joints apart

@@ -422,4 +422,54 @@ void write_cracks_csv_row(std::ostream& os, const BreakRecord& r) {
   os << line.str();
 }
 
+// Checkpoint. The sizeof guards fail the build when a field is added to CohesiveSystem or PointHistory (x86-64
+// libstdc++): add the field to save_state and load_state if it carries from one step to the next, then update the size.
+void CohesiveSystem::save_state(StateWriter& w) const {
+#if defined(__x86_64__) && defined(__GLIBCXX__)
+  static_assert(sizeof(CohesiveSystem) == 592, "CohesiveSystem changed: update save_state/load_state and this size");
+  static_assert(sizeof(PointHistory) == 40, "PointHistory changed: check CohesiveSystem::save_state and this size");
+#endif
+  w.section("cohesive");
+  w.pod(static_cast<std::int32_t>(sizeof(PointHistory)));
+  w.pod(static_cast<std::int32_t>(size()));
+  w.vec(history_), w.vec(force_), w.vec(energy_), w.vec(dissipated_), w.vec(friction_);
+  w.vec(break_DI_), w.vec(break_DII_), w.vec(pending_), w.vec(broken_), w.vec(active_);
+  w.pod(pending_count_);
+  w.vec(gather_node_), w.vec(gather_start_), w.vec(gather_slot_);
+  w.pod(static_cast<std::uint64_t>(stale_slots_));
+  w.pod(counts_);
+  // law = "composite": its point histories (composite_index_ and composite_law_ are fixed when the system is built).
+  w.vec(composite_history_);
+}
+
+void CohesiveSystem::load_state(StateReader& r) {
+  r.section("cohesive");
+  if (r.get<std::int32_t>() != std::int32_t(sizeof(PointHistory))) throw StateError("cohesive: another point history");
+  if (r.get<std::int32_t>() != size()) throw StateError("cohesive: another number of elements");
+  const std::size_t ne = std::size_t(size());
+  r.vec_sized(history_, 3 * ne, "cohesive point histories");
+  r.vec_sized(force_, 8 * ne, "cohesive forces");
+  r.vec_sized(energy_, ne, "cohesive energies");
+  r.vec_sized(dissipated_, ne, "cohesive dissipation");
+  r.vec_sized(friction_, ne, "cohesive friction");
+  r.vec_sized(break_DI_, ne, "cohesive break damage I");
+  r.vec_sized(break_DII_, ne, "cohesive break damage II");
+  r.vec_sized(pending_, ne, "cohesive pending flags");
+  r.vec_sized(broken_, ne, "cohesive broken flags");
+  r.vec(active_);
+  for (int e : active_)
+    if (e < 0 || e >= size()) throw StateError("cohesive: element index out of range");
+  r.pod(pending_count_);
+  r.vec(gather_node_), r.vec(gather_start_), r.vec(gather_slot_);
+  if (gather_start_.empty() || gather_start_.size() != gather_node_.size() + 1 || gather_start_.back() != int(gather_slot_.size()))
+    throw StateError("cohesive: inconsistent node gather");
+  for (int v : gather_node_)
+    if (v < 0 || v >= num_nodes_) throw StateError("cohesive: gather node out of range");
+  for (int sl : gather_slot_)
+    if (sl < 0 || std::size_t(sl) + 1 >= force_.size()) throw StateError("cohesive: gather slot out of range");
+  stale_slots_ = std::size_t(r.get<std::uint64_t>());
+  r.pod(counts_);
+  r.vec_sized(composite_history_, composite_history_.size(), "composite point histories");
+}
+
 }  // namespace fdem::fracture

@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "fracture/composite_law.hpp"
+#include "fdem/state_io.hpp"
 #include "fracture/law.hpp"
 #include "fracture/properties.hpp"
 
@@ -126,6 +127,13 @@ class CohesiveSystem {
   void state_per_element(std::uint8_t* out) const;
   const BreakCounts& counts() const { return counts_; }
   double residual_friction(int e) const;  // tan(phi_res) of element e's class
+
+  // Checkpoint (fdem/state_io.hpp): the point histories (damage, trial damage, slider slip, cap closure), forces,
+  // energies and dissipations per element, the pending and broken flags, the intact list, the node gather with its
+  // stale slots (it fixes the summation order) and the break counts. load_state needs an object built from the same
+  // elements and properties.
+  void save_state(StateWriter& w) const;
+  void load_state(StateReader& r);
 
  private:
   std::vector<CohesiveElement> elems_;
