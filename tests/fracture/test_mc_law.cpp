@@ -15,7 +15,7 @@
 using namespace fdem::fracture;
 
 namespace {
-McLaw layer() {  // bed joints of the Ispra piers (CASES.md §D): c 0.23 MPa, tan(phi) 0.58; stiffnesses ours
+McLaw layer() {  // bed joints of the Ispra piers (JRC Ispra, M-DEM paper Table 1): c 0.23 MPa, tan(phi) 0.58; stiffnesses ours
   return McLaw{1.0e10, 4.0e9, 0.1e6, 0.23e6, 0.58};
 }
 }  // namespace
