@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "fracture/properties.hpp"
+#include "fracture/value_checks.hpp"
 
 namespace fdem::fracture {
 
@@ -70,28 +71,6 @@ ShearStep shear_return(const CompositeLaw& L, double tau_trial, double sigma_n, 
     return {0.0, dk};
 }
 
-std::string fmt(double v) {
-    std::ostringstream os;
-    os.precision(6);
-    os << v;
-    return os.str();
-}
-
-void need_positive(std::vector<std::string>& out, const char* name, const char* unit, double v) {
-    if (std::isnan(v)) {
-        out.push_back(std::string(name) + " is missing (" + unit + ")");
-    } else if (!std::isfinite(v) || v <= 0.0) {
-        out.push_back(std::string(name) + " = " + fmt(v) + " " + unit + " is not physical: it must be finite and > 0");
-    }
-}
-
-void need_angle(std::vector<std::string>& out, const char* name, double v) {
-    if (std::isnan(v)) {
-        out.push_back(std::string(name) + " is missing (degrees)");
-    } else if (!(v >= 0.0 && v < 90.0)) {
-        out.push_back(std::string(name) + " = " + fmt(v) + " deg is not physical: it must be in [0, 90)");
-    }
-}
 }  // namespace
 
 CompositeLaw make_composite_law(double k_n, double k_s, double f_t, double G_I, double c_0, double theta0_deg,

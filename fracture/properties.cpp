@@ -1,6 +1,7 @@
 // fracture/properties.cpp: validation of cohesive properties and their conversion to per-element law constants.
 // DATA LAYOUT: none (cold data, one CohesiveProps per class).
 #include "fracture/properties.hpp"
+#include "fracture/value_checks.hpp"
 
 #include "fracture/mc_law.hpp"
 
@@ -11,30 +12,6 @@ namespace fdem::fracture {
 
 namespace {
 constexpr double kPi = 3.14159265358979323846;
-
-std::string fmt(double v) {
-  std::ostringstream os;
-  os.precision(6);
-  os << v;
-  return os.str();
-}
-
-// Adds "missing" or "non-physical" for one value that must be finite and > 0 (or >= 0 when allow_zero).
-void need_positive(std::vector<std::string>& out, const char* name, const char* unit, double v) {
-  if (std::isnan(v)) {
-    out.push_back(std::string(name) + " is missing (" + unit + ")");
-  } else if (!std::isfinite(v) || v <= 0.0) {
-    out.push_back(std::string(name) + " = " + fmt(v) + " " + unit + " is not physical: it must be finite and > 0");
-  }
-}
-
-void need_angle(std::vector<std::string>& out, const char* name, double v) {
-  if (std::isnan(v)) {
-    out.push_back(std::string(name) + " is missing (degrees)");
-  } else if (!(v >= 0.0 && v < 90.0)) {
-    out.push_back(std::string(name) + " = " + fmt(v) + " deg is not physical: it must be in [0, 90)");
-  }
-}
 
 // Initial slopes (Pa/m) of the law for an element of length h: p_j / h or the measured k_n, k_s.
 void stiffnesses(const CohesiveProps& p, double h, double& K_n, double& K_s) {
