@@ -75,6 +75,14 @@ double monitor(const fdem::Simulation& sim, const std::string& name) {
     return 0.0;
 }
 
+// Mean x displacement of the right edge's nodes (m).
+double right_edge_ux(const fdem::Simulation& sim) {
+    const auto& md = sim.model();
+    double ux = 0;
+    for (int k : md.group("right").nodes) ux += md.x[2 * k] - md.X[2 * k];
+    return ux / static_cast<double>(md.group("right").nodes.size());
+}
+
 double total_mass(const fdem::Simulation& sim) {
     double m = 0;
     for (int k = 0; k < sim.model().n_nodes(); ++k) m += sim.model().mass[k];
@@ -161,10 +169,7 @@ local_damping = 0.0
     sim.run();
     const double t = sim.time();
     const double expected = v0 / omega * (1 - std::cos(omega * t));
-    double ux = 0;
-    const auto& md = sim.model();
-    for (int k : md.group("right").nodes) ux += md.x[2 * k] - md.X[2 * k];
-    ux /= static_cast<double>(md.group("right").nodes.size());
+    const double ux = right_edge_ux(sim);
     std::printf("[scene] support function: edge displacement %.8e m, closed form %.8e m\n", ux, expected);
     CHECK(ux == Approx(expected).epsilon(1e-3));
 }
@@ -278,12 +283,6 @@ local_damping = 0.0
   group = "right"
   vx = 0.01
 )";
-    auto edge_ux = [](const fdem::Simulation& sim) {
-        const auto& md = sim.model();
-        double ux = 0;
-        for (int k : md.group("right").nodes) ux += md.x[2 * k] - md.X[2 * k];
-        return ux / static_cast<double>(md.group("right").nodes.size());
-    };
     auto plain = testing::make_simulation(head, "servo_plain");
     plain.run();
     auto high = testing::make_simulation(head + "  servo = { ratio = 0.999999, time = 0.01 }\n", "servo_high");
@@ -296,8 +295,8 @@ local_damping = 0.0
     low.run();
     const double t_end = low.time(), t1 = 0.5 * T * std::log(1 / fmin);
     const double expected = 0.5 * v * T * (1 - fmin) + fmin * v * (t_end - t1);
-    std::printf("[scene] servo: unslowed edge %.6e m; slowed %.6e m, closed form %.6e m\n", edge_ux(plain), edge_ux(low),
+    std::printf("[scene] servo: unslowed edge %.6e m; slowed %.6e m, closed form %.6e m\n", right_edge_ux(plain), right_edge_ux(low),
                 expected);
-    CHECK(edge_ux(plain) == Approx(v * t_end).epsilon(1e-3));
-    CHECK(edge_ux(low) == Approx(expected).epsilon(5e-3));
+    CHECK(right_edge_ux(plain) == Approx(v * t_end).epsilon(1e-3));
+    CHECK(right_edge_ux(low) == Approx(expected).epsilon(5e-3));
 }
