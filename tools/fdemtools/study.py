@@ -14,6 +14,16 @@ study speed: a grid of mesh sizes x loading rates x damping values. Error of a r
   peak load, with P_ref given (--reference, kN), else the case's reference peak, else the peak of the most
   accurate run of the grid (smallest mesh size, slowest rate, least damping). A run is on the Pareto front when
   no other run is at the same time both faster and more accurate.
+  Whole-curve errors (curve_errors): every completed run's loading curve H(u) (the last stage, the tools' load sign
+  rule, as `validate` and `eeep` read it) against a reference curve: a run folder given (--reference-run, e.g. a
+  run at half the rate and half the mass scaling that no longer changes), else the most accurate run of the grid.
+  Both curves are taken on their loading branch (the rows where u exceeds every earlier u) and interpolated
+  linearly on 2001 points of [0, u_to]; with P_ref the reference curve's peak, curve_rms = sqrt(mean((H - H_ref)^2))
+  / P_ref over [0, u_to] and curve_max = max |H - H_ref| / P_ref over [u_from, u_to] (u_to: --curve-to, default the
+  smallest reach of the runs and the reference; u_from: --curve-from, default 5 % of u_to, the 0.5 mm of a 10 mm
+  pushover, so that the first rows, where any two curves differ by their start-up, do not decide it). K_e, P_y,
+  ductility (EEEP as `eeep` computes them) and the peak are compared with the reference curve's: signed relative
+  differences. --error picks which error the Pareto front and the figure use (peak, curve_max or curve_rms).
 """
 from __future__ import annotations
 
@@ -129,6 +139,63 @@ def pareto_front(times, errors) -> list:
             front.append(i)
             best = errors[i]
     return front
+
+
+CURVE_POINTS = 2001
+
+
+def loading_branch(x, y):
+    """The rows of a curve where x exceeds every earlier x (the monotonic loading branch; a pause or a step back of
+    the control displacement is dropped), as two arrays."""
+    x, y = np.asarray(x, float), np.asarray(y, float)
+    if len(x) == 0:
+        return x, y
+    prev = np.maximum.accumulate(np.concatenate(([-np.inf], x[:-1])))
+    keep = x > prev
+    return x[keep], y[keep]
+
+
+def curve_errors(x, y, xr, yr, u_to, u_from) -> dict:
+    """Whole-curve difference of H(u) = (x, y) from the reference (xr, yr), as shares of the reference peak:
+    curve_rms over [0, u_to], curve_max over [u_from, u_to] (module doc). Either is None, with a reason, when a
+    curve does not reach u_to."""
+    xb, yb = loading_branch(x, y)
+    xrb, yrb = loading_branch(xr, yr)
+    p_ref = float(np.max(yrb)) if len(yrb) else 0.0
+    out = {"curve_rms": None, "curve_max": None, "curve_note": ""}
+    if p_ref <= 0:
+        out["curve_note"] = "the reference curve has no positive load"
+        return out
+    for name, xs in (("the run", xb), ("the reference", xrb)):
+        if len(xs) < 2 or xs[-1] < u_to * (1 - 1e-9):
+            reach = xs[-1] if len(xs) else 0.0
+            out["curve_note"] = f"{name}'s curve ends at {reach * 1e3:.4g} mm, before {u_to * 1e3:.4g} mm"
+            return out
+    g = np.linspace(0.0, u_to, CURVE_POINTS)
+    d = (np.interp(g, xb, yb) - np.interp(g, xrb, yrb)) / p_ref
+    out["curve_rms"] = float(np.sqrt(np.mean(d * d)))
+    out["curve_max"] = float(np.max(np.abs(d[g >= u_from])))
+    return out
+
+
+def _signed_rel(a, b):
+    if a is None or b is None or not np.isfinite(a) or not np.isfinite(b) or b == 0:
+        return None
+    return (a - b) / abs(b)
+
+
+def curve_quantities(run_dir: str) -> dict:
+    """The loading curve of a run and its EEEP quantities (validate.curve_metrics: last stage, the load sign rule)."""
+    from .validate import curve_metrics
+    m = curve_metrics(run_dir)
+    py = None
+    try:
+        from .eeep import eeep
+        py = float(eeep(m["x"], m["y"], source=run_dir, load_sign=1.0)["P_y"])
+    except (ToolError, ValueError, ZeroDivisionError, FloatingPointError):
+        pass
+    return {"x": m["x"], "y": m["y"], "peak": m["peak_load_N"], "K_e": m.get("eeep_K_e_N_m"), "P_y": py,
+            "ductility": m.get("ductility"), "reach": m["reach_m"]}
 
 
 def _batch(args, points, out, grid):
@@ -257,6 +324,19 @@ def format_rows(rows, keys):
     return format_table(keys, [[r.get(k) for k in keys] for r in rows])
 
 
+def _accuracy_key(dims):
+    """Sort key of a run: smaller is more accurate in each dimension (mesh size, rate, damping, ...: their absolute
+    values; non-numeric values: their order in the list given)."""
+    def key(r):
+        out = []
+        for k, vals, _ in dims:
+            v = r["params"][k]
+            x = _num(v)
+            out.append(abs(x) if x is not None else vals.index(v))
+        return out
+    return key
+
+
 def cmd_speed(args):
     dims = []
     if args.sizes:
@@ -288,42 +368,81 @@ def cmd_speed(args):
     elif ok[0].get("reference_peak_N"):
         ref, ref_src = ok[0]["reference_peak_N"], "case reference"
     else:
-        def accuracy_key(r):  # smaller is more accurate in each dimension; non-numeric values: their list order
-            key = []
-            for k, vals, _ in dims:
-                v = r["params"][k]
-                x = _num(v)
-                key.append(abs(x) if x is not None else vals.index(v))
-            return key
-        best = min(ok, key=accuracy_key)
+        best = min(ok, key=_accuracy_key(dims))
         ref, ref_src = best["peak_load_N"], "most accurate run"
         ref_run = best["name"]
     if not ref:
         raise ToolError("the reference peak load is zero")
+    # reference curve: --reference-run, else the most accurate run of the grid
+    curves = {}
+    for r in ok:
+        try:
+            curves[r["name"]] = curve_quantities(r["run_dir"])
+        except ToolError as e:
+            print(f"fdem-tools study: {r['name']}: no curve ({e})", file=sys.stderr)
+    if args.reference_run:
+        try:
+            cref = curve_quantities(args.reference_run)
+        except ToolError as e:
+            raise ToolError(f"--reference-run {args.reference_run}: {e}")
+        cref_src = f"run {args.reference_run}"
+    else:
+        best_curve = min([r for r in ok if r["name"] in curves], key=_accuracy_key(dims), default=None)
+        cref = curves.get(best_curve["name"]) if best_curve else None
+        cref_src = f"most accurate run ({best_curve['name']})" if best_curve else None
+    u_to = args.curve_to
+    if cref is not None and u_to is None:
+        u_to = min([c["reach"] for c in curves.values()] + [cref["reach"]])
+    if u_to is not None and not u_to > 0:
+        raise ToolError(f"--curve-to must be a positive displacement in m, got {u_to:g}")
+    u_from = args.curve_from if args.curve_from is not None else (0.05 * u_to if u_to else None)
+    if u_from is not None and u_to is not None and not 0 <= u_from < u_to:
+        raise ToolError(f"--curve-from must be in [0, {u_to:g}) m, got {u_from:g}")
     rows = []
     for r in recs:
         err = abs(r["peak_load_N"] - ref) / abs(ref) if r in ok else None
-        rows.append({**r["params"], "status": r["status"], "wall_time_s": r.get("wall_time_s"),
-                     "peak_load_kN": r["peak_load_N"] / 1e3 if r.get("peak_load_N") is not None else None,
-                     "error": err, "pareto": False, "run": r["name"]})
-    valid = [i for i, r in enumerate(rows) if r["error"] is not None]
-    front = [valid[i] for i in pareto_front([rows[i]["wall_time_s"] for i in valid], [rows[i]["error"] for i in valid])]
+        row = {**r["params"], "status": r["status"], "wall_time_s": r.get("wall_time_s"),
+               "peak_load_kN": r["peak_load_N"] / 1e3 if r.get("peak_load_N") is not None else None,
+               "error": err, "curve_rms": None, "curve_max": None, "K_e_error": None, "P_y_error": None,
+               "ductility_error": None, "peak_error": None, "curve_note": "", "pareto": False, "run": r["name"]}
+        c = curves.get(r["name"])
+        if c is not None and cref is not None:
+            row.update(curve_errors(c["x"], c["y"], cref["x"], cref["y"], u_to, u_from))
+            for k in ("K_e", "P_y", "ductility"):
+                row[k + "_error"] = _signed_rel(c[k], cref[k])
+            row["peak_error"] = _signed_rel(c["peak"], cref["peak"])
+        rows.append(row)
+    measure = "error" if args.error == "peak" else args.error
+    valid = [i for i, r in enumerate(rows) if r[measure] is not None]
+    if not valid:
+        raise ToolError(f"no run has a {args.error} error (" + "; ".join(sorted({r['curve_note'] for r in rows
+                                                                                 if r['curve_note']})) + ")")
+    front = [valid[i] for i in pareto_front([rows[i]["wall_time_s"] for i in valid], [rows[i][measure] for i in valid])]
     for i in front:
         rows[i]["pareto"] = True
     header = list(rows[0].keys())
     write_csv(os.path.join(out, "speed_study.csv"), header, [[r[k] for k in header] for r in rows])
     write_json(os.path.join(out, "speed_study.json"), {"case": os.path.abspath(args.case), "reference_peak_N": ref,
-                                                      "reference": ref_src, "reference_run": ref_run, "runs": rows})
-    files = plot_speed(rows, dims, ref_src, os.path.join(out, "speed_study"))
-    print(format_rows(rows, [k for k, _, _ in dims] + ["status", "wall_time_s", "peak_load_kN", "error", "pareto"]))
+                                                      "reference": ref_src, "reference_run": ref_run,
+                                                      "reference_curve": cref_src, "curve_to_m": u_to,
+                                                      "curve_from_m": u_from, "front_error": args.error, "runs": rows})
+    files = plot_speed(rows, dims, ref_src if args.error == "peak" else cref_src, os.path.join(out, "speed_study"),
+                       measure, args.error)
+    print(format_rows(rows, [k for k, _, _ in dims] + ["status", "wall_time_s", "peak_load_kN", "error", "curve_rms",
+                                                       "curve_max", "K_e_error", "ductility_error", "pareto"]))
     print(f"reference peak load {ref / 1e3:.5g} kN: {ref_src}" + (f" ({ref_run})" if ref_run else ""))
+    if cref_src:
+        print(f"reference curve: {cref_src}; curve_rms over 0-{u_to * 1e3:.4g} mm, curve_max over "
+              f"{u_from * 1e3:.4g}-{u_to * 1e3:.4g} mm, shares of its peak {cref['peak'] / 1e3:.5g} kN; "
+              f"Pareto front on the {args.error} error")
     print("wrote " + ", ".join([os.path.join(out, "speed_study.csv"), os.path.join(out, "speed_study.json")] + files))
     return 0 if len(ok) == len(recs) else 2
 
 
-def plot_speed(rows, dims, ref_src, prefix):
+def plot_speed(rows, dims, ref_src, prefix, measure="error", label="peak"):
     from .figures import new_figure, save
     fig, ax = new_figure(figsize=(7.2, 5.0))
+    rows = [{**r, "error": r[measure]} for r in rows]
     valid = [r for r in rows if r["error"] is not None]
     floor = min([r["error"] for r in valid if r["error"] > 0], default=1e-6) / 3.0
     # colour by the first dimension, marker by the second
@@ -353,7 +472,8 @@ def plot_speed(rows, dims, ref_src, prefix):
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.set_xlabel("wall time (s)")
-    ax.set_ylabel("peak-load error (%)")
+    ax.set_ylabel({"peak": "peak-load error (%)", "curve_max": "largest curve difference (% of the reference peak)",
+                   "curve_rms": "RMS curve difference (% of the reference peak)"}[label])
     ax.legend(handles=handles, fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0),
               title=f"error against: {ref_src}", title_fontsize=7)
     if any(r["error"] == 0 for r in valid):
@@ -393,7 +513,10 @@ def add_parser(sub):
     m.set_defaults(func=cmd_mesh)
     s = ss.add_parser("speed", help="wall time against error over mesh sizes, loading rates and damping",
                       description="Runs the grid mesh sizes x loading rates x damping values and plots wall time "
-                                  "against the peak-load error, marking the Pareto front.")
+                                  "against the error (peak load by default; --error curve_max or curve_rms: the "
+                                  "whole loading curve against a reference curve), marking the Pareto front. Every "
+                                  "run's whole-curve errors and the signed errors of K_e, P_y, ductility (EEEP) "
+                                  "and peak against the reference curve are tabulated.")
     _common(s)
     s.add_argument("--sizes", help="mesh sizes in m (comma-separated)")
     s.add_argument("--size-key", default="geometry.mesh_size", help="case key of the mesh size")
@@ -404,6 +527,15 @@ def add_parser(sub):
     s.add_argument("--grid", action="append", metavar="KEY=V1,V2", help="a further grid dimension (repeatable)")
     s.add_argument("--reference", type=float, help="reference peak load in kN (default: case reference, else the "
                                                    "most accurate run)")
+    s.add_argument("--reference-run", metavar="RUN_DIR",
+                   help="run folder whose loading curve is the reference of the whole-curve errors (default: the "
+                        "most accurate run of the grid)")
+    s.add_argument("--curve-to", type=float, metavar="M", help="end of the curve comparison, m (default: the "
+                                                              "smallest reach of the runs and the reference)")
+    s.add_argument("--curve-from", type=float, metavar="M", help="start of the largest-difference range, m "
+                                                                "(default 5 %% of --curve-to)")
+    s.add_argument("--error", choices=("peak", "curve_max", "curve_rms"), default="peak",
+                   help="error of the Pareto front and the figure (default peak)")
     s.add_argument("--out-dir", help="study folder (default runs/study_speed_<case>)")
     s.set_defaults(func=cmd_speed)
     p.set_defaults(func=lambda a: p.print_help() or 1)

@@ -1,8 +1,10 @@
 import csv
-import re
 import json
+import math
 import os
+import re
 
+import numpy as np
 import pytest
 
 from fdemtools import study
@@ -190,3 +192,51 @@ def test_shipped_dry_stone_wall_checks_at_every_study_size():
         got[h] = float(m.group(1))
     assert got[None] == 1e10  # the fixed value these cases had
     assert got["0.1"] > got["0.05"] > 1e10  # [K25] joints stiffened where the check needs it
+
+
+def test_speed_study_whole_curve_errors_with_fake_fdem(tmp_path, cli):
+    """Curve errors against the most accurate run: the fake curves are s P0 g(u), g = min(1, 2u / 1 mm), scaled by
+    s = (1 + h)(1 + rate); against s_ref = 1.1 the difference is (s / s_ref - 1) g(u): largest |.| = |s/s_ref - 1|
+    on the plateau, RMS = |s/s_ref - 1| sqrt(2/3) (the mean of g^2 over [0, 1 mm]; 2001 points: to 1e-3)."""
+    case = tmp_path / "case.toml"
+    case.write_text("# fake\n")
+    out = tmp_path / "s"
+    rc, o, err = cli("study", "speed", case, "--sizes", "0.2,0.1", "--rates", "0.5,0", "--rate-key", "rate",
+                     "--fdem", FAKE, "--out-dir", out, "--error", "curve_max")
+    assert rc == 0, err
+    j = json.loads((out / "speed_study.json").read_text())
+    assert j["curve_to_m"] == pytest.approx(1e-3, rel=1e-12) and j["curve_from_m"] == pytest.approx(5e-5, rel=1e-12)
+    assert "most accurate run" in j["reference_curve"] and j["front_error"] == "curve_max"
+    for r in j["runs"]:
+        q = (1 + float(r["geometry.mesh_size"])) * (1 + float(r["rate"])) / 1.1 - 1
+        assert r["curve_max"] == pytest.approx(abs(q), rel=1e-9, abs=1e-12)
+        assert r["curve_rms"] == pytest.approx(abs(q) * math.sqrt(2 / 3), rel=1e-3, abs=1e-12)
+        assert r["K_e_error"] == pytest.approx(q, rel=1e-9, abs=1e-12)
+        assert r["peak_error"] == pytest.approx(q, rel=1e-9, abs=1e-12)
+        assert r["ductility_error"] == pytest.approx(0.0, abs=1e-12)
+        dominated = any(p["wall_time_s"] <= r["wall_time_s"] and p["curve_max"] < r["curve_max"] for p in j["runs"])
+        assert r["pareto"] == (not dominated)
+    assert "largest curve difference" in (out / "speed_study.svg").read_text()
+    # a given reference run, and a comparison range no curve reaches
+    ref = [r["run"] for r in j["runs"] if float(r["geometry.mesh_size"]) == 0.2 and float(r["rate"]) == 0.5][0]
+    rc, o, err = cli("study", "speed", case, "--sizes", "0.2,0.1", "--rates", "0.5,0", "--rate-key", "rate",
+                     "--fdem", FAKE, "--out-dir", out, "--reference-run", str(out / "runs" / ref))
+    assert rc == 0, err
+    j = json.loads((out / "speed_study.json").read_text())
+    for r in j["runs"]:
+        q = (1 + float(r["geometry.mesh_size"])) * (1 + float(r["rate"])) / 1.8 - 1
+        assert r["curve_max"] == pytest.approx(abs(q), rel=1e-9, abs=1e-12)
+    rc, o, err = cli("study", "speed", case, "--sizes", "0.2,0.1", "--fdem", FAKE, "--out-dir", out,
+                     "--curve-to", "0.002", "--error", "curve_rms")
+    assert rc == 1 and "ends at 1 mm, before 2 mm" in err
+
+
+def test_loading_branch_and_curve_errors():
+    x = np.array([0.0, 1.0, 2.0, 1.5, 2.0, 3.0, 3.0, 4.0])
+    y = np.array([0.0, 1.0, 2.0, 9.0, 9.0, 3.0, 7.0, 4.0])
+    xb, yb = study.loading_branch(x, y)
+    assert list(xb) == [0.0, 1.0, 2.0, 3.0, 4.0] and list(yb) == [0.0, 1.0, 2.0, 3.0, 4.0]
+    e = study.curve_errors(xb, yb + 0.2, xb, yb, 4.0, 1.0)  # constant offset 0.2 on a peak of 4
+    assert e["curve_max"] == pytest.approx(0.05, rel=1e-12) and e["curve_rms"] == pytest.approx(0.05, rel=1e-12)
+    e = study.curve_errors(xb[:3], yb[:3], xb, yb, 4.0, 1.0)
+    assert e["curve_max"] is None and "the run's curve ends at" in e["curve_note"]
