@@ -7,6 +7,7 @@ set -euo pipefail
 cd "$(dirname "$0")"
 FDEM_BUILD_TARGET=${FDEM_BUILD_TARGET:-fdem}  # the executable only; ./test.sh builds the tests
 source tools/setup.sh
-case_file=${1:-cases/lourenco2005/k25_N100_quick.toml}
-[ $# -gt 0 ] && shift
+# The first argument is the case unless it is an option (`./run.sh --threads 2` runs the default case).
+case_file=cases/lourenco2005/k25_N100_quick.toml
+if [ $# -gt 0 ] && [ "${1#-}" = "$1" ]; then case_file=$1; shift; fi
 exec "$FDEM_BIN" run "$case_file" "$@"
