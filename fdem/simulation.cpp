@@ -1134,7 +1134,7 @@ void Simulation::fail(const std::string& what) {
                             std::to_string(steps_) + ", t = " + sci(time_, 6) + " s (dt = " + sci(dt_) +
                             " s, stable limit " + sci(dt_limit_) + " s)";
     wall_time_ = wall_clock() - wall_start_;
-    log("error: run failed: " + msg);
+    log_ += "error: run failed: " + msg + "\n";  // run.log; the terminal gets it once, on stderr from main
     if (!opt_.out_dir.empty()) {
         flush_files();
         write_summary("failed", msg);
