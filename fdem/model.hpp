@@ -59,13 +59,17 @@ Model build_model(const CaseSpec& spec, mesh::Mesh mesh);
 // node origins (renumbered with the mesh).
 Model build_model(const CaseSpec& spec, mesh::Topology topo);
 
-// Stable time step of the triangles alone ([M04] ch. 4): min over triangles of h_e / c_p, reduced for
-// viscous damping by (sqrt(1 + xi^2) - xi). Returns the limit (s) and the triangle that sets it.
+// Stable time step of the triangles alone: min over triangles of 2 / omega_e, omega_e the exact highest frequency of the
+// lumped-mass constant-strain triangle (triangle_omega2), reduced for viscous damping by (sqrt(1 + xi^2) - xi) ([M04]
+// ch. 4). Returns the limit (s) and the triangle that sets it.
 struct StepLimit {
     double dt = 0;  // s
     int element = -1;
 };
 StepLimit triangle_step_limit(const CaseSpec& spec, const Model& model);
+
+// omega_e^2 (1/s^2) of triangle n (node indices into the coordinates p) of material m at the given mass scaling.
+double triangle_omega2(const double* p, const int* n, const Material& m, Plane plane, double mass_scale);
 
 // P-wave speed of a material in the plane model, m/s.
 double p_wave_speed(const Material& m, Plane plane);
