@@ -27,8 +27,9 @@ CANTILEVER = os.path.join(REPO, "cases", "elastic", "cantilever.toml")
 SLIDING = os.path.join(REPO, "cases", "lourenco2005", "checks", "sliding_block.toml")
 # dry-joint block pushed 0.3 and 0.5 mm (about 2.5 s each on one core)
 DRY_GRID = ["--grid", "stages.2.until.value=0.0003,0.0005"]
-# cantilever at 50 mm (completes, about 2 s) and 100 mm (one triangle across the depth: inverts at step 45, exit 2)
-ELASTIC_GRID = ["--grid", "geometry.mesh_size=0.05,0.1"]
+# cantilever at safety 0.8 (completes, about 2 s) and 2.5 (a step 2.5 x its stable limit: a triangle inverts at step
+# 9, exit 2)
+ELASTIC_GRID = ["--grid", "numerics.safety=0.8,2.5"]
 POLL = ["--poll", "0.5", "--max-wait", "300"]
 
 
@@ -195,7 +196,7 @@ def test_failing_run_reported_with_its_slurm_state(cluster, tmp_path):
     rc, o, err = tools_cli("batch", CANTILEVER, *ELASTIC_GRID, "--out-dir", out, "--scheduler", "slurm", *POLL)
     assert rc_l == 2 and rc == 2
     assert "1 of 2 runs did not complete" in err
-    bad = batch.run_name({"geometry.mesh_size": "0.1"})
+    bad = batch.run_name({"numerics.safety": "2.5"})
     job = submissions(out)[0]["job_id"]
     assert f"  {bad}: Slurm state FAILED (job {job}_1), fdem exit 2, status failed" in err
     assert "inverted" in err.split(f"last lines of {out}/logs/{bad}.log:", 1)[1]  # fdem's own error message
@@ -203,7 +204,7 @@ def test_failing_run_reported_with_its_slurm_state(cluster, tmp_path):
     same_runs(out, local)
     with open(os.path.join(out, "slurm", "tasks.csv"), newline="") as f:
         states = {r["name"]: (r["slurm_state"], r["exit_code"]) for r in csv.DictReader(f)}
-    good = batch.run_name({"geometry.mesh_size": "0.05"})
+    good = batch.run_name({"numerics.safety": "0.8"})
     assert states[bad] == ("FAILED", "2") and states[good] == ("COMPLETED", "0")
 
 
