@@ -7,7 +7,10 @@
 
 #include "engine_helpers.hpp"
 #include "fdem/errors.hpp"
+#include "fdem/model.hpp"
 #include "fdem/triangle.hpp"
+
+#include <Eigen/Dense>
 #include "mesh/gmsh_source.hpp"
 
 using namespace fdem;
@@ -309,4 +312,43 @@ gravity = [0.0, -9.81]
     // Everything written so far is kept.
     CHECK(std::filesystem::exists(dir / "run" / "history.csv"));
     CHECK(testing::read_text(dir / "run" / "summary.json").find("\"failed\"") != std::string::npos);
+}
+
+// The automatic time step of the triangles: triangle_omega2 must be the highest frequency of K w = omega^2 M w for the
+// engine's own triangle (stiffness by central differences of triangle_forces at the reference state, lumped mass
+// rho A t / 3 per node), for shapes from equilateral to skew and slender, plane stress and strain, with mass scaling.
+TEST_CASE("triangle time step: omega_e is the lumped-mass CST's exact highest frequency", "[unit]") {
+    const double shapes[][6] = {{0, 0, 1, 0, 0.5, 0.8660254037844386}, {0, 0, 1, 0, 0, 1},     {0, 0, 2, 0, 0, 1},
+                                {0, 0, 1, 0, 0.9, 0.3},                 {0, 0, 1, 0, 0.5, 0.05}, {0.1, 0.2, 0.4, 0.25, 0.2, 0.6}};
+    for (Plane plane : {Plane::stress, Plane::strain})
+        for (const auto& p : shapes) {
+            Material mat;
+            mat.E = 3.0e10, mat.nu = 0.2, mat.density = 2500.0;
+            const double t = 0.2, scale = 10.0;
+            const double det = (p[2] - p[0]) * (p[5] - p[1]) - (p[4] - p[0]) * (p[3] - p[1]);
+            const double d00 = p[2] - p[0], d10 = p[3] - p[1], d01 = p[4] - p[0], d11 = p[5] - p[1];
+            TriangleRef tr{};
+            tr.n[0] = 0, tr.n[1] = 1, tr.n[2] = 2;
+            tr.Dinv[0] = d11 / det, tr.Dinv[1] = -d01 / det, tr.Dinv[2] = -d10 / det, tr.Dinv[3] = d00 / det;
+            tr.A0t = 0.5 * det * t;
+            MaterialConst mc;
+            mc.mu = mat.E / (2 * (1 + mat.nu));
+            mc.lambda = plane == Plane::stress ? mat.E * mat.nu / (1 - mat.nu * mat.nu)
+                                               : mat.E * mat.nu / ((1 + mat.nu) * (1 - 2 * mat.nu));
+            Eigen::Matrix<double, 6, 6> K;
+            const double h = 1e-7, v[6] = {0, 0, 0, 0, 0, 0};
+            for (int j = 0; j < 6; ++j) {
+                double xp[6], xm[6], fp[6], fm[6], pw;
+                for (int i = 0; i < 6; ++i) xp[i] = xm[i] = p[i];
+                xp[j] += h, xm[j] -= h;
+                triangle_forces(tr, mc, xp, v, fp, pw);
+                triangle_forces(tr, mc, xm, v, fm, pw);
+                for (int i = 0; i < 6; ++i) K(i, j) = -(fp[i] - fm[i]) / (2 * h);
+            }
+            const Eigen::Matrix<double, 6, 6> Ks = 0.5 * (K + K.transpose());
+            const double m = mat.density * scale * tr.A0t / 3.0;
+            const double w2_exact = Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>>(Ks / m).eigenvalues().maxCoeff();
+            const double w2 = triangle_omega2(p, tr.n, mat, plane, scale);
+            CHECK(w2 == Approx(w2_exact).epsilon(1e-6));
+        }
 }
