@@ -499,13 +499,13 @@ Topology build_topology(const Mesh& m, const TopologyOptions& opt) {
         } else if (const std::vector<int> own = g.every_copy ? std::vector<int>{} : owner_bodies(g); !own.empty()) {
             // A curve group (or a case group with `within`) takes the copies on its own bodies only: a curve of the
             // upper block that ends at a corner of the lower block must not drag the lower block's copy there.
-            h.bodies = own;
-            std::set<int> left_out;
-            for (int k : g.nodes) {
+            std::set<int> left_out, taken;  // taken: the own bodies of the copies held (a point picked `within` a
+            for (int k : g.nodes) {         // group of many bodies is on one or two of them)
                 const std::size_t before = h.nodes.size();
                 for (int c = copies_start[k]; c < copies_start[k + 1]; ++c) {
                     bool mine = false;
-                    for (int b : copy_bodies[c]) mine = mine || std::binary_search(own.begin(), own.end(), b);
+                    for (int b : copy_bodies[c])
+                        if (std::binary_search(own.begin(), own.end(), b)) mine = true, taken.insert(b);
                     if (mine) h.nodes.push_back(c);
                     else left_out.insert(copy_bodies[c].begin(), copy_bodies[c].end());
                 }
@@ -514,6 +514,7 @@ Topology build_topology(const Mesh& m, const TopologyOptions& opt) {
             }
             for (int b : left_out)
                 if (!std::binary_search(own.begin(), own.end(), b)) h.left_out_bodies.push_back(b);
+            h.bodies = taken.empty() ? own : std::vector<int>(taken.begin(), taken.end());
         } else {
             // No body rule: every copy. A node whose copies lie on bodies that share no copy (a dry or bonded
             // joint runs through it) is dragged on all of them; the case loader refuses to load or support it.
