@@ -1225,7 +1225,8 @@ void Simulation::run() {
     log("fdem " FDEM_VERSION ": case '" + spec_.name + "' (" + spec_.file + ")");
     log("mesh: " + std::to_string(model_.n_triangles()) + " triangles, " + std::to_string(model_.n_nodes()) + " nodes");
     log("time step: " + sci(dt_) + " s = " + (spec_.dt_override ? std::string("fixed by numerics.dt") : sci(spec_.safety) + " x stable limit") +
-        " " + sci(dt_limit_) + " s (set by " + (dt_element_ >= 0 ? "triangle " + std::to_string(dt_element_) : std::string("joint/contact springs")) + ")");
+        " " + sci(dt_limit_) + " s (set by " + (dt_element_ >= 0 ? "triangle " + std::to_string(dt_element_) : std::string("joint/contact springs")) + ")" +
+        (std::isfinite(dt_springs_) ? "; joint/contact springs alone " + sci(dt_springs_) + " s" : std::string()));
     if (!model_.has_topology && model_.mesh.n_bodies() > 1)
         log("no interface or fracture rules: the " + std::to_string(model_.mesh.n_bodies()) + " bodies of the mesh are tied into one continuum");
     if (inter_.has_joints())

@@ -45,10 +45,10 @@ LOAD_HEIGHT = 1.0   # m, the actuator node: the beam's left end at the top of th
 K25 = dict(mesh=0.025, penalty=1.0e10, rate=0.01, until=0.010, damping=0.05, ld_filter=0.1, contact_damping=0.3, mass_scale=10,
            # precompression: ramps and bound long enough for the mass-scaled wall (vertical period ~0.1 s) to come to rest
            pre_ramp=0.05, pre_max=0.4, snapshots=0.05)
-# QUICK (the default ./run.sh, about 2 minutes on 2 threads): the family setting with mass scaling 100 instead of 10
-# (time step x 3.16). On the 100 kN wall with the filtered local damping of RESULTS.md §8: 45.58 kN raw against
-# 45.13 kN raw at mass scaling 10 (+1.0 %), 116,405 steps, 123-137 s on 2 threads (RESULTS.md §17; before §8: 47.23
-# against 46.20 kN, RESULTS.md §7.4).
+# QUICK (the default ./run.sh, about 2-4 minutes on 2 threads): the family setting with mass scaling 100 instead of 10
+# (time step x 3.16). On the 100 kN wall with the filtered local damping of RESULTS.md §8 and the loading of SETUP_NODE:
+# 45.58 kN raw against 45.13 kN raw at mass scaling 10 (+1.0 %), 116,405 steps, 123-137 s on 2 threads (RESULTS.md
+# §17; before §8: 47.23 against 46.20 kN, RESULTS.md §7.4); with SETUP_PAPER 40.01 kN, 118,692 steps (RESULTS.md §28).
 K25_QUICK = dict(K25, mass_scale=100)
 # 3DEC family: local damping 0.8 in the shear stage, as 3DEC's default (Itasca's local damping 0.8), signed by the
 # velocity minus its moving mean over 0.1 s, and contact dashpots at 0.3 of critical: without the filter the damping
@@ -56,6 +56,118 @@ K25_QUICK = dict(K25, mass_scale=100)
 # 30 kN wall's first peak at 0.9 mm was dynamic (-20.7 % at half rate; RESULTS.md §8.4-8.5).
 DEC = dict(mesh=0.05, rate=0.01, until=0.008, damping=0.8, ld_filter=0.1, contact_damping=0.3, pre_ramp=0.01, pre_max=0.02,
            snapshots=0.01)
+
+
+
+# Set-up of the loading and supports. "node": the committed set-up until 27 Nov (RESULTS.md §6): one actuator node at the
+# beam's left end at the top of the wall (h = 1.0 m), H its reaction; the bottom-left corner node restrained in x only.
+# "paper": the [K25] model's set-up (seeds/004 = Karimzadeh et al., Sec. 4, Figure 7b): "the base and bottom-left corner of
+# the simulated wall specimens were pinned ... the gridpoints of the element located at the left toe and bottom surface
+# were assigned zero displacement"; "no restraints were applied at the top of the RC beam"; "constant gridpoint
+# velocities were assigned at the top surface of the loading beam"; "base shear reaction forces were recorded". Read
+# here as: every node of the wall's bottom surface fixed in x and y (the toe is one of them; the base slab below is then
+# idle), every node of the beam's top surface driven at vx (vertical free, so the beam can still rotate: a uniform
+# horizontal velocity along a horizontal line allows a rigid rotation), and H the sum of the horizontal reactions of
+# the supports. The other reading, the wall on the slab through its dry joint with only the bottom-left corner node
+# pinned (x and y), was run once on the 100 kN wall (RESULTS.md §28: 37.94 kN against 40.01 kN with this one).
+# The [K25] family uses "paper" (issue 27 §2); the 3DEC-style family keeps "node".
+SETUP_NODE = dict(
+    base="""the wall stands on a concrete base slab (fixed at base_bottom) through a dry joint, so it can
+#   rock and slide""",
+    groups="""[groups.actuator]        # one node at the beam's left end, at the top of the wall (h = {load_height} m): the beam stays
+nearest = [0.0, {load_height}]    # free to rotate
+within = "beam_left"
+
+[groups.stopper]         # bottom-left corner node of the bottom-left block: restrained against sliding (fix x); one
+nearest = [0.0, 0.0]     # node, so that the block can still lift and rotate with the wall (a box of nodes on its left
+within = "wall_left"     # face held it upright: a moment restraint the test did not have)
+
+[[monitors]]
+name = "u_beam"          # m, horizontal displacement of the loaded point
+type = "displacement"
+group = "actuator"
+component = "x"
+
+[[monitors]]
+name = "H"               # N, actuator reaction (negative while pushing in +x)
+type = "reaction"
+group = "actuator"
+component = "x"
+
+[[monitors]]
+name = "V_base"          # N, vertical base reaction (= N + self-weight once precompressed)
+type = "reaction"
+group = "base_bottom"
+component = "y"
+
+[[monitors]]
+name = "H_stopper"       # N, reaction of the sliding restraint
+type = "reaction"
+group = "stopper"
+component = "x"
+""",
+    sentence="""The actuator
+#   is a single node at the beam's left end at the top of the wall (h = {LOAD_HEIGHT} m): horizontal velocity prescribed,
+#   vertical free, the beam rotates; the bottom-left corner node is held in x (SETUP_NODE in make_cases.py). N on top of
+#   the self-weight follows the rigid-block limit of cases/README.md §A, H = N/2 plus the self-weight share, which the
+#   brief's other sentence (cases/README.md §A) ("N includes the self-weight") contradicts: see make_cases.py and
+#   RESULTS.md §6 (the other reading: --set stages.1.loads.1.force=[0.0,-(N - {W:.1f})]; the load at the
+#   beam's mid-depth: --set groups.actuator.nearest=[0.0,1.1]).""",
+    toe="""  [[stages.supports]]
+  group = "stopper"
+  fix = "x"
+""",
+    drive="""  [[stages.supports]]
+  group = "actuator"
+  vx = {rate}              # m/s
+  ramp = 0.005           # s
+""")
+SETUP_PAPER = dict(
+    base="""the wall's bottom surface is fixed (the concrete base slab
+#   below it, fixed at base_bottom, stays idle)""",
+    groups="""[groups.supports]        # every node from the base slab's bottom to the wall's bottom (a box): the reaction monitors
+box = [-0.2, -0.2, 1.2, 0.001]   # sum over its prescribed DOFs, i.e. base_bottom and wall_bottom (xmin, ymin, xmax, ymax; m)
+
+[[monitors]]
+name = "u_beam"          # m, horizontal displacement of the beam's top surface (mean over its nodes)
+type = "displacement"
+group = "beam_top"
+component = "x"
+
+[[monitors]]
+name = "H"               # N, base shear: horizontal reaction of the supports (the recorded load of seeds/004;
+type = "reaction"        # negative while the beam is pushed in +x)
+group = "supports"
+component = "x"
+
+[[monitors]]
+name = "H_drive"         # N, reaction of the driven beam top (positive while pushing in +x; -H plus the inertial and
+type = "reaction"        # damping forces of wall and beam)
+group = "beam_top"
+component = "x"
+
+[[monitors]]
+name = "V_base"          # N, vertical reaction of the supports (= N + self-weight once precompressed)
+type = "reaction"
+group = "supports"
+component = "y"
+""",
+    sentence="""Loading and
+#   supports as the [K25] model of seeds/004 (Sec. 4, Figure 7b; SETUP_PAPER in make_cases.py): the wall's bottom surface
+#   fixed in x and y (the base slab below is idle; the other reading, the wall on the slab's dry joint with only the
+#   bottom-left corner pinned, gave 5 % less on the 100 kN wall, RESULTS.md §28), every node of the beam's top surface
+#   (h = 1.2 m) driven horizontally at a constant velocity, vertical free (the beam can rotate); H is the base shear,
+#   the horizontal reaction of the supports. N on top of the self-weight as the rigid-block limit of cases/README.md §A
+#   reads it (RESULTS.md §6; the other reading: --set stages.1.loads.1.force=[0.0,-(N - {W:.1f})]).""",
+    toe="""  [[stages.supports]]
+  group = "wall_bottom"   # the wall's bottom surface, pinned (seeds/004 Sec. 4)
+  fix = "xy"
+""",
+    drive="""  [[stages.supports]]
+  group = "beam_top"      # every node of the beam's top surface (seeds/004: constant gridpoint velocities)
+  vx = {rate}              # m/s
+  ramp = 0.005           # s
+""")
 
 
 def rows():
@@ -97,38 +209,7 @@ base = "concrete"
 regions = ["units", "beam"]
 kind = "tied"
 
-[groups.actuator]        # one node at the beam's left end, at the top of the wall (h = {load_height} m): the beam stays
-nearest = [0.0, {load_height}]    # free to rotate
-within = "beam_left"
-
-[groups.stopper]         # bottom-left corner node of the bottom-left block: restrained against sliding (fix x); one
-nearest = [0.0, 0.0]     # node, so that the block can still lift and rotate with the wall (a box of nodes on its left
-within = "wall_left"     # face held it upright: a moment restraint the test did not have)
-
-[[monitors]]
-name = "u_beam"          # m, horizontal displacement of the loaded point
-type = "displacement"
-group = "actuator"
-component = "x"
-
-[[monitors]]
-name = "H"               # N, actuator reaction (negative while pushing in +x)
-type = "reaction"
-group = "actuator"
-component = "x"
-
-[[monitors]]
-name = "V_base"          # N, vertical base reaction (= N + self-weight once precompressed)
-type = "reaction"
-group = "base_bottom"
-component = "y"
-
-[[monitors]]
-name = "H_stopper"       # N, reaction of the sliding restraint
-type = "reaction"
-group = "stopper"
-component = "x"
-
+{setup_groups}
 [[monitors]]
 name = "u_top_right"     # m
 type = "displacement"
@@ -164,10 +245,7 @@ gravity_ramp = {pre_ramp}      # s
   [[stages.supports]]
   group = "base_bottom"
   fix = "xy"
-  [[stages.supports]]
-  group = "stopper"
-  fix = "x"
-  [[stages.loads]]
+{toe_support}  [[stages.loads]]
   group = "beam_top"
   force = [0.0, {F_top}]  # N = -N; the base carries N + wall and beam self-weight {W:.1f} N
   ramp = {pre_ramp}            # s
@@ -176,11 +254,12 @@ gravity_ramp = {pre_ramp}      # s
 name = "shear"           # horizontal displacement at constant rate, N held
 until = {{ monitor = "u_beam", value = {until} }}
 local_damping = {damping}{ldf}{contact}
-  [[stages.supports]]
-  group = "actuator"
-  vx = {rate}              # m/s
-  ramp = 0.005           # s
-"""
+{drive}"""
+
+
+def setup_text(setup, s):
+    return dict(setup_groups=setup["groups"].format(load_height=LOAD_HEIGHT), toe_support=setup["toe"],
+                drive=setup["drive"].format(rate=s["rate"]))
 
 
 def ldf_line(s):
@@ -193,21 +272,17 @@ def contact_line(s):
     return f"\ncontact_damping = {x}    # contact dashpots, fraction of critical (see the header)" if x else ""
 
 
-def header(title, r, variant_text, s, fname):
+def header(title, r, variant_text, s, fname, setup):
+    setup_sentence = setup["sentence"].format(LOAD_HEIGHT=LOAD_HEIGHT, W=W_WALL + W_BEAM)
+    setup_base = setup["base"]
     return f"""# {title}
 # Reproduces: Lourenco, Oliveira, Roca, Orduna, "Dry joint stone masonry walls subjected to in-plane combined loading",
 #   J. Struct. Eng. 131(11) 2005: dry-joint sandstone wall 1000 x 1000 x 200 mm, blocks 200 x 100 x 200 mm, running
 #   bond, RC beam on top free to rotate, bottom-left block restrained against sliding; N = {r['N_kN']} kN
 #   (sigma = {r['sigma_MPa']} MPa), then horizontal displacement of the beam until well past peak.
 #   Measured peak {r['experiment_kN']} kN; published FDEM [K25] {r['fdem_k25_kN']} kN (reference.csv, cases/README.md §A).
-# Model (cases/README.md 'A 3D test as a 2D model'): the wall stands on a concrete base slab (fixed at base_bottom) through a dry joint, so it can
-#   rock and slide; the beam is tied to the top course; N is a force on beam_top and the self-weight of wall and beam
-#   ({W_WALL:.1f} + {W_BEAM:.1f} N, gravity on) acts in addition, so the base carries N + {W_WALL + W_BEAM:.1f} N. The actuator
-#   is a single node at the beam's left end at the top of the wall (h = {LOAD_HEIGHT} m): horizontal velocity prescribed,
-#   vertical free, the beam rotates. Both follow the rigid-block limit of cases/README.md §A, H = N/2 plus the self-weight
-#   share, which the brief's other sentence (cases/README.md §A) ("N includes the self-weight") contradicts: see make_cases.py and
-#   RESULTS.md §6 (the other reading: --set stages.1.loads.1.force=[0.0,-(N - {W_WALL + W_BEAM:.1f})]; the load at the
-#   beam's mid-depth: --set groups.actuator.nearest=[0.0,1.1]).
+# Model (cases/README.md 'A 3D test as a 2D model'): {setup_base}; the beam is tied to the top course; N is a force on beam_top and the self-weight of wall and beam
+#   ({W_WALL:.1f} + {W_BEAM:.1f} N, gravity on) acts in addition, so the base carries N + {W_WALL + W_BEAM:.1f} N. {setup_sentence}
 {variant_text}
 # Assumed values (not published): Poisson 0.2, density 2400 kg/m^3 (cases/README.md §A); beam 200 mm deep and base 100 mm deep,
 #   both concrete with E = 1 GPa (elastic, no cracking); loading rate {s['rate']} m/s up to {s['until'] * 1000:g} mm;
@@ -235,11 +310,12 @@ def k25_case(r, quick=False):
 # Mesh: {s['mesh'] * 1000:g} mm in the blocks (the [K25] size, from the single-stone study), 100 mm in the beam and base.
 {{settings_text}}"""
     if quick:
-        settings_text = f"""# QUICK SETTING, for the default ./run.sh (about 2 minutes on 2 threads): the family's settings (k25_N{r['N_kN']}.toml:
+        settings_text = f"""# QUICK SETTING, for the default ./run.sh (2-4 minutes on 2 threads): the family's settings (k25_N{r['N_kN']}.toml:
 #   contact dashpots {s['contact_damping']}, shear-stage local damping {s['damping']}, {s['rate']} m/s to {s['until'] * 1000:g} mm) with the
 #   inertial mass x {s['mass_scale']} instead of x {K25['mass_scale']} ([numerics] mass_scale; gravity keeps the physical mass), time step
-#   x 3.16. Measured on this wall: raw maximum 45.58 kN against 45.13 kN for the family setting, +1.0 %
-#   (RESULTS.md §8, §17). The family report is the validation; this is its fast preview."""
+#   x 3.16. Measured on this wall with the loading of SETUP_NODE: raw maximum 45.58 kN against 45.13 kN for the family
+#   setting, +1.0 % (RESULTS.md §8, §17); with the paper's set-up 40.01 kN (RESULTS.md §28; the family setting not yet
+#   run with it). The family report is the validation; this is its fast preview."""
     else:
         settings_text = f"""# Mass scaling: inertial mass x {s['mass_scale']} ([numerics] mass_scale; gravity keeps the physical mass): time step
 #   ~3.7e-6 s instead of ~1.2e-6 s. Shear stage: contact dashpots at {s['contact_damping']} of critical (stage key
@@ -251,7 +327,8 @@ def k25_case(r, quick=False):
 #   signed by v minus its moving mean over {s['ld_filter']} s (local_damping_filter) it damps the oscillation and leaves
 #   the drive's steady motion alone (RESULTS.md §8). Its share of the loading work is in the family report."""
     variant = variant.replace("{settings_text}", settings_text)
-    text = header(f"Dry-joint sandstone wall, N = {r['N_kN']} kN, [K25]-style FDEM (block cracking, wall modulus)", r, variant, s, fname)
+    text = header(f"Dry-joint sandstone wall, N = {r['N_kN']} kN, [K25]-style FDEM (block cracking, wall modulus)", r, variant, s, fname,
+                  SETUP_PAPER)
     text += f"""[case]
 name = "lourenco2005_k25_N{r['N_kN']}{'_quick' if quick else ''}"
 description = "Dry-joint sandstone wall (Lourenco 2005), N = {r['N_kN']} kN, [K25] style: per-wall modulus, cracking blocks{' (QUICK setting: mass scaling 100)' if quick else ''}"
@@ -289,7 +366,7 @@ normal_penalty = {s['penalty']:g}  # Pa (assumed)
 mass_scale = {s['mass_scale']}          # inertial mass multiplier, see the header
 """
     W = W_WALL + W_BEAM
-    text += COMMON_TAIL.format(interfaces=interfaces, numerics=numerics, load_height=LOAD_HEIGHT, exp_N=float(r["experiment_kN"]) * 1e3,
+    text += COMMON_TAIL.format(**setup_text(SETUP_PAPER, s), interfaces=interfaces, numerics=numerics, load_height=LOAD_HEIGHT, exp_N=float(r["experiment_kN"]) * 1e3,
                                N=r["N_kN"], F_top=f"{-N:.1f}", W=W, until=s["until"], damping=s["damping"], pre_ramp=s["pre_ramp"], pre_max=s["pre_max"], snapshots=s["snapshots"],
                                rate=s["rate"], contact=contact_line(s), ldf=ldf_line(s))
     return fname, text
@@ -309,7 +386,8 @@ def dec_case(r):
 # Shear stage: local damping {s['damping']} signed by v minus its moving mean over {s['ld_filter']} s (local_damping_filter), so that
 #   it damps vibrations and not the drive's steady motion, and contact dashpots at {s['contact_damping']} of critical
 #   (contact_damping); without them the 30 kN wall's first peak was dynamic (RESULTS.md §8.5)."""
-    text = header(f"Dry-joint sandstone wall, N = {r['N_kN']} kN, 3DEC-style model (stone modulus, joint stiffness)", r, variant, s, fname)
+    text = header(f"Dry-joint sandstone wall, N = {r['N_kN']} kN, 3DEC-style model (stone modulus, joint stiffness)", r, variant, s, fname,
+                  SETUP_NODE)
     text += f"""[case]
 name = "lourenco2005_dec_N{r['N_kN']}"
 description = "Dry-joint sandstone wall (Lourenco 2005), N = {r['N_kN']} kN, 3DEC style: E 15.5 GPa, joint k_n/k_s"
@@ -337,7 +415,7 @@ normal_stiffness = {kn:.4g}   # Pa/m
 shear_stiffness = {ks:.4g}    # Pa/m
 """
     W = W_WALL + W_BEAM
-    text += COMMON_TAIL.format(interfaces=interfaces, numerics="", load_height=LOAD_HEIGHT, exp_N=float(r["experiment_kN"]) * 1e3,
+    text += COMMON_TAIL.format(**setup_text(SETUP_NODE, s), interfaces=interfaces, numerics="", load_height=LOAD_HEIGHT, exp_N=float(r["experiment_kN"]) * 1e3,
                                N=r["N_kN"], F_top=f"{-N:.1f}", W=W, until=s["until"], damping=s["damping"], pre_ramp=s["pre_ramp"], pre_max=s["pre_max"], snapshots=s["snapshots"],
                                rate=s["rate"], contact=contact_line(s), ldf=ldf_line(s))
     return fname, text
