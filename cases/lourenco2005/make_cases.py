@@ -366,7 +366,7 @@ normal_penalty = {s['penalty']:g}  # Pa (assumed)
 mass_scale = {s['mass_scale']}          # inertial mass multiplier, see the header
 """
     W = W_WALL + W_BEAM
-    text += COMMON_TAIL.format(**setup_text(SETUP_PAPER, s), interfaces=interfaces, numerics=numerics, load_height=LOAD_HEIGHT, exp_N=float(r["experiment_kN"]) * 1e3,
+    text += COMMON_TAIL.format(**setup_text(SETUP_PAPER, s), interfaces=interfaces, numerics=numerics, exp_N=float(r["experiment_kN"]) * 1e3,
                                N=r["N_kN"], F_top=f"{-N:.1f}", W=W, until=s["until"], damping=s["damping"], pre_ramp=s["pre_ramp"], pre_max=s["pre_max"], snapshots=s["snapshots"],
                                rate=s["rate"], contact=contact_line(s), ldf=ldf_line(s))
     return fname, text
@@ -415,7 +415,7 @@ normal_stiffness = {kn:.4g}   # Pa/m
 shear_stiffness = {ks:.4g}    # Pa/m
 """
     W = W_WALL + W_BEAM
-    text += COMMON_TAIL.format(**setup_text(SETUP_NODE, s), interfaces=interfaces, numerics="", load_height=LOAD_HEIGHT, exp_N=float(r["experiment_kN"]) * 1e3,
+    text += COMMON_TAIL.format(**setup_text(SETUP_NODE, s), interfaces=interfaces, numerics="", exp_N=float(r["experiment_kN"]) * 1e3,
                                N=r["N_kN"], F_top=f"{-N:.1f}", W=W, until=s["until"], damping=s["damping"], pre_ramp=s["pre_ramp"], pre_max=s["pre_max"], snapshots=s["snapshots"],
                                rate=s["rate"], contact=contact_line(s), ldf=ldf_line(s))
     return fname, text
