@@ -10,7 +10,9 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <sstream>
 #include <unordered_map>
+#include <vector>
 
 namespace fdem::mesh {
 
@@ -349,10 +351,101 @@ std::string msh_diagnosis(const std::string& path) {
     return "";
 }
 
+// Structure of an ASCII MSH 2.2 file, checked before Gmsh reads it: Gmsh 4.8's MSH2 reader trusts the node and element
+// lines and crashes (SIGSEGV in GModel::_associateEntityWithMeshVertices) on a node line missing a coordinate, a node
+// tag 0 or an element line short of nodes (issue 26 fuzzer). Returns "" when the file is sound, or not ASCII MSH 2.2
+// (other formats are left to Gmsh), else "line N: what is wrong".
+std::string msh2_structure(const std::string& path) {
+    std::ifstream f(path);
+    std::string line;
+    long n = 0;
+    auto next = [&]() {
+        if (!std::getline(f, line)) return false;
+        ++n;
+        if (!line.empty() && line.back() == '\r') line.pop_back();
+        return true;
+    };
+    // A defect on the file's last line is a file cut short: left to Gmsh and msh_diagnosis, which say so.
+    auto at = [&](const std::string& what) {
+        return f.peek() == std::char_traits<char>::eof() ? std::string()
+                                                         : "line " + std::to_string(n) + ": " + what + " ('" + line + "')";
+    };
+    auto fields = [](const std::string& l) {
+        std::vector<std::string> out;
+        std::istringstream is(l);
+        for (std::string w; is >> w;) out.push_back(w);
+        return out;
+    };
+    auto to_long = [](const std::string& w, long& v) {
+        char* end = nullptr;
+        errno = 0;
+        v = std::strtol(w.c_str(), &end, 10);
+        return errno == 0 && end && *end == '\0' && end != w.c_str();
+    };
+    auto to_double = [](const std::string& w) {
+        char* end = nullptr;
+        const double v = std::strtod(w.c_str(), &end);
+        return end && *end == '\0' && end != w.c_str() && std::isfinite(v);
+    };
+    if (!next() || line.rfind("$MeshFormat", 0) != 0 || !next()) return "";
+    {
+        const auto w = fields(line);
+        if (w.size() < 2 || w[0] != "2.2" || w[1] != "0") return "";  // not ASCII 2.2
+    }
+    std::unordered_map<long, char> nodes;
+    // Nodes per element of the MSH 2 types fdem meets (line, triangle, quadrangle, tetrahedron, point, 2nd-order
+    // line and triangle); another type is left to Gmsh.
+    const std::map<long, long> nodes_of = {{1, 2}, {2, 3}, {3, 4}, {4, 4}, {15, 1}, {8, 3}, {9, 6}};
+    while (next()) {
+        if (line == "$Nodes" || line == "$Elements") {
+            const bool is_nodes = line == "$Nodes";
+            if (!next()) return "";
+            long count = 0;
+            const auto c = fields(line);
+            if (c.size() != 1 || !to_long(c[0], count) || count < 0) return at("expected the number of entries");
+            for (long i = 0; i < count; ++i) {
+                if (!next()) return "";
+                if (!line.empty() && line[0] == '$')
+                    return at("the section announces " + std::to_string(count) + " entries and ends after " + std::to_string(i) +
+                              "; expected $End" + (is_nodes ? "Nodes" : "Elements") + " after " + std::to_string(count));
+                const auto w = fields(line);
+                long id = 0;
+                if (w.empty() || !to_long(w[0], id) || id <= 0) return at("expected a positive tag first");
+                if (is_nodes) {
+                    if (w.size() != 4) return at("a node line holds a tag and three coordinates");
+                    for (int k = 1; k < 4; ++k)
+                        if (!to_double(w[k])) return at("coordinate '" + w[k] + "' is not a finite number");
+                    if (!nodes.emplace(id, 1).second) return at("node tag " + w[0] + " appears twice");
+                } else {
+                    long type = 0, ntags = 0;
+                    if (w.size() < 3 || !to_long(w[1], type) || !to_long(w[2], ntags) || ntags < 0)
+                        return at("expected: tag, type, number of tags, tags, nodes");
+                    const auto it = nodes_of.find(type);
+                    if (it == nodes_of.end()) continue;
+                    if (static_cast<long>(w.size()) != 3 + ntags + it->second)
+                        return at("element type " + w[1] + " with " + w[2] + " tags needs " + std::to_string(3 + ntags + it->second) +
+                                  " numbers, the line has " + std::to_string(w.size()));
+                    for (std::size_t k = 3; k < w.size(); ++k) {
+                        long v = 0;
+                        if (!to_long(w[k], v)) return at("'" + w[k] + "' is not an integer");
+                        if (k >= static_cast<std::size_t>(3 + ntags) && !nodes.count(v)) return at("node " + w[k] + " is not in $Nodes");
+                    }
+                }
+            }
+            if (!next()) return "";
+            if (line != (is_nodes ? "$EndNodes" : "$EndElements"))
+                return at(std::string("expected $End") + (is_nodes ? "Nodes" : "Elements") + " after " + std::to_string(count) + " entries");
+        }
+    }
+    return "";
+}
+
 // Opens a .geo or .msh through the API, meshes in 2D when asked, and extracts the Mesh; every Gmsh failure
 // becomes a MeshError naming the file.
 Mesh open_and_extract(const std::string& path, bool generate, double size_factor) {
     require_readable(path);
+    if (!generate)
+        if (const std::string why = msh2_structure(path); !why.empty()) throw MeshError("reading '" + path + "': " + why);
     GmshSession session;
     if (generate) gmsh::option::setNumber("Mesh.MeshSizeFactor", size_factor);
     try {

@@ -287,3 +287,39 @@ TEST_CASE("a curve group of the upper block that ends at the lower block's corne
     CHECK(tied.mesh.find_group("corner")->nodes.size() == 1);
     CHECK(tied.mesh.find_group("upper_left")->left_out_bodies.empty());
 }
+
+// Gmsh 4.8's MSH 2.2 reader crashed (SIGSEGV) on these one-line defects, found by the issue-26 fuzzer; fdem checks the
+// file's structure first and names the file and the line.
+TEST_CASE("malformed MSH 2.2 node and element lines are refused with the line, before Gmsh reads them", "[unit]") {
+    const std::string good =
+        "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$PhysicalNames\n1\n2 1 \"body\"\n$EndPhysicalNames\n"
+        "$Nodes\n4\n1 0 0 0\n2 1 0 0\n3 1 1 0\n4 0 1 0\n$EndNodes\n"
+        "$Elements\n2\n1 2 2 1 5 1 2 3\n2 2 2 1 5 1 3 4\n$EndElements\n";
+    auto write = [](const std::string& name, const std::string& text) {
+        const std::string path = tmp_dir() + "/" + name;
+        std::ofstream(path) << text;
+        return path;
+    };
+    auto replace_line = [](std::string text, int line, const std::string& with) {
+        std::size_t b = 0;
+        for (int k = 1; k < line; ++k) b = text.find('\n', b) + 1;
+        return text.replace(b, text.find('\n', b) - b, with);
+    };
+    CHECK(read_msh_file(write("good2.msh", good)).n_triangles() == 2);
+    const struct {
+        int line;
+        const char* text;
+        const char* why;
+    } cases[] = {{11, "2 1 0", "a tag and three coordinates"},
+                 {12, "0 1 1 0", "positive tag"},
+                 {12, "3 1 nan 0", "not a finite number"},
+                 {13, "2 0 1 0", "appears twice"},
+                 {17, "1 2 2 1 5 1 2", "needs 8 numbers"},
+                 {18, "2 2 2 1 5 1 3 9", "node 9 is not in $Nodes"},
+                 {9, "5", "expected $EndNodes"}};
+    for (const auto& c : cases) {
+        const std::string path = write("bad2.msh", replace_line(good, c.line, c.text));
+        INFO("line " << c.line << " -> '" << c.text << "'");
+        CHECK_THROWS_WITH(read_msh_file(path), Catch::Contains("bad2.msh") && Catch::Contains("line ") && Catch::Contains(c.why));
+    }
+}
