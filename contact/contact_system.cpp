@@ -334,21 +334,7 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f)
     travel_ += dt * vmax;
 
     const double t0 = omp_get_wtime();
-    // Bounding boxes and pair-kernel geometry of the capable triangles, once per step: most candidate pairs are
-    // apart and are rejected from two contiguous boxes, and a triangle met by several overlapping pairs has its
-    // area coordinates and altitudes computed once.
     const int n_items = static_cast<int>(items_.size());
-#pragma omp parallel for schedule(static) if (n_items > kParallelMin)
-    for (int i = 0; i < n_items; ++i) {
-        double T[6];
-        gather(x, tri_ + 3 * items_[i], T);
-        double* bx = &box_[4 * static_cast<size_t>(items_[i])];
-        bx[0] = std::min(T[0], std::min(T[2], T[4]));
-        bx[1] = std::max(T[0], std::max(T[2], T[4]));
-        bx[2] = std::min(T[1], std::min(T[3], T[5]));
-        bx[3] = std::max(T[1], std::max(T[3], T[5]));
-        triangle_geometry(T, geom_[items_[i]]);
-    }
     const int np = static_cast<int>(pair_a_.size());
     const bool want_energy = opt_.compute_energy;
     // The kernel's parameters depend on the law, dt and the dashpot only: resolved once per law, not per pair.
@@ -372,51 +358,70 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f)
             else prm.p_n = L.normal;
         }
     }
-#pragma omp parallel for schedule(dynamic, 512) if (np > kParallelMin)
-    for (int p = 0; p < np; ++p) {
-        const int a = pair_a_[p], b = pair_b_[p];
-        pair_on_[p] = 0;
-        const double* ba = &box_[4 * static_cast<size_t>(a)];
-        const double* bb = &box_[4 * static_cast<size_t>(b)];
-        if (ba[1] <= bb[0] || bb[1] <= ba[0] || ba[3] <= bb[2] || bb[3] <= ba[2]) {  // disjoint boxes
-            if (!pair_hist_on_[p]) continue;  // nothing to forget (the common case: apart since detection)
-            pair_hist_on_[p] = 0;
-            const double released = forget(&hist_[kHistPerPair * static_cast<size_t>(p)]);
-            if (released != 0.0) {  // booked in the serial sum below, no forces
+    // Bounding boxes and pair-kernel geometry of the capable triangles, once per step: most candidate pairs are
+    // apart and are rejected from two contiguous boxes, and a triangle met by several overlapping pairs has its
+    // area coordinates and altitudes computed once. One parallel region for this loop and the pair loop (a fork
+    // and join less; the capable triangles, about half as many as the pairs, were below kParallelMin on their own
+    // and ran serially in the wall cases).
+#pragma omp parallel if (np > kParallelMin || n_items > kParallelMin)
+    {
+#pragma omp for schedule(static)
+        for (int i = 0; i < n_items; ++i) {
+            double T[6];
+            gather(x, tri_ + 3 * items_[i], T);
+            double* bx = &box_[4 * static_cast<size_t>(items_[i])];
+            bx[0] = std::min(T[0], std::min(T[2], T[4]));
+            bx[1] = std::max(T[0], std::max(T[2], T[4]));
+            bx[2] = std::min(T[1], std::min(T[3], T[5]));
+            bx[3] = std::max(T[1], std::max(T[3], T[5]));
+            triangle_geometry(T, geom_[items_[i]]);
+        }
+#pragma omp for schedule(dynamic, 512)
+        for (int p = 0; p < np; ++p) {
+            const int a = pair_a_[p], b = pair_b_[p];
+            pair_on_[p] = 0;
+            const double* ba = &box_[4 * static_cast<size_t>(a)];
+            const double* bb = &box_[4 * static_cast<size_t>(b)];
+            if (ba[1] <= bb[0] || bb[1] <= ba[0] || ba[3] <= bb[2] || bb[3] <= ba[2]) {  // disjoint boxes
+                if (!pair_hist_on_[p]) continue;  // nothing to forget (the common case: apart since detection)
+                pair_hist_on_[p] = 0;
+                const double released = forget(&hist_[kHistPerPair * static_cast<size_t>(p)]);
+                if (released != 0.0) {  // booked in the serial sum below, no forces
+                    pair_on_[p] = 2;
+                    double* pe = &pair_e_[4 * static_cast<size_t>(p)];
+                    pe[0] = pe[1] = pe[3] = 0.0;
+                    pe[2] = released;
+                }
+                continue;
+            }
+            double va[6], vb[6];
+            gather(v, tri_ + 3 * a, va);
+            gather(v, tri_ + 3 * b, vb);
+            PairResult r;
+            // pair_contact leaves the history all zero when it returns false (every slot released).
+            const bool on = pair_contact(geom_[a], geom_[b], va, vb, law_prm_[pair_law_[p]], want_energy,
+                                         &hist_[kHistPerPair * static_cast<size_t>(p)], r);
+            pair_hist_on_[p] = on ? 1 : 0;
+            if (on) {
+                pair_on_[p] = 1;
+                double* pf = &pair_f_[12 * static_cast<size_t>(p)];
+                for (int s = 0; s < 6; ++s) {
+                    pf[s] = r.fa[s];
+                    pf[6 + s] = r.fb[s];
+                }
+                double* pe = &pair_e_[4 * static_cast<size_t>(p)];
+                pe[0] = r.energy_normal;
+                pe[1] = r.energy_tangential;
+                pe[2] = r.dissipation;
+                pe[3] = r.damping;
+            } else if (r.dissipation != 0.0) {  // apart now: only the released friction springs to book
                 pair_on_[p] = 2;
                 double* pe = &pair_e_[4 * static_cast<size_t>(p)];
                 pe[0] = pe[1] = pe[3] = 0.0;
-                pe[2] = released;
+                pe[2] = r.dissipation;
             }
-            continue;
         }
-        double va[6], vb[6];
-        gather(v, tri_ + 3 * a, va);
-        gather(v, tri_ + 3 * b, vb);
-        PairResult r;
-        // pair_contact leaves the history all zero when it returns false (every slot released).
-        const bool on = pair_contact(geom_[a], geom_[b], va, vb, law_prm_[pair_law_[p]], want_energy,
-                                     &hist_[kHistPerPair * static_cast<size_t>(p)], r);
-        pair_hist_on_[p] = on ? 1 : 0;
-        if (on) {
-            pair_on_[p] = 1;
-            double* pf = &pair_f_[12 * static_cast<size_t>(p)];
-            for (int s = 0; s < 6; ++s) {
-                pf[s] = r.fa[s];
-                pf[6 + s] = r.fb[s];
-            }
-            double* pe = &pair_e_[4 * static_cast<size_t>(p)];
-            pe[0] = r.energy_normal;
-            pe[1] = r.energy_tangential;
-            pe[2] = r.dissipation;
-            pe[3] = r.damping;
-        } else if (r.dissipation != 0.0) {  // apart now: only the released friction springs to book
-            pair_on_[p] = 2;
-            double* pe = &pair_e_[4 * static_cast<size_t>(p)];
-            pe[0] = pe[1] = pe[3] = 0.0;
-            pe[2] = r.dissipation;
-        }
-    }
+    }  // omp parallel
     // Serial scatter and sums in pair order: the same bits for any thread count.
     const double t1 = omp_get_wtime();
     double en = 0.0, et = 0.0, ed = 0.0, ec = 0.0;
