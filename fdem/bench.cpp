@@ -13,6 +13,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <ctime>
 #include <fstream>
 #include <iostream>
 #include <sstream>
@@ -106,7 +107,7 @@ int main(int argc, char** argv) {
         return 1;
     }
     out << "case,threads,triangles,nodes,steps,repeat,seconds,triangle_steps_per_s,steps_per_s,us_triangles,us_cohesive,"
-           "us_contact_detection,us_contact_forces,us_contact_scatter,us_integration,us_other\n";
+           "us_contact_detection,us_contact_forces,us_contact_scatter,us_integration,us_other,cpu_seconds\n";
     // Microseconds per step of each kernel over one repeat, from the cumulative timers before and after it.
     constexpr int kKernels = 7;
     const char* kernel_names[kKernels] = {"triangles", "cohesive", "contact detection", "contact forces",
@@ -137,12 +138,18 @@ int main(int argc, char** argv) {
         for (int i = 0; i < 20; ++i) sim.step();  // warm-up
         std::vector<double> rates;
         std::vector<std::vector<double>> kernel_us(kKernels);
+        // Process CPU time per step (all threads): on a shared machine a thread that waits for a core is not
+        // charged, so on 1 thread steps / cpu_seconds is the rate of a quiet core (spin-waits count on 2).
+        std::vector<double> cpu_rates;
         for (long r = 0; r < repeats; ++r) {
             double k0[kKernels], k1[kKernels];
             kernel_clock(sim, k0);
+            const std::clock_t c0 = std::clock();
             const auto t0 = std::chrono::steady_clock::now();
             for (long s = 0; s < steps; ++s) sim.step();
             const double sec = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+            const double cpu = static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC;
+            cpu_rates.push_back(static_cast<double>(steps) / cpu);
             kernel_clock(sim, k1);
             const double rate = static_cast<double>(steps) * model.n_triangles() / sec;
             rates.push_back(rate);
@@ -153,7 +160,7 @@ int main(int argc, char** argv) {
                 kernel_us[k].push_back(us);
                 out << "," << us;
             }
-            out << "\n";
+            out << "," << cpu << "\n";
         }
         const std::vector<double>& xe = sim.model().x;
         if (first_x.empty()) first_x = xe;
@@ -164,6 +171,8 @@ int main(int argc, char** argv) {
         medians.emplace_back(nth, med);
         std::printf("threads %d: median %.3g triangle-steps/s, %.4g steps/s (min %.3g, max %.3g)\n", nth, med,
                     med / model.n_triangles(), rates.front(), rates.back());
+        std::sort(cpu_rates.begin(), cpu_rates.end());
+        std::printf("  steps per CPU second (median): %.4g\n", cpu_rates[cpu_rates.size() / 2]);
         std::printf("  us/step (median):");
         for (int k = 0; k < kKernels; ++k) {
             std::sort(kernel_us[k].begin(), kernel_us[k].end());
