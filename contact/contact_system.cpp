@@ -311,7 +311,6 @@ void ContactSystem::detect(const double* x) {
     pair_hist_on_.swap(non);
     pair_law_.resize(np);
     for (int p = 0; p < np; ++p) pair_law_[p] = law_of(pair_a_[p], pair_b_[p]);
-    build_scatter();
     pair_f_.resize(12 * static_cast<size_t>(np));
     pair_e_.resize(4 * static_cast<size_t>(np));
     pair_on_.resize(np);
@@ -322,36 +321,6 @@ void ContactSystem::detect(const double* x) {
     ++stats_.detections;
     stats_.candidate_pairs = np;
     stats_.time_detection += omp_get_wtime() - t0;
-}
-
-void ContactSystem::build_scatter() {
-    // Counting sort of the 6 nodes of every pair by node, filled in pair order (so each node's list is increasing
-    // in p). Pairs never share a node between their two triangles, so a node appears at most once per pair.
-    const int np = static_cast<int>(pair_a_.size());
-    std::vector<int>& start = csr_start_;  // scratch: per node, then compacted into scat_start_
-    start.assign(n_nodes_ + 1, 0);
-    for (int p = 0; p < np; ++p)
-        for (int k = 0; k < 3; ++k) {
-            ++start[tri_[3 * pair_a_[p] + k] + 1];
-            ++start[tri_[3 * pair_b_[p] + k] + 1];
-        }
-    scat_node_.clear();
-    scat_start_.assign(1, 0);
-    for (int n = 0; n < n_nodes_; ++n)
-        if (start[n + 1] > 0) {
-            scat_node_.push_back(n);
-            scat_start_.push_back(scat_start_.back() + start[n + 1]);
-        }
-    for (int n = 0; n < n_nodes_; ++n) start[n + 1] += start[n];
-    std::vector<int>& fill = csr_fill_;
-    fill.assign(start.begin(), start.end() - 1);
-    scat_src_.resize(6 * static_cast<size_t>(np));
-    for (int p = 0; p < np; ++p)
-        for (int k = 0; k < 3; ++k) {
-            scat_src_[fill[tri_[3 * pair_a_[p] + k]]++] = 12 * p + 2 * k;
-            scat_src_[fill[tri_[3 * pair_b_[p] + k]]++] = 12 * p + 6 + 2 * k;
-        }
-    // The per-node lists are contiguous and in node order, as scat_node_ lists them.
 }
 
 void ContactSystem::step(const double* x, const double* v, double dt, double* f) {
@@ -394,8 +363,6 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f)
     // area coordinates and altitudes computed once. One parallel region for this loop and the pair loop (a fork
     // and join less; the capable triangles, about half as many as the pairs, were below kParallelMin on their own
     // and ran serially in the wall cases).
-    const int n_scat = static_cast<int>(scat_node_.size());
-    double t1 = t0;
 #pragma omp parallel if (np > kParallelMin || n_items > kParallelMin)
     {
 #pragma omp for schedule(static)
@@ -454,24 +421,9 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f)
                 pe[2] = r.dissipation;
             }
         }
-        // Scatter: each node adds its loaded pairs' forces in pair order, the bits of a serial loop over pairs.
-#pragma omp master
-        t1 = omp_get_wtime();
-#pragma omp for schedule(static)
-        for (int i = 0; i < n_scat; ++i) {
-            const int n = scat_node_[i];
-            double fx = f[2 * n], fy = f[2 * n + 1];
-            for (int j = scat_start_[i]; j < scat_start_[i + 1]; ++j) {
-                const int src = scat_src_[j];
-                if (pair_on_[src / 12] != 1) continue;
-                fx += pair_f_[src];
-                fy += pair_f_[src + 1];
-            }
-            f[2 * n] = fx;
-            f[2 * n + 1] = fy;
-        }
     }  // omp parallel
-    // Energy sums in pair order: the same bits for any thread count.
+    // Serial scatter and sums in pair order: the same bits for any thread count.
+    const double t1 = omp_get_wtime();
     double en = 0.0, et = 0.0, ed = 0.0, ec = 0.0;
     int active = 0;
     for (int p = 0; p < np; ++p) {
@@ -481,6 +433,15 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f)
             continue;
         }
         ++active;
+        const int* ta = tri_ + 3 * pair_a_[p];
+        const int* tb = tri_ + 3 * pair_b_[p];
+        const double* pf = &pair_f_[12 * static_cast<size_t>(p)];
+        for (int k = 0; k < 3; ++k) {
+            f[2 * ta[k]] += pf[2 * k];
+            f[2 * ta[k] + 1] += pf[2 * k + 1];
+            f[2 * tb[k]] += pf[6 + 2 * k];
+            f[2 * tb[k] + 1] += pf[6 + 2 * k + 1];
+        }
         const double* pe = &pair_e_[4 * static_cast<size_t>(p)];
         en += pe[0];
         et += pe[1];
@@ -520,7 +481,7 @@ double ContactSystem::normal_energy_at(const double* x) const {
 // add the field to save_state and load_state if it carries from one step to the next, then update the size.
 void ContactSystem::save_state(StateWriter& w) const {
 #if defined(__x86_64__) && defined(__GLIBCXX__)
-    static_assert(sizeof(ContactSystem) == 1272, "ContactSystem changed: update save_state/load_state and this size");
+    static_assert(sizeof(ContactSystem) == 1200, "ContactSystem changed: update save_state/load_state and this size");
 #endif
     w.section("contact");
     w.pod(static_cast<std::int32_t>(kHistPerPair));
@@ -566,7 +527,6 @@ void ContactSystem::load_state(StateReader& r) {
     pair_f_.assign(12 * np, 0.0);
     pair_e_.assign(4 * np, 0.0);
     pair_on_.assign(np, 0);
-    build_scatter();
     box_.assign(4 * static_cast<std::size_t>(n_tri_), 0.0);
     geom_.resize(static_cast<std::size_t>(n_tri_));
 }

@@ -10,8 +10,7 @@
 //   hist may hold something (0: all zero, nothing to forget). Per law: law_prm[l], the pair kernel's parameters
 //   resolved once per step (they depend on the law, dt and the dashpot only). Per-pair scratch
 //   (forces 12 p, energies) is written by one thread per pair in parallel and then added serially in pair order,
-//   so the result has the same bits for any thread count. The adding runs in parallel over nodes (scat_* below):
-//   each node takes its pairs' contributions in pair order, the sum the serial pair loop made.
+//   so the result has the same bits for any thread count.
 //   "No index" is -1.
 //
 // HOW THE ENGINE USES IT
@@ -54,7 +53,7 @@ struct ContactStats {
     long long pair_evaluations = 0;  // candidate pairs evaluated, cumulative
     double time_detection = 0.0;   // s, cumulative wall time in detection
     double time_forces = 0.0;      // s, cumulative wall time in the force evaluation and scatter
-    double time_scatter = 0.0;     // s, the part of time_forces that adds the pair forces to the nodes (in pair order)
+    double time_scatter = 0.0;     // s, the serial part of time_forces (adding pair forces in pair order)
 };
 
 class ContactSystem {
@@ -129,7 +128,6 @@ public:
 
 private:
     void detect(const double* x);
-    void build_scatter();  // the node-to-pair-force CSR below, from the pair list
     int law_of(int ta, int tb) const;
 
     const int* tri_;
@@ -166,10 +164,6 @@ private:
     std::vector<double> pair_f_;   // 12 per pair
     std::vector<double> pair_e_;   // 4 per pair: normal energy, tangential energy, friction dissipation, dashpot work
     std::vector<char> pair_on_;
-    // Scatter by node, rebuilt at each detection: scat_node_[i] a node of some pair, its pair-force entries
-    // scat_src_[scat_start_[i] .. scat_start_[i + 1]) (offsets into pair_f_: 12 p + 2 k for node k of A, 12 p + 6 + 2 k
-    // for node k of B) in increasing p. Adding them in that order gives each node the serial pair-order sum.
-    std::vector<int> scat_node_, scat_start_, scat_src_;
     std::vector<double> box_;      // 4 per triangle: xmin, xmax, ymin, ymax (m), capable ones, this step
     std::vector<TriangleGeometry> geom_;  // per triangle, capable ones, this step: what the pair kernel needs
 
