@@ -19,14 +19,19 @@ namespace {
 // oversubscribed machine its barrier can cost milliseconds. Results are the same bits either way.
 constexpr int kParallelMin = 4096;
 
+// Whether a pair's friction state holds anything (some slot not all zero).
+inline bool any_history(const double* h) {
+    bool any = false;
+    for (int s = 0; s < kHistPerPair; ++s) any = any || h[s] != 0.0;
+    return any;
+}
+
 // A separated pair forgets its sliding history; written only when there is something to forget (most pairs
 // are apart and this keeps their history lines clean in cache).
 // Returns the energy its friction springs held (J), which the caller books as dissipated.
 inline double forget(double* h) {
-    bool any = false;
-    for (int s = 0; s < kHistPerPair; ++s) any = any || h[s] != 0.0;
     double released = 0.0;
-    if (any)
+    if (any_history(h))
         for (int s = 0; s < 6; ++s) released += release_slot(h + kHistPerEdge * s);
     return released;
 }
@@ -273,6 +278,8 @@ void ContactSystem::detect(const double* x) {
     // bucketed by their first triangle (counting sort, O(P)), each new pair looks in its bucket.
     std::vector<double>& nh = new_hist_;
     nh.assign(kHistPerPair * static_cast<size_t>(np), 0.0);
+    std::vector<char>& non = new_hist_on_;
+    non.assign(np, 0);
     const int op = static_cast<int>(pair_a_.size());
     if (op > 0) {
         std::vector<int>& start = csr_start_;
@@ -292,6 +299,7 @@ void ContactSystem::detect(const double* x) {
                 if (pair_b_[o] == b) {
                     for (int s = 0; s < kHistPerPair; ++s)
                         nh[kHistPerPair * static_cast<size_t>(p) + s] = hist_[kHistPerPair * static_cast<size_t>(o) + s];
+                    non[p] = pair_hist_on_[o];
                     break;
                 }
             }
@@ -300,6 +308,7 @@ void ContactSystem::detect(const double* x) {
     pair_a_.swap(na);
     pair_b_.swap(nb);
     hist_.swap(nh);
+    pair_hist_on_.swap(non);
     pair_law_.resize(np);
     for (int p = 0; p < np; ++p) pair_law_[p] = law_of(pair_a_[p], pair_b_[p]);
     pair_f_.resize(12 * static_cast<size_t>(np));
@@ -325,44 +334,15 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f)
     travel_ += dt * vmax;
 
     const double t0 = omp_get_wtime();
-    // Bounding boxes and pair-kernel geometry of the capable triangles, once per step: most candidate pairs are
-    // apart and are rejected from two contiguous boxes, and a triangle met by several overlapping pairs has its
-    // area coordinates and altitudes computed once.
     const int n_items = static_cast<int>(items_.size());
-#pragma omp parallel for schedule(static) if (n_items > kParallelMin)
-    for (int i = 0; i < n_items; ++i) {
-        double T[6];
-        gather(x, tri_ + 3 * items_[i], T);
-        double* bx = &box_[4 * static_cast<size_t>(items_[i])];
-        bx[0] = std::min(T[0], std::min(T[2], T[4]));
-        bx[1] = std::max(T[0], std::max(T[2], T[4]));
-        bx[2] = std::min(T[1], std::min(T[3], T[5]));
-        bx[3] = std::max(T[1], std::max(T[3], T[5]));
-        triangle_geometry(T, geom_[items_[i]]);
-    }
     const int np = static_cast<int>(pair_a_.size());
     const bool want_energy = opt_.compute_energy;
-#pragma omp parallel for schedule(dynamic, 512) if (np > kParallelMin)
-    for (int p = 0; p < np; ++p) {
-        const int a = pair_a_[p], b = pair_b_[p];
-        pair_on_[p] = 0;
-        const double* ba = &box_[4 * static_cast<size_t>(a)];
-        const double* bb = &box_[4 * static_cast<size_t>(b)];
-        if (ba[1] <= bb[0] || bb[1] <= ba[0] || ba[3] <= bb[2] || bb[3] <= ba[2]) {  // disjoint boxes
-            const double released = forget(&hist_[kHistPerPair * static_cast<size_t>(p)]);
-            if (released != 0.0) {  // booked in the serial sum below, no forces
-                pair_on_[p] = 2;
-                double* pe = &pair_e_[4 * static_cast<size_t>(p)];
-                pe[0] = pe[1] = pe[3] = 0.0;
-                pe[2] = released;
-            }
-            continue;
-        }
-        double va[6], vb[6];
-        gather(v, tri_ + 3 * a, va);
-        gather(v, tri_ + 3 * b, vb);
-        const ResolvedLaw& L = laws_[pair_law_[p]];
-        PairParams prm;
+    // The kernel's parameters depend on the law, dt and the dashpot only: resolved once per law, not per pair.
+    law_prm_.resize(laws_.size());
+    for (std::size_t l = 0; l < laws_.size(); ++l) {
+        const ResolvedLaw& L = laws_[l];
+        PairParams& prm = law_prm_[l];
+        prm = PairParams{};
         prm.thickness = thickness_;
         prm.distance_potential = L.normal_is_stiffness;
         prm.c = L.normal_is_stiffness ? 0.5 * L.normal : L.normal;
@@ -377,26 +357,71 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f)
             if (L.normal_is_stiffness) prm.k_n_area = L.normal;
             else prm.p_n = L.normal;
         }
-        PairResult r;
-        if (pair_contact(geom_[a], geom_[b], va, vb, prm, want_energy, &hist_[kHistPerPair * static_cast<size_t>(p)], r)) {
-            pair_on_[p] = 1;
-            double* pf = &pair_f_[12 * static_cast<size_t>(p)];
-            for (int s = 0; s < 6; ++s) {
-                pf[s] = r.fa[s];
-                pf[6 + s] = r.fb[s];
-            }
-            double* pe = &pair_e_[4 * static_cast<size_t>(p)];
-            pe[0] = r.energy_normal;
-            pe[1] = r.energy_tangential;
-            pe[2] = r.dissipation;
-            pe[3] = r.damping;
-        } else if (r.dissipation != 0.0) {  // apart now: only the released friction springs to book
-            pair_on_[p] = 2;
-            double* pe = &pair_e_[4 * static_cast<size_t>(p)];
-            pe[0] = pe[1] = pe[3] = 0.0;
-            pe[2] = r.dissipation;
-        }
     }
+    // Bounding boxes and pair-kernel geometry of the capable triangles, once per step: most candidate pairs are
+    // apart and are rejected from two contiguous boxes, and a triangle met by several overlapping pairs has its
+    // area coordinates and altitudes computed once. One parallel region for this loop and the pair loop (a fork
+    // and join less; the capable triangles, about half as many as the pairs, were below kParallelMin on their own
+    // and ran serially in the wall cases).
+#pragma omp parallel if (np > kParallelMin || n_items > kParallelMin)
+    {
+#pragma omp for schedule(static)
+        for (int i = 0; i < n_items; ++i) {
+            double T[6];
+            gather(x, tri_ + 3 * items_[i], T);
+            double* bx = &box_[4 * static_cast<size_t>(items_[i])];
+            bx[0] = std::min(T[0], std::min(T[2], T[4]));
+            bx[1] = std::max(T[0], std::max(T[2], T[4]));
+            bx[2] = std::min(T[1], std::min(T[3], T[5]));
+            bx[3] = std::max(T[1], std::max(T[3], T[5]));
+            triangle_geometry(T, geom_[items_[i]]);
+        }
+#pragma omp for schedule(dynamic, 512)
+        for (int p = 0; p < np; ++p) {
+            const int a = pair_a_[p], b = pair_b_[p];
+            pair_on_[p] = 0;
+            const double* ba = &box_[4 * static_cast<size_t>(a)];
+            const double* bb = &box_[4 * static_cast<size_t>(b)];
+            if (ba[1] <= bb[0] || bb[1] <= ba[0] || ba[3] <= bb[2] || bb[3] <= ba[2]) {  // disjoint boxes
+                if (!pair_hist_on_[p]) continue;  // nothing to forget (the common case: apart since detection)
+                pair_hist_on_[p] = 0;
+                const double released = forget(&hist_[kHistPerPair * static_cast<size_t>(p)]);
+                if (released != 0.0) {  // booked in the serial sum below, no forces
+                    pair_on_[p] = 2;
+                    double* pe = &pair_e_[4 * static_cast<size_t>(p)];
+                    pe[0] = pe[1] = pe[3] = 0.0;
+                    pe[2] = released;
+                }
+                continue;
+            }
+            double va[6], vb[6];
+            gather(v, tri_ + 3 * a, va);
+            gather(v, tri_ + 3 * b, vb);
+            PairResult r;
+            // pair_contact leaves the history all zero when it returns false (every slot released).
+            const bool on = pair_contact(geom_[a], geom_[b], va, vb, law_prm_[pair_law_[p]], want_energy,
+                                         &hist_[kHistPerPair * static_cast<size_t>(p)], r);
+            pair_hist_on_[p] = on ? 1 : 0;
+            if (on) {
+                pair_on_[p] = 1;
+                double* pf = &pair_f_[12 * static_cast<size_t>(p)];
+                for (int s = 0; s < 6; ++s) {
+                    pf[s] = r.fa[s];
+                    pf[6 + s] = r.fb[s];
+                }
+                double* pe = &pair_e_[4 * static_cast<size_t>(p)];
+                pe[0] = r.energy_normal;
+                pe[1] = r.energy_tangential;
+                pe[2] = r.dissipation;
+                pe[3] = r.damping;
+            } else if (r.dissipation != 0.0) {  // apart now: only the released friction springs to book
+                pair_on_[p] = 2;
+                double* pe = &pair_e_[4 * static_cast<size_t>(p)];
+                pe[0] = pe[1] = pe[3] = 0.0;
+                pe[2] = r.dissipation;
+            }
+        }
+    }  // omp parallel
     // Serial scatter and sums in pair order: the same bits for any thread count.
     const double t1 = omp_get_wtime();
     double en = 0.0, et = 0.0, ed = 0.0, ec = 0.0;
@@ -456,7 +481,7 @@ double ContactSystem::normal_energy_at(const double* x) const {
 // add the field to save_state and load_state if it carries from one step to the next, then update the size.
 void ContactSystem::save_state(StateWriter& w) const {
 #if defined(__x86_64__) && defined(__GLIBCXX__)
-    static_assert(sizeof(ContactSystem) == 1128, "ContactSystem changed: update save_state/load_state and this size");
+    static_assert(sizeof(ContactSystem) == 1200, "ContactSystem changed: update save_state/load_state and this size");
 #endif
     w.section("contact");
     w.pod(static_cast<std::int32_t>(kHistPerPair));
@@ -487,6 +512,8 @@ void ContactSystem::load_state(StateReader& r) {
     const std::size_t np = pair_a_.size();
     if (pair_b_.size() != np || pair_law_.size() != np || hist_.size() != kHistPerPair * np)
         throw StateError("contact: inconsistent pair arrays");
+    pair_hist_on_.resize(np);
+    for (std::size_t p = 0; p < np; ++p) pair_hist_on_[p] = any_history(&hist_[kHistPerPair * p]) ? 1 : 0;
     for (std::size_t p = 0; p < np; ++p)
         if (pair_a_[p] < 0 || pair_a_[p] >= n_tri_ || pair_b_[p] < 0 || pair_b_[p] >= n_tri_ || pair_law_[p] < 0 ||
             pair_law_[p] >= static_cast<int>(laws_.size()))

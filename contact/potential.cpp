@@ -100,7 +100,9 @@ void load_edge(const double* xo, const double* vo, double* fo, const double* vq,
                const double* I, const PairParams& p, double* h, PairResult& r) {
     const int e1 = (e + 1) % 3;
     const double dx = xo[2 * e1] - xo[2 * e], dy = xo[2 * e1 + 1] - xo[2 * e + 1];
-    const double nx = dy / len, ny = -dx / len, tx = dx / len, ty = dy / len;
+    // (n = (t_y, -t_x): the same bits as dy / len and -dx / len, division rounds symmetrically; two divisions)
+    const double tx = dx / len, ty = dy / len;
+    const double nx = ty, ny = -tx;
     const double total = I[0] + I[1];
     const double fn = p.c * p.thickness * total;  // N
     // Centre of pressure: along the edge s = I1 / (I0 + I1); in the other triangle the area coordinates
@@ -243,33 +245,43 @@ bool edge_integrals(const double* La, const double* Lb, const double* p0, const 
     // interval below comes out empty (or b = 0 with a < 0), taken before its three divisions.
     for (int k = 0; k < 3; ++k)
         if ((La[k] < 0.0 && Lb[k] <= 0.0) || (La[k] <= 0.0 && Lb[k] < 0.0)) return false;
-    double a[3], b[3];
-    double lo = 0.0, hi = 1.0;
+    // The part inside: L_k(s) = a_k + b_k s >= 0 for all k, s in [lo, hi]. The three roots -a_k / b_k are computed
+    // side by side and selected without branches (the sign of b_k is data, a branch on it mispredicts); b_k = 0 with
+    // a_k < 0 cannot reach here (both ends outside that edge line, rejected above).
+    double a[3], b[3], q[3];
     for (int k = 0; k < 3; ++k) {
         a[k] = La[k];
         b[k] = Lb[k] - La[k];
-        if (b[k] == 0.0) {
-            if (a[k] < 0.0) return false;
-        } else if (b[k] > 0.0) {
-            lo = std::max(lo, -a[k] / b[k]);
-        } else {
-            hi = std::min(hi, -a[k] / b[k]);
-        }
+    }
+    for (int k = 0; k < 3; ++k) q[k] = -a[k] / (b[k] != 0.0 ? b[k] : 1.0);
+    double lo = 0.0, hi = 1.0;
+    for (int k = 0; k < 3; ++k) {
+        lo = b[k] > 0.0 ? std::max(lo, q[k]) : lo;
+        hi = b[k] < 0.0 ? std::min(hi, q[k]) : hi;
     }
     if (!(hi > lo)) return false;
     const double len = std::sqrt((p1[0] - p0[0]) * (p1[0] - p0[0]) + (p1[1] - p0[1]) * (p1[1] - p0[1]));
     *len_out = len;
     // breakpoints of min_k w_k L_k(s) inside (lo, hi)
+    // (branch pairs (0,1), (0,2), (1,2) in that order, as three independent divisions; a breakpoint is appended
+    // without a branch: written, then counted if it lies inside)
     double br[5];
     int nb = 0;
     br[nb++] = lo;
-    for (int j = 0; j < 3; ++j)
-        for (int k = j + 1; k < 3; ++k) {
-            const double den = w[j] * b[j] - w[k] * b[k];
-            if (den == 0.0) continue;
-            const double s = -(w[j] * a[j] - w[k] * a[k]) / den;
-            if (s > lo && s < hi) br[nb++] = s;
+    {
+        static constexpr int kJ[3] = {0, 0, 1}, kK[3] = {1, 2, 2};
+        double num[3], den[3], sb[3];
+        for (int i = 0; i < 3; ++i) {
+            const int j = kJ[i], k = kK[i];
+            den[i] = w[j] * b[j] - w[k] * b[k];
+            num[i] = w[j] * a[j] - w[k] * a[k];
         }
+        for (int i = 0; i < 3; ++i) sb[i] = -num[i] / (den[i] != 0.0 ? den[i] : 1.0);
+        for (int i = 0; i < 3; ++i) {
+            br[nb] = sb[i];
+            nb += (den[i] != 0.0 && sb[i] > lo && sb[i] < hi) ? 1 : 0;
+        }
+    }
     br[nb++] = hi;
     for (int i = 2; i < nb - 1; ++i)  // insertion sort of at most 3 interior breakpoints
         for (int j = i; j > 1 && br[j] < br[j - 1]; --j) std::swap(br[j], br[j - 1]);

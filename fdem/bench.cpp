@@ -1,5 +1,7 @@
 // fdem_bench: step throughput (triangle-steps per second) for 1 and 2 threads (or --threads LIST), median of
-// several runs, written to a CSV. Without --case: triangle forces and integration of an elastic plate of about N
+// several runs, written to a CSV, with the time per step of each kernel (Simulation::step_times and the contact
+// statistics): triangle forces, cohesive elements, contact detection, contact forces (pair kernels), contact scatter
+// (the serial sum in pair order), integration (node loop) and the rest (loads, damage update, outputs). Without --case: triangle forces and integration of an elastic plate of about N
 // triangles. With --case FILE: the first steps of that case's first stage (contact, joints and all), so that the
 // thread scaling of a real scene is measured; --set key=value as for `fdem run`.
 //   fdem_bench [--triangles N | --case FILE [--set k=v ...]] [--steps S] [--repeats R] [--threads 1,2] [--csv FILE]
@@ -11,6 +13,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <ctime>
 #include <fstream>
 #include <iostream>
 #include <sstream>
@@ -103,7 +106,26 @@ int main(int argc, char** argv) {
         std::cerr << "error: cannot write the CSV file '" << csv << "'\n";
         return 1;
     }
-    out << "case,threads,triangles,nodes,steps,repeat,seconds,triangle_steps_per_s\n";
+    out << "case,threads,triangles,nodes,steps,repeat,seconds,triangle_steps_per_s,steps_per_s,us_triangles,us_cohesive,"
+           "us_contact_detection,us_contact_forces,us_contact_scatter,us_integration,us_other,cpu_seconds\n";
+    // Microseconds per step of each kernel over one repeat, from the cumulative timers before and after it.
+    constexpr int kKernels = 7;
+    const char* kernel_names[kKernels] = {"triangles", "cohesive", "contact detection", "contact forces",
+                                          "contact scatter", "integration", "other"};
+    auto kernel_clock = [](const fdem::Simulation& sim, double* t) {
+        const fdem::StepTimes& st = sim.step_times();
+        const fdem::contact::ContactSystem* cs = sim.interactions().contact();
+        const double det = cs ? cs->stats().time_detection : 0.0;
+        const double frc = cs ? cs->stats().time_forces : 0.0;  // includes the scatter
+        const double sct = cs ? cs->stats().time_scatter : 0.0;
+        t[0] = st.triangles;
+        t[1] = st.interactions - det - frc;  // what add_forces spent outside contact: the cohesive elements
+        t[2] = det;
+        t[3] = frc - sct;
+        t[4] = sct;
+        t[5] = st.integration;
+        t[6] = st.other;
+    };
     std::vector<std::pair<int, double>> medians;
     std::vector<double> first_x;  // end state of the first thread count: every count runs the same steps
     bool same_bits = true;
@@ -115,13 +137,30 @@ int main(int argc, char** argv) {
         sim.begin_stage(0);
         for (int i = 0; i < 20; ++i) sim.step();  // warm-up
         std::vector<double> rates;
+        std::vector<std::vector<double>> kernel_us(kKernels);
+        // Process CPU time per step (all threads): on a shared machine a thread that waits for a core is not
+        // charged, so on 1 thread steps / cpu_seconds is the rate of a quiet core (spin-waits count on 2).
+        std::vector<double> cpu_rates;
         for (long r = 0; r < repeats; ++r) {
+            double k0[kKernels], k1[kKernels];
+            kernel_clock(sim, k0);
+            const std::clock_t c0 = std::clock();
             const auto t0 = std::chrono::steady_clock::now();
             for (long s = 0; s < steps; ++s) sim.step();
             const double sec = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+            const double cpu = static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC;
+            cpu_rates.push_back(static_cast<double>(steps) / cpu);
+            kernel_clock(sim, k1);
             const double rate = static_cast<double>(steps) * model.n_triangles() / sec;
             rates.push_back(rate);
-            out << label << "," << nth << "," << model.n_triangles() << "," << model.n_nodes() << "," << steps << "," << r << "," << sec << "," << rate << "\n";
+            out << label << "," << nth << "," << model.n_triangles() << "," << model.n_nodes() << "," << steps << "," << r
+                << "," << sec << "," << rate << "," << steps / sec;
+            for (int k = 0; k < kKernels; ++k) {
+                const double us = 1e6 * (k1[k] - k0[k]) / static_cast<double>(steps);
+                kernel_us[k].push_back(us);
+                out << "," << us;
+            }
+            out << "," << cpu << "\n";
         }
         const std::vector<double>& xe = sim.model().x;
         if (first_x.empty()) first_x = xe;
@@ -130,7 +169,15 @@ int main(int argc, char** argv) {
         std::sort(rates.begin(), rates.end());
         const double med = rates[rates.size() / 2];
         medians.emplace_back(nth, med);
-        std::printf("threads %d: median %.3g triangle-steps/s (min %.3g, max %.3g)\n", nth, med, rates.front(), rates.back());
+        std::printf("threads %d: median %.3g triangle-steps/s, %.4g steps/s (min %.3g, max %.3g)\n", nth, med,
+                    med / model.n_triangles(), rates.front(), rates.back());
+        std::sort(cpu_rates.begin(), cpu_rates.end());
+        std::printf("  steps per CPU second (median): %.4g\n", cpu_rates[cpu_rates.size() / 2]);
+        std::printf("  us/step (median):");
+        for (int k = 0; k < kKernels; ++k) {
+            std::sort(kernel_us[k].begin(), kernel_us[k].end());
+            std::printf(" %s %.1f%s", kernel_names[k], kernel_us[k][kernel_us[k].size() / 2], k + 1 < kKernels ? "," : "\n");
+        }
     }
     if (medians.size() > 1) {
         std::printf("speed-up %d -> %d threads: %.2f\n", medians.front().first, medians.back().first,

@@ -544,6 +544,7 @@ void Simulation::apply_time_dependent(double t) {
 
 void Simulation::step() {
     const double dt = dt_;
+    const double w0 = omp_get_wtime();
     apply_time_dependent(time_);
     const int nt = model_.n_triangles(), nn = model_.n_nodes();
     const TriangleRef* tris = model_.tris.data();
@@ -553,6 +554,7 @@ void Simulation::step() {
     double* tf = tf_.data();
 
     // 2. Triangle forces; per block: viscous power and the first inverted triangle.
+    const double w1 = omp_get_wtime();
     const int ntb = (nt + kBlock - 1) / kBlock;
 #pragma omp parallel for schedule(static) if (ntb > 1)
     for (int b = 0; b < ntb; ++b) {
@@ -585,7 +587,9 @@ void Simulation::step() {
     // Joint and contact forces, added to f_mod_ in a fixed order by their modules. The contact energy is only
     // evaluated on the steps whose energies are reported or checked.
     inter_.want_energy(history_due(time_ + dt, steps_ + 1) || (steps_ + 1) % 1000 == 0 || energy_every_step_);
+    const double w2 = omp_get_wtime();
     inter_.add_forces(x, v, dt, f_mod_.data());
+    const double w3 = omp_get_wtime();
 
     // Rigid groups first: one velocity per group and component from the resultant of its nodes' forces,
     // v^{n+1/2} = v^{n-1/2} + dt (F + F_d) / M with F = sum of the nodal forces, M = sum of the nodal masses and the
@@ -721,6 +725,11 @@ void Simulation::step() {
     D_damp_ += dD;
     D_visc_ += dt * visc_power;
     unbalanced_ratio_ = scale > 0 ? unb / scale : 0;
+    const double w4 = omp_get_wtime();
+    step_times_.triangles += w2 - w1;
+    step_times_.interactions += w3 - w2;
+    step_times_.integration += w4 - w3;
+    step_times_.other += w1 - w0;
     update_servos();
     time_ += dt;
     tilt_deg_ += tilt_rate_ * dt;
@@ -751,6 +760,7 @@ void Simulation::step() {
     if (opt_.progress && (steps_ & 255) == 0) progress_line(false);
     if (opt_.progress_log && (steps_ & 255) == 0) progress_log_line();
     if (steps_ % 1000 == 0) check_energy(energies());
+    step_times_.other += omp_get_wtime() - w4;
 }
 
 // Servo-controlled loading rate (the Itasca codes' practice of driving a quasi-static test by its unbalanced-force

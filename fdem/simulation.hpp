@@ -48,6 +48,15 @@ struct Energies {
     double balance_error() const;  // |W - (K + E + D)| relative to the largest term
 };
 
+// Wall time spent in each part of Simulation::step (s, cumulative; not part of the state, not checkpointed). For
+// fdem_bench's per-kernel breakdown; the contact module's own split (detection, forces, scatter) is in its stats.
+struct StepTimes {
+    double triangles = 0;     // triangle forces (and crushing)
+    double interactions = 0;  // cohesive elements and contact (detection, forces, scatter)
+    double integration = 0;   // rigid groups, node loop, block sums
+    double other = 0;         // loads, damage update, outputs, energy checks
+};
+
 struct StageResult {
     std::string name;
     std::string ended_by;  // "duration", "until", "equilibrium", "max_duration"
@@ -80,6 +89,7 @@ public:
     void energy_every_step(bool on) { energy_every_step_ = on; }
     const std::vector<StageResult>& stage_results() const { return stage_results_; }
     double wall_time() const { return wall_time_; }
+    const StepTimes& step_times() const { return step_times_; }
     int interrupted_signal() const { return interrupted_signal_; }  // 0, or the signal that stopped run()
     const std::vector<double>& reactions() const { return reaction_; }
     const Interactions& interactions() const { return inter_; }
@@ -237,6 +247,7 @@ private:
     std::string log_;
     double wall_start_ = 0, wall_time_ = 0, last_flush_ = 0, last_progress_ = 0, last_progress_log_ = 0;
     double dt_report_triangles_ = 0;
+    StepTimes step_times_;
 };
 
 // Run a case file end to end (the `fdem run` command). Returns the exit code.

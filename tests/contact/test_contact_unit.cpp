@@ -519,6 +519,54 @@ TEST_CASE("Capable set, excluded pairs and history that survives re-detection", 
     CHECK(fy0() == 0.0);
 }
 
+TEST_CASE("A stuck pair that separates releases its spring energy once and keeps no history, then starts afresh",
+          "[unit]") {
+    // Triangle 0 rests 1e-4 m deep in triangle 1 and is slid within the stick range, so its friction springs hold
+    // energy. Lifted clear (boxes apart, no re-detection: the pair stays in the list), the pair books that energy as
+    // friction dissipation on the step it separates, and nothing on the next steps (pairs apart skip their history,
+    // which must then be all zero). Pressed back, it carries the same normal force with fresh anchors.
+    const std::vector<double> x0 = {0.0, -1e-4, 1.0, -1e-4, 0.5, 0.6,  // 0: nodes 0-2
+                                    -1.0, -1.0, 2.0, 0.0, -1.0, 0.0};   // 1: nodes 3-5
+    std::vector<double> x = x0;
+    const int tri[6] = {0, 1, 2, 3, 4, 5};
+    ContactLaws laws(1);
+    laws.set_interface(0, 0, ContactLaw::stiffness(1e9, 1e9, 30.0));
+    ContactSystem cs(tri, 2, 6, 0.1, {0, 0}, {0, 1}, laws);
+    cs.set_capable(0, true);
+    cs.set_capable(1, true);
+    std::vector<double> v(12, 0.0), f(12, 0.0);
+    auto step = [&] {
+        std::fill(f.begin(), f.end(), 0.0);
+        cs.step(x.data(), v.data(), 1e-4, f.data());
+        return f[1] + f[3] + f[5];
+    };
+    const double fy = step();
+    REQUIRE(fy > 0.0);
+    REQUIRE(cs.pair_a().size() == 1);
+    for (int k = 0; k < 3; ++k) v[2 * k] = 0.01;
+    step();
+    for (int k = 0; k < 3; ++k) v[2 * k] = 0.0;
+    const double stored = cs.tangential_energy();
+    REQUIRE(stored > 0.0);
+    const double d0 = cs.friction_dissipation();
+    CHECK(d0 == 0.0);  // stuck: nothing dissipated yet
+    const long long detections = cs.stats().detections;
+    for (int k = 0; k < 3; ++k) x[2 * k + 1] += 1e-3;  // lifted 0.9 mm clear of triangle 1
+    CHECK(step() == 0.0);
+    CHECK(cs.stats().detections == detections);  // still the same pair list
+    CHECK(cs.stats().active_pairs == 0);
+    CHECK(cs.tangential_energy() == 0.0);
+    CHECK(cs.friction_dissipation() == Approx(d0 + stored).epsilon(1e-12));
+    for (double h : cs.sliding_history()) CHECK(h == 0.0);
+    const double d1 = cs.friction_dissipation();
+    for (int i = 0; i < 3; ++i) CHECK(step() == 0.0);
+    CHECK(cs.friction_dissipation() == d1);
+    x = x0;  // pressed back: the same normal force, new anchors, no stretch
+    CHECK(step() == Approx(fy).epsilon(1e-12));
+    CHECK(cs.tangential_energy() == 0.0);
+    CHECK(cs.friction_dissipation() == d1);
+}
+
 TEST_CASE("Corner neighbours of one body (copies of a vertex) form no pair until the vertex is released", "[unit]") {
     // Triangle 0 has node 0 at the vertex (0, 0); triangle 1's node 3 is a copy of the same vertex, pushed 1 mm into
     // triangle 0, as when the cohesive elements between corner neighbours compress. Vertex ids: node 3 -> vertex 0.
