@@ -724,6 +724,16 @@ CaseSpec load_case(const std::string& path, const std::vector<std::string>& over
             if (const toml::table* ft = r.table("fracture", false, "a [materials.NAME.fracture] table")) {
                 Reader fr(ctx, *ft, p + ".fracture");
                 read_joint(fr, m.fracture, false);
+                // insertion: "intrinsic" (default: a cohesive element on every crackable edge from the start) or
+                // "extrinsic" (the unit is one continuum, its copies tied, until an edge's traction reaches the
+                // strength; the element is then inserted at the peak of the [K25] law, fracture/README.md
+                // "Extrinsic insertion").
+                m.fracture.extrinsic = fr.string("insertion", false, "when the cohesive elements join the model",
+                                                 {"intrinsic", "extrinsic"})
+                                           .value_or("intrinsic") == "extrinsic";
+                if (m.fracture.extrinsic && (m.fracture.composite || m.fracture.mohr_coulomb))
+                    fr.number("insertion", false, "insertion = \"extrinsic\" only with the [K25] law (law = \"k25\")",
+                              [](double) { return false; });  // a string: reported with this expectation
                 if (std::isnan(m.fracture.penalty) && !m.fracture.penalty_auto)
                     ctx.error(p + ".fracture.penalty", fr.line(), "missing; expected a joint penalty p_j > 0 in Pa (it also "
                                                                   "serves as the contact penalty of the crack faces)");
@@ -739,6 +749,10 @@ CaseSpec load_case(const std::string& path, const std::vector<std::string>& over
                 m.crushing.Gc = cr.number("Gc", true, "a compressive fracture energy G_c > 0 in J/m^2", positive).value_or(std::nan(""));
                 cr.finish();
             }
+            if (m.crushing.present && m.fracture.extrinsic)
+                ctx.error(p + ".fracture.insertion", m.fracture.line,
+                          "\"extrinsic\" is not available with a [" + p + ".crushing] table (the insertion test reads the "
+                          "elastic stress); expected \"intrinsic\"");
             r.finish();
             spec.materials.push_back(m);
         }

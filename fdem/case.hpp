@@ -41,6 +41,7 @@ struct JointSpec {
     bool composite = false;                       // law = "composite" (fracture/composite_law.hpp)
     double compressive_energy = std::nan("");     // J/m^2, G_c of the composite law's cap (NaN = none)
     double cap_shear_factor = std::nan("");       // -, C_s of the composite law's cap (NaN = none)
+    bool extrinsic = false;                       // insertion = "extrinsic": materials only (fracture/README.md)
     int line = 0;
 };
 

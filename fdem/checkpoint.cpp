@@ -134,7 +134,7 @@ std::string Simulation::checkpoint_path() const { return (std::filesystem::path(
 // Everything that changes during a run. The order is the format: load_state reads the same sequence.
 void Simulation::save_state(StateWriter& w) const {
 #if defined(__x86_64__) && defined(__GLIBCXX__)
-    static_assert(sizeof(Simulation) == 4040, "Simulation changed: update save_state/load_state (fdem/checkpoint.cpp) and this size");
+    static_assert(sizeof(Simulation) == 4416, "Simulation changed: update save_state/load_state (fdem/checkpoint.cpp) and this size");
     static_assert(sizeof(ActiveSupport) == 376, "ActiveSupport changed: update save_state/load_state and this size");
     static_assert(sizeof(ActiveLoad) == 296, "ActiveLoad changed: update save_state/load_state and this size");
 #endif
@@ -144,7 +144,7 @@ void Simulation::save_state(StateWriter& w) const {
     w.vec(model_.x), w.vec(model_.v), w.vec(model_.mass), w.vec(model_.inv_mass), w.vec(model_.grav_mass);
 
     w.section("clock");
-    w.pod(dt_), w.pod(time_), w.pod(steps_), w.pod(stage_), w.pod(stage_t0_), w.pod(stage_steps0_), w.pod(broken_total_);
+    w.pod(dt_initial_), w.pod(dt_), w.pod(dt_limit_), w.pod(dt_springs_), w.pod(dt_logged_), w.pod(time_), w.pod(steps_), w.pod(stage_), w.pod(stage_t0_), w.pod(stage_steps0_), w.pod(broken_total_);
 
     w.section("supports");
     w.vec(dof_kind_), w.vec(dof_owner_), w.vec(dof_vel_), w.vec(reaction_);
@@ -224,7 +224,9 @@ void Simulation::load_state(StateReader& r) {
 
     r.section("clock");
     const double dt = r.get<double>();
-    if (dt != dt_) throw StateError("time step " + std::to_string(dt) + " s, this case gives " + std::to_string(dt_) + " s");
+    if (dt != dt_initial_)
+        throw StateError("time step " + std::to_string(dt) + " s, this case gives " + std::to_string(dt_initial_) + " s");
+    r.pod(dt_), r.pod(dt_limit_), r.pod(dt_springs_), r.pod(dt_logged_);  // smaller than at the start after insertions
     r.pod(time_), r.pod(steps_), r.pod(stage_), r.pod(stage_t0_), r.pod(stage_steps0_), r.pod(broken_total_);
     if (stage_ < 0 || stage_ >= static_cast<int>(spec_.stages.size())) throw StateError("stage index out of range");
 
@@ -302,6 +304,7 @@ void Simulation::load_state(StateReader& r) {
     r.vec_sized(crush_.kappa, crush_.kappa.size(), "crushing softening variables");
 
     inter_.load_state(r);
+    build_ties();  // derived from the cohesive elements still dormant
     r.section("end");
     if (!r.at_end()) throw StateError("data after the end of the state");
 }

@@ -45,6 +45,7 @@ fracture::CohesiveProps to_props(const JointSpec& j, double E) {
     p.composite = j.composite;  // law = "composite"
     p.compressive_energy = j.compressive_energy;
     p.cap_shear_factor = j.cap_shear_factor;
+    p.extrinsic = j.extrinsic;
     return p;
 }
 
@@ -216,18 +217,86 @@ Interactions::Interactions(const CaseSpec& spec, const Model& model) {
         }
 }
 
-double Interactions::stable_dt(const Model& model, double xi_contact) const {
+double Interactions::stable_dt(const Model& model, double xi_contact, const double* mass, const int* rep) const {
     double dt = std::numeric_limits<double>::infinity();
-    if (joints_) dt = std::min(dt, joints_->stable_dt(model.mass.data()));
+    if (joints_) dt = std::min(dt, joints_->stable_dt(mass ? mass : model.mass.data(), rep));
     if (contact_) {
         const double damped = xi_contact > 0 ? std::sqrt(1 + xi_contact * xi_contact) - xi_contact : 1.0;
-        dt = std::min(dt, contact_stable_dt(model) * damped);
+        dt = std::min(dt, contact_stable_dt(model, mass) * damped);
     }
     return dt;
 }
 
-double Interactions::contact_stable_dt(const Model& model) const {
-    return contact_ ? contact_->stable_dt(model.X.data(), model.mass.data()) : std::numeric_limits<double>::infinity();
+double Interactions::contact_stable_dt(const Model& model, const double* mass) const {
+    return contact_ ? contact_->stable_dt(model.X.data(), mass ? mass : model.mass.data())
+                    : std::numeric_limits<double>::infinity();
+}
+
+void Interactions::list_dormant(int n_triangles) {
+    dormant_.clear(), dormant_tris_.clear();
+    if (!joints_) return;
+    for (int e = 0; e < joints_->size(); ++e)
+        if (joints_->dormant(e)) {
+            dormant_.push_back(e);
+            const auto& el = joints_->element(e);
+            if (el.tri_a >= 0) dormant_tris_.push_back(el.tri_a);
+            if (el.tri_b >= 0) dormant_tris_.push_back(el.tri_b);
+        }
+    std::sort(dormant_tris_.begin(), dormant_tris_.end());
+    dormant_tris_.erase(std::unique(dormant_tris_.begin(), dormant_tris_.end()), dormant_tris_.end());
+    tri_slot_.assign(n_triangles, -1);
+    for (std::size_t i = 0; i < dormant_tris_.size(); ++i) tri_slot_[dormant_tris_[i]] = static_cast<int>(i);
+    tri_sigma_.assign(3 * dormant_tris_.size(), 0.0);
+    due_.assign(dormant_.size(), 0);
+    due_traction_.assign(2 * dormant_.size(), 0.0);
+}
+
+int Interactions::insert_cracks(const Model& model, const double* x) {
+    if (!has_dormant()) return 0;
+    if (tri_slot_.size() != static_cast<std::size_t>(model.n_triangles())) list_dormant(model.n_triangles());
+    const int nt = static_cast<int>(dormant_tris_.size()), ne = static_cast<int>(dormant_.size());
+    int found = 0;
+#pragma omp parallel if (ne >= 2048)
+    {
+#pragma omp for schedule(static)
+        for (int i = 0; i < nt; ++i) {
+            const int t = dormant_tris_[i];
+            triangle_stress(model.tris[t], model.mat[model.tris[t].mat], x, &tri_sigma_[3 * static_cast<std::size_t>(i)]);
+        }
+#pragma omp for schedule(static) reduction(+ : found)
+        for (int i = 0; i < ne; ++i) {
+            const auto& el = joints_->element(dormant_[i]);
+            // Mean stress of the two sides (one side on a free boundary: its own).
+            double sg[3] = {0, 0, 0};
+            int sides = 0;
+            for (int t : {el.tri_a, el.tri_b})
+                if (t >= 0) {
+                    const double* q = &tri_sigma_[3 * static_cast<std::size_t>(tri_slot_[t])];
+                    sg[0] += q[0], sg[1] += q[1], sg[2] += q[2], ++sides;
+                }
+            for (double& q : sg) q /= sides;
+            // Frame of the element (cohesive_system.cpp): t along edge A's a0 -> a1, n = (t_y, -t_x) into side B.
+            double tx = x[2 * el.n[1]] - x[2 * el.n[0]], ty = x[2 * el.n[1] + 1] - x[2 * el.n[0] + 1];
+            const double len = std::hypot(tx, ty);
+            tx /= len, ty /= len;
+            const double nx = ty, ny = -tx;
+            // Traction on the plane of normal n: T = sigma n; sigma_n = n.T, tau = t.T.
+            const double Tx = sg[0] * nx + sg[2] * ny, Ty = sg[2] * nx + sg[1] * ny;
+            const double sn = Tx * nx + Ty * ny, tau = Tx * tx + Ty * ty;
+            const bool due = joints_->reaches_strength(dormant_[i], sn, tau);
+            due_[i] = due;
+            due_traction_[2 * static_cast<std::size_t>(i)] = sn;
+            due_traction_[2 * static_cast<std::size_t>(i) + 1] = tau;
+            found += due;
+        }
+    }
+    if (found == 0) return 0;
+    std::vector<fracture::CohesiveSystem::Insertion> list;
+    for (int i = 0; i < ne; ++i)
+        if (due_[i]) list.push_back({dormant_[i], due_traction_[2 * static_cast<std::size_t>(i)], due_traction_[2 * static_cast<std::size_t>(i) + 1]});
+    joints_->insert(list);
+    list_dormant(model.n_triangles());
+    return found;
 }
 
 void Interactions::add_forces(const double* x, const double* v, double dt, double* f) {
@@ -315,7 +384,7 @@ double Interactions::friction_dissipation() const {
 // field to save_state and load_state if it changes during a run, then update the size.
 void Interactions::save_state(StateWriter& w) const {
 #if defined(__x86_64__) && defined(__GLIBCXX__)
-    static_assert(sizeof(Interactions) == 248, "Interactions changed: update save_state/load_state and this size");
+    static_assert(sizeof(Interactions) == 392, "Interactions changed: update save_state/load_state and this size");
 #endif
     w.section("interactions");
     w.str(cracks_csv_);

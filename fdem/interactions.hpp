@@ -27,9 +27,11 @@ public:
     // fraction xi_contact of critical on the stiffest contact spring, the contact bound is multiplied by the damped
     // central-difference factor sqrt(1 + xi^2) - xi (dt <= (2 / omega)(sqrt(1 + xi^2) - xi), Belytschko, Liu & Moran,
     // Nonlinear Finite Elements for Continua and Structures, 2000, §6.3).
-    double stable_dt(const Model& model, double xi_contact = 0.0) const;
+    // mass, rep (optional): the nodal masses to use instead of the model's, and a representative per node for nodes
+    // that move as one (tied copies: mass holds the group's mass; fracture/cohesive_system.hpp).
+    double stable_dt(const Model& model, double xi_contact = 0.0, const double* mass = nullptr, const int* rep = nullptr) const;
     // Undamped stable step of the contact springs alone (s), +inf without contact: beta = xi * this.
-    double contact_stable_dt(const Model& model) const;
+    double contact_stable_dt(const Model& model, const double* mass = nullptr) const;
     void set_contact_dashpot(double beta_s) {
         if (contact_) contact_->set_dashpot(beta_s);
     }
@@ -38,6 +40,13 @@ public:
     void want_energy(bool on) {
         if (contact_) contact_->set_compute_energy(on);
     }
+    // Extrinsic insertion (fracture/cohesive_system.hpp): whether some elements are still dormant, and the check of
+    // one step: the Cauchy stress of the two triangles of every dormant element at positions x (their mean, the
+    // stress the tied continuum carries across the edge) gives the traction (sigma, tau) in the element's frame; the
+    // elements whose traction reached the law's peak surface are inserted. Returns how many were.
+    bool has_dormant() const { return joints_ && joints_->dormant_count() > 0; }
+    int insert_cracks(const Model& model, const double* x);
+    double inserted_energy() const { return joints_ ? joints_->inserted_energy() : 0.0; }  // J
     // Adds joint and contact forces (N) at positions x, velocities v, to f.
     void add_forces(const double* x, const double* v, double dt, double* f);
     // After the update: removes broken joints, makes their triangles contact-capable, records them.
@@ -87,6 +96,13 @@ private:
     std::unique_ptr<contact::ContactSystem> contact_;
     std::unique_ptr<fracture::CohesiveSystem> joints_;
     std::string cracks_csv_;
+    std::vector<int> dormant_;         // dormant elements, ascending
+    std::vector<int> dormant_tris_;    // their triangles, ascending, unique
+    std::vector<double> tri_sigma_;    // Pa, Cauchy stress xx, yy, xy of dormant_tris_ (3 per entry)
+    std::vector<int> tri_slot_;        // triangle -> index into dormant_tris_ (-1: none)
+    std::vector<std::uint8_t> due_;    // per entry of dormant_: reached the strength this step
+    std::vector<double> due_traction_; // sigma, tau per entry of dormant_ (Pa)
+    void list_dormant(int n_triangles);
     std::vector<mesh::CohesiveElement> dry_;
     std::vector<char> dry_open_, dry_slip_;
     std::vector<double> dry_len_, dry_ref_mid_;  // m: reference length and midpoint (2 per segment)

@@ -160,7 +160,9 @@ Simulation::Simulation(CaseSpec spec, Model model, RunOptions options)
     mon_ext_.assign(spec_.monitors.size(), {0, 0, 0});
     mon_first_peak_.assign(spec_.monitors.size(), 0.0);
     crush_.setup(spec_, model_);
+    build_ties();
     compute_dt();
+    dt_initial_ = dt_logged_ = dt_;
     // Derived quantities must be finite (issue 26: a huge mass_scale gave dt = 1e148 s, NaN energies and "completed").
     for (int k = 0; k < nn; ++k)
         if (!(std::isfinite(model_.mass[k]) && model_.mass[k] > 0) && !model_.mass.empty())
@@ -180,23 +182,132 @@ Simulation::Simulation(CaseSpec spec, Model model, RunOptions options)
         history_ += ",E_kin,E_el,E_joint,E_contact,W_ext,D_damp,D_visc,D_frac,D_fric,E_balance";
         if (inter_.has_joints())
             history_ += ",broken_unit_I,broken_unit_II,broken_unit_mixed,broken_interface_I,broken_interface_II,broken_interface_mixed";
+        if (inter_.has_joints() && inter_.joints()->extrinsic_count() > 0) history_ += ",inserted";  // extrinsic elements in
         history_ += ",unbalanced\n";
     }
 }
 
 void Simulation::compute_dt() {
     const StepLimit lim = triangle_step_limit(spec_, model_);
-    dt_limit_ = lim.dt;
+    dt_limit_ = dt_triangles_ = lim.dt;
     dt_element_ = lim.element;
     // Contact dashpots lower the contact springs' stable step (damped central difference); the largest fraction
     // any stage asks for sets it for the whole run, so that dt stays the same from stage to stage.
     double xi_max = 0;
     for (const StageSpec& st : spec_.stages)
         if (st.contact_damping) xi_max = std::max(xi_max, *st.contact_damping);
-    dt_contact_ = inter_.contact_stable_dt(model_);
-    dt_springs_ = inter_.stable_dt(model_, xi_max);
+    xi_max_ = xi_max;
+    // Tied copies (extrinsic insertion) move as one node of their group's mass.
+    const double* mass = eff_mass_.empty() ? nullptr : eff_mass_.data();
+    const int* rep = tie_rep_.empty() ? nullptr : tie_rep_.data();
+    dt_contact_ = inter_.contact_stable_dt(model_, mass);
+    dt_springs_ = inter_.stable_dt(model_, xi_max, mass, rep);
     if (dt_springs_ < dt_limit_) dt_limit_ = dt_springs_, dt_element_ = -1;
     dt_ = spec_.dt_override ? *spec_.dt_override : spec_.safety * dt_limit_;
+}
+
+void Simulation::build_ties() {
+    const fracture::CohesiveSystem* J = inter_.joints();
+    ties_ = J && J->dormant_count() > 0;
+    const int nn = model_.n_nodes();
+    tie_of_.clear(), tie_start_.clear(), tie_node_.clear();
+    if (!ties_) {
+        tie_F_.clear(), tie_w_.clear(), tie_inv_mass_.clear(), eff_mass_.clear(), tie_rep_.clear();
+        return;
+    }
+    std::vector<int> parent(nn);
+    for (int k = 0; k < nn; ++k) parent[k] = k;
+    auto find = [&parent](int k) {
+        while (parent[k] != k) k = parent[k] = parent[parent[k]];
+        return k;
+    };
+    for (int e = 0; e < J->size(); ++e) {
+        if (!J->dormant(e)) continue;
+        const int* n = J->element(e).n;
+        for (int k = 0; k < 2; ++k) {
+            const int a = find(n[k]), b = find(n[2 + k]);
+            if (a != b) parent[std::max(a, b)] = std::min(a, b);  // the root is the smallest member
+        }
+    }
+    // Groups of two or more, in order of their smallest member (the root), members ascending.
+    std::vector<int> count(nn, 0);
+    for (int k = 0; k < nn; ++k) ++count[find(k)];
+    tie_of_.assign(nn, -1);
+    std::vector<int> gid(nn, -1);
+    int ng = 0;
+    for (int k = 0; k < nn; ++k)
+        if (parent[k] == k && count[k] > 1) gid[k] = ng++;
+    tie_start_.assign(ng + 1, 0);
+    for (int k = 0; k < nn; ++k)
+        if (gid[find(k)] >= 0) ++tie_start_[gid[find(k)] + 1];
+    for (int g = 0; g < ng; ++g) tie_start_[g + 1] += tie_start_[g];
+    tie_node_.assign(tie_start_[ng], 0);
+    std::vector<int> fill(tie_start_.begin(), tie_start_.end() - 1);
+    for (int k = 0; k < nn; ++k) {
+        const int g = gid[find(k)];
+        if (g < 0) continue;
+        tie_of_[k] = g;
+        tie_node_[fill[g]++] = k;
+    }
+    tie_F_.assign(4 * static_cast<std::size_t>(nn), 0.0);
+    tie_w_.assign(nn, 1.0);
+    tie_inv_mass_.assign(nn, 0.0);
+    eff_mass_ = model_.mass;
+    tie_rep_.resize(nn);
+    for (int k = 0; k < nn; ++k) tie_rep_[k] = k;
+    for (int g = 0; g < ng; ++g) {
+        double M = 0;
+        for (int j = tie_start_[g]; j < tie_start_[g + 1]; ++j) M += model_.mass[tie_node_[j]];
+        for (int j = tie_start_[g]; j < tie_start_[g + 1]; ++j) {
+            const int k = tie_node_[j];
+            tie_w_[k] = model_.mass[k] / M;
+            tie_inv_mass_[k] = 1.0 / M;
+            eff_mass_[k] = M;
+            tie_rep_[k] = tie_node_[tie_start_[g]];
+        }
+    }
+    if (stage_ >= 0) check_ties();
+}
+
+void Simulation::reduce_dt_after_insertion() {
+    if (spec_.dt_override) return;  // numerics.dt: the user's step
+    const double* mass = eff_mass_.empty() ? nullptr : eff_mass_.data();
+    const int* rep = tie_rep_.empty() ? nullptr : tie_rep_.data();
+    // The contact dashpots keep their coefficient beta = xi dt_contact_ (set at the start); on lighter nodes that is
+    // a larger fraction of critical, xi dt_contact_ / dt_c.
+    const double dt_c = inter_.contact_stable_dt(model_, mass);
+    const double xi = std::isfinite(dt_c) && std::isfinite(dt_contact_) && dt_c > 0 ? xi_max_ * dt_contact_ / dt_c : xi_max_;
+    const double springs = inter_.stable_dt(model_, std::max(xi, xi_max_), mass, rep);
+    const double dt = spec_.safety * std::min(dt_triangles_, springs);
+    if (!(dt < dt_)) return;
+    dt_ = dt;
+    if (springs < dt_limit_) dt_limit_ = springs, dt_springs_ = springs, dt_element_ = -1;
+    if (dt_ < 0.9 * dt_logged_) {
+        dt_logged_ = dt_;
+        log("time step: " + sci(dt_) + " s from t = " + sci(time_) + " s (cracks inserted, nodes untied)");
+    }
+}
+
+void Simulation::check_ties() const {
+    if (!ties_) return;
+    const int ng = static_cast<int>(tie_start_.size()) - 1;
+    for (int g = 0; g < ng; ++g) {
+        const int k0 = tie_node_[tie_start_[g]];
+        for (int j = tie_start_[g] + 1; j < tie_start_[g + 1]; ++j) {
+            const int k = tie_node_[j];
+            for (int c = 0; c < 2; ++c) {
+                const int d0 = 2 * k0 + c, d = 2 * k + c;
+                if (dof_kind_[d] == dof_kind_[d0] && dof_owner_[d] == dof_owner_[d0]) continue;
+                const int owner = dof_owner_[d] >= 0 ? dof_owner_[d] : dof_owner_[d0];
+                const std::string grp = owner >= 0 ? supports_[owner].group : std::string("?");
+                throw InputError(spec_.file + ": stage " + std::to_string(stage_ + 1) + ": the support of group '" + grp +
+                                 "' holds only some of the copies of the node at (" + sci(model_.X[2 * k], 6) + ", " +
+                                 sci(model_.X[2 * k + 1], 6) + ") m, which move as one node until a crack is inserted "
+                                 "there (insertion = \"extrinsic\"); expected a group that takes every copy (a box, "
+                                 "or a curve or surface of the whole unit)");
+            }
+        }
+    }
 }
 
 void Simulation::log(const std::string& line) {
@@ -450,6 +561,7 @@ void Simulation::begin_stage(int s) {
                                      sci(until_start_) + " and the prescribed velocity moves it away from " +
                                      sci(st.until_value));
     }
+    check_ties();
     const double hi = history_interval();
     next_history_ = hi > 0 ? time_ : 0;
     const double si = snapshot_interval();
@@ -543,8 +655,18 @@ void Simulation::apply_time_dependent(double t) {
 }
 
 void Simulation::step() {
-    const double dt = dt_;
     const double w0 = omp_get_wtime();
+    // Extrinsic insertion: dormant edges whose traction reached the strength get their cohesive element before this
+    // step's forces, their copies are untied, and the step shrinks if the lighter nodes need it. The velocity update
+    // of a step that changed it spans the mean of the two steps (central difference with a variable step,
+    // v^{n+1/2} = v^{n-1/2} + (dt^{n-1/2} + dt^{n+1/2}) / 2 a^n).
+    const double dt_before = dt_;
+    if (ties_ && inter_.insert_cracks(model_, model_.x.data()) > 0) {
+        build_ties();
+        reduce_dt_after_insertion();
+    }
+    const double dt = dt_;
+    const double dtv = 0.5 * (dt_before + dt);
     apply_time_dependent(time_);
     const int nt = model_.n_triangles(), nn = model_.n_nodes();
     const TriangleRef* tris = model_.tris.data();
@@ -602,7 +724,7 @@ void Simulation::step() {
     // exponential mean over tau for a velocity held over the step.
     const double wf = tau_ld_ > 0 ? -std::expm1(-dt / tau_ld_) : 0.0;
     double* vref = tau_ld_ > 0 ? v_ref_.data() : nullptr;
-    const double hm = 0.5 * dt * beta_mass_;
+    const double hm = 0.5 * dtv * beta_mass_;
     for (std::size_t id = 0; id < supports_.size(); ++id) {
         ActiveSupport& s = supports_[id];
         if (s.mode != DofMode::rigid) continue;
@@ -619,7 +741,7 @@ void Simulation::step() {
         const double vold = s.v_common;
         const double vrel = tau_ld_ > 0 ? vold - s.v_ref : vold;
         const double Fd = vrel > 0 ? -alpha_ * std::abs(F) : vrel < 0 ? alpha_ * std::abs(F) : 0.0;
-        const double vnew = ((1 - hm) * vold + dt * (F + Fd) / M) / (1 + hm);
+        const double vnew = ((1 - hm) * vold + dtv * (F + Fd) / M) / (1 + hm);
         const double Fm = -beta_mass_ * M * 0.5 * (vold + vnew);
         rigid_damp += dt * Fd * 0.5 * (vold + vnew);
         rigid_damp_half += 0.5 * dt * Fd * vnew;
@@ -630,6 +752,34 @@ void Simulation::step() {
         for (int k : s.nodes)
             if (dof_owner_[2 * k + c] == static_cast<int>(id)) dof_vel_[2 * k + c] = vnew;
     }
+
+    // Tied copies (extrinsic insertion): each group's internal and external force sums, so that every member
+    // takes the same acceleration F / M (the node loop below) and books its mass share m / M of the work.
+    if (ties_) {
+        const int ng = static_cast<int>(tie_start_.size()) - 1;
+        const double* fm = f_mod_.data();
+        const double gx = applied_gravity_[0], gy = applied_gravity_[1];
+#pragma omp parallel for schedule(static) if (ng > 2048)
+        for (int g = 0; g < ng; ++g) {
+            double S[4] = {0, 0, 0, 0};
+            for (int j = tie_start_[g]; j < tie_start_[g + 1]; ++j) {
+                const int k = tie_node_[j];
+                S[0] += fm[2 * k], S[1] += fm[2 * k + 1];
+                for (int i = model_.inc_ptr[k]; i < model_.inc_ptr[k + 1]; ++i) {
+                    const double* r = tf + 2 * static_cast<std::size_t>(model_.inc_idx[i]);
+                    S[0] += r[0], S[1] += r[1];
+                }
+                S[2] += f_ext_[2 * k] + model_.grav_mass[k] * gx;
+                S[3] += f_ext_[2 * k + 1] + model_.grav_mass[k] * gy;
+            }
+            for (int j = tie_start_[g]; j < tie_start_[g + 1]; ++j)
+                for (int c = 0; c < 4; ++c) tie_F_[4 * static_cast<std::size_t>(tie_node_[j]) + c] = S[c];
+        }
+    }
+    const int* tie_of = ties_ ? tie_of_.data() : nullptr;
+    const double* tieF = ties_ ? tie_F_.data() : nullptr;
+    const double* tie_w = ties_ ? tie_w_.data() : nullptr;
+    const double* tie_im = ties_ ? tie_inv_mass_.data() : nullptr;
 
     // 3. Node loop.
     const int nnb = (nn + kBlock - 1) / kBlock;
@@ -660,8 +810,17 @@ void Simulation::step() {
                 const double* r = tf + 2 * static_cast<std::size_t>(inc_idx[j]);
                 fi0 += r[0], fi1 += r[1];
             }
-            const double fe[2] = {fext[2 * k] + gmass[k] * gx, fext[2 * k + 1] + gmass[k] * gy};
-            const double fin[2] = {fi0, fi1};
+            double fe[2] = {fext[2 * k] + gmass[k] * gx, fext[2 * k + 1] + gmass[k] * gy};
+            double fin[2] = {fi0, fi1};
+            // A tied copy: the scale takes its own forces; its motion the group's resultant over the group's mass,
+            // the same bits for every member; its books the share w = m / M of the group's forces.
+            const double sc[2] = {std::abs(fin[0]) + std::abs(fe[0]), std::abs(fin[1]) + std::abs(fe[1])};
+            double w = 1.0, im = inv_mass[k];
+            if (tie_of && tie_of[k] >= 0) {
+                const double* S = tieF + 4 * static_cast<std::size_t>(k);
+                fin[0] = S[0], fin[1] = S[1], fe[0] = S[2], fe[1] = S[3];
+                w = tie_w[k], im = tie_im[k];
+            }
             for (int c = 0; c < 2; ++c) {
                 const int d = 2 * k + c;
                 const double f = fin[c] + fe[c];
@@ -671,26 +830,26 @@ void Simulation::step() {
                     // [C79] local damping: -alpha |f| sign(v), or sign(v - vref) with the filter.
                     const double vrel = vref ? vold - vref[d] : vold;
                     const double fd = vrel > 0 ? -alpha * std::abs(f) : vrel < 0 ? alpha * std::abs(f) : 0.0;
-                    vnew = ((1 - hm) * vold + dt * (f + fd) * inv_mass[k]) / (1 + hm);
+                    vnew = ((1 - hm) * vold + dtv * (f + fd) * im) / (1 + hm);
                     const double vbar = 0.5 * (vold + vnew);
-                    dW += dt * fe[c] * vbar;
-                    dD -= dt * fd * vbar;
-                    cW += 0.5 * dt * fe[c] * vnew;
-                    cD -= 0.5 * dt * fd * vnew;
+                    dW += w * dt * fe[c] * vbar;
+                    dD -= w * dt * fd * vbar;
+                    cW += w * 0.5 * dt * fe[c] * vnew;
+                    cD -= w * 0.5 * dt * fd * vnew;
                     if (hm > 0) {  // -a m vbar: work dt (-a m vbar) vbar, and its share up to t^n
                         const double fm = -beta_mass * mass[k] * vbar;
                         dM -= dt * fm * vbar;
                         cM -= 0.5 * dt * fm * vnew;
                     }
-                    unb += std::abs(f);
-                    scale += std::abs(fin[c]) + std::abs(fe[c]);
+                    unb += w * std::abs(f);
+                    scale += sc[c];
                 } else {
                     vnew = kind[d] == 1 ? 0.0 : vpres[d];
-                    const double R = mass[k] * (vnew - vold) / dt - f;
+                    const double R = mass[k] * (vnew - vold) / dtv - w * f;
                     reac[d] = R;
-                    dW += dt * (fe[c] + R) * 0.5 * (vold + vnew);
-                    cW += 0.5 * dt * (fe[c] + R) * vnew;
-                    scale += std::abs(fin[c]) + std::abs(fe[c]);
+                    dW += dt * (w * fe[c] + R) * 0.5 * (vold + vnew);
+                    cW += 0.5 * dt * (w * fe[c] + R) * vnew;
+                    scale += sc[c];
                 }
                 K += 0.5 * mass[k] * vold * vnew;
                 if (vref) vref[d] += wf * (vnew - vref[d]);
@@ -915,7 +1074,9 @@ Energies Simulation::energies() const {
     for (double s : pk) e.kinetic += s;
     for (double s : pe) e.elastic += s;
     if (stepped) e.kinetic = kinetic_n_;
-    e.external = W_ext_ - (stepped ? work_half_ : 0.0);
+    // Extrinsic insertion: the pre-peak energy an inserted element starts with is put in, like work
+    // (fracture/cohesive_system.hpp).
+    e.external = W_ext_ - (stepped ? work_half_ : 0.0) + inter_.inserted_energy();
     e.damping = D_damp_ - (stepped ? damp_half_ : 0.0);
     e.viscous = D_visc_ + D_mass_ - (stepped ? mass_half_ : 0.0) + inter_.contact_damping_dissipation();
     e.joint = inter_.joint_energy();
@@ -951,6 +1112,8 @@ std::string Simulation::history_row(const Energies& e) {
         for (auto cls : {fracture::JointClass::unit_interior, fracture::JointClass::interface})
             for (auto mode : {fracture::FractureMode::mode_I, fracture::FractureMode::mode_II, fracture::FractureMode::mixed})
                 row += "," + std::to_string(c->of(cls, mode));
+    if (inter_.has_joints() && inter_.joints()->extrinsic_count() > 0)
+        row += "," + std::to_string(inter_.joints()->extrinsic_count() - inter_.joints()->dormant_count());
     row += "," + format_double(unbalanced_ratio_) + "\n";
     return row;
 }
@@ -1239,8 +1402,12 @@ void Simulation::run() {
         (std::isfinite(dt_springs_) ? "; joint/contact springs alone " + sci(dt_springs_) + " s" : std::string()));
     if (!model_.has_topology && model_.mesh.n_bodies() > 1)
         log("no interface or fracture rules: the " + std::to_string(model_.mesh.n_bodies()) + " bodies of the mesh are tied into one continuum");
-    if (inter_.has_joints())
-        log("cohesive elements: " + std::to_string(inter_.joints()->size()));
+    if (inter_.has_joints()) {
+        const int ext = inter_.joints()->extrinsic_count();
+        log("cohesive elements: " + std::to_string(inter_.joints()->size()) +
+            (ext > 0 ? " (" + std::to_string(ext) + " extrinsic: inserted where the traction reaches the strength, the "
+                       "unit one continuum until then)" : std::string()));
+    }
     if (crush_.active())
         log("crushing (compression softening, fdem/plasticity.hpp): " + std::to_string(crush_.kappa.size()) + " triangles; work booked under D_frac");
     for (const std::string& note : inter_.penalty_notes()) log(note);
@@ -1294,6 +1461,12 @@ void Simulation::run() {
     if (inter_.has_dry_joints())
         log("dry joint record: " + std::to_string(inter_.dry_open_count()) + " segments opened, " + std::to_string(inter_.dry_slip_count()) +
             " slipped (of " + std::to_string(inter_.dry_joint_count()) + ")");
+    if (inter_.has_joints() && inter_.joints()->extrinsic_count() > 0) {
+        const auto* J = inter_.joints();
+        log("extrinsic insertion: " + std::to_string(J->extrinsic_count() - J->dormant_count()) + " of " +
+            std::to_string(J->extrinsic_count()) + " elements inserted; time step " + sci(dt_) + " s at the end (" +
+            sci(dt_initial_) + " s at the start)");
+    }
     log("done: " + std::to_string(steps_) + " steps in " + human_time(wall_time_) + " (" + sci(tps, 3) + " triangle-steps/s)");
     if (const contact::ContactSystem* c = inter_.contact()) {
         const auto& st = c->stats();
@@ -1347,6 +1520,12 @@ void Simulation::write_summary(const std::string& status, const std::string& mes
     for (const char* c : {"E_kin", "E_el", "E_joint", "E_contact", "W_ext", "D_damp", "D_visc", "D_frac", "D_fric"}) cols[c] = "J";
     cols["E_balance"] = "-";
     cols["unbalanced"] = "-";
+    if (inter_.has_joints()) {
+        for (const char* c : {"broken_unit_I", "broken_unit_II", "broken_unit_mixed", "broken_interface_I", "broken_interface_II",
+                              "broken_interface_mixed"})
+            cols[c] = "-";
+        if (inter_.joints()->extrinsic_count() > 0) cols["inserted"] = "-";
+    }
     j["columns"] = cols;
     if (!spec_.curve_x.empty()) {
         Json c = Json::object();

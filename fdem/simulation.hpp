@@ -144,6 +144,11 @@ private:
     double rotation_deg(const std::vector<int>& nodes, double lag) const;  // deg, positions x - lag v
 
     void compute_dt();
+    // Extrinsic insertion (fracture/cohesive_system.hpp): the copies joined by dormant cohesive elements move as one
+    // node. build_ties groups them (union-find over the dormant elements' node pairs; groups in order of their first
+    // node, members ascending); check_ties refuses a support that holds only some copies of a group.
+    void build_ties();
+    void check_ties() const;
     void apply_time_dependent(double t);
     double protocol_displacement(const ActiveSupport& s, double tau) const;
     double protocol_integral(const ActiveSupport& s, double tau) const;
@@ -212,6 +217,21 @@ private:
     double tau_ld_ = 0;  // s, local damping filter time constant (0: sign of the absolute velocity)
     std::vector<double> v_ref_;  // m/s, per DOF: moving mean of the velocity over tau_ld_ (empty while tau_ld_ = 0)
     double beta_mass_ = 0;  // 1/s, mass-proportional damping
+
+    // tied copies (derived from the cohesive system's dormant elements; rebuilt, not checkpointed)
+    bool ties_ = false;
+    std::vector<int> tie_of_;                // per node: its group, -1 when untied
+    std::vector<int> tie_start_, tie_node_;  // CSR: members of group g are tie_node_[tie_start_[g] .. tie_start_[g+1])
+    std::vector<double> tie_F_;              // N, per node: its group's internal (x, y) and external (x, y) force sums
+    std::vector<double> tie_w_;              // -, per node: its mass over its group's mass
+    std::vector<double> tie_inv_mass_;       // 1/kg, per node: 1 / (its group's mass)
+    std::vector<double> eff_mass_;           // kg, per node: its group's mass (tied) or its own (empty: no ties)
+    std::vector<int> tie_rep_;               // per node: its group's first node, or itself (empty: no ties)
+    double dt_triangles_ = 0;                // s, the triangles' stable limit (does not change with the ties)
+    double xi_max_ = 0;                      // largest contact dashpot fraction of any stage
+    double dt_initial_ = 0;                  // s, the step at the start (the restart check compares it)
+    double dt_logged_ = 0;                   // s, the last step reported in the log
+    void reduce_dt_after_insertion();        // the step after nodes were untied: never larger, smaller if needed
 
     // per-step scratch
     std::vector<double> tf_;  // 6 per triangle

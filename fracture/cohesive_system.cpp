@@ -165,8 +165,17 @@ CohesiveSystem::CohesiveSystem(std::vector<CohesiveElement> elems, std::vector<C
   break_DII_.assign(ne, 0.0);
   pending_.assign(ne, 0);
   broken_.assign(ne, 0);
-  active_.resize(ne);
-  for (int e = 0; e < ne; ++e) active_[e] = e;
+  dormant_.assign(ne, 0);
+  offset_.assign(2 * std::size_t(ne), 0.0);
+  active_.clear();
+  for (int e = 0; e < ne; ++e) {
+    if (props_[elems_[e].props].extrinsic) {
+      dormant_[e] = 1;
+      ++dormant_count_;
+    } else {
+      active_.push_back(e);
+    }
+  }
 
   build_gather();
 }
@@ -195,7 +204,7 @@ void CohesiveSystem::build_gather() {
   stale_slots_ = 0;
 }
 
-double CohesiveSystem::stable_dt(const double* node_mass) const {
+double CohesiveSystem::stable_dt(const double* node_mass, const int* rep) const {
   // Gershgorin bound of one element's stiffness row for a node: the 2x2 block R^T diag(K_n, K_s) R has absolute row
   // sum <= K_max + |K_n - K_s| / 2, and the Simpson-lumped couplings of a node to the 4 nodes sum to h t (1/3 + 1/6 +
   // 1/3 + 1/6) = h t. So omega^2 <= k / m with k = h t (K_max + |K_n - K_s|/2) summed over the node's elements,
@@ -206,7 +215,7 @@ double CohesiveSystem::stable_dt(const double* node_mass) const {
     const double K = std::max(L.normal_stiffness, L.shear_stiffness) +
                      0.5 * std::abs(L.normal_stiffness - L.shear_stiffness);
     const double k = length_[e] * thickness_ * K;
-    for (int j = 0; j < 4; ++j) k_node[elems_[e].n[j]] += k;
+    for (int j = 0; j < 4; ++j) k_node[rep ? rep[elems_[e].n[j]] : elems_[e].n[j]] += k;
   }
   double dt = std::numeric_limits<double>::infinity();
   for (int v = 0; v < num_nodes_; ++v)
@@ -250,8 +259,8 @@ void CohesiveSystem::add_forces(const double* x, double* f) {
     double energy = 0.0, dissipated = 0.0, friction = 0.0, DI = 0.0, DII = 0.0;
     bool all_broken = true;
     for (int i = 0; i < 3; ++i) {
-      const double o = dx[i] * nx + dy[i] * ny;
-      const double s = dx[i] * tx + dy[i] * ty;
+      const double o = dx[i] * nx + dy[i] * ny + offset_[2 * std::size_t(e)];
+      const double s = dx[i] * tx + dy[i] * ty + offset_[2 * std::size_t(e) + 1];
       const PointResponse r =
           ci < 0 ? evaluate_point(L, o, s, history_[3 * e + i])
                  : evaluate_composite(composite_law_[ci], o, s, composite_history_[3 * std::size_t(ci) + i]);
@@ -304,6 +313,53 @@ void CohesiveSystem::add_forces(const double* x, double* f) {
   }
   }  // omp parallel
   pending_count_ = pending;
+}
+
+int CohesiveSystem::extrinsic_count() const {
+  int n = 0;
+  for (const CohesiveElement& el : elems_) n += props_[el.props].extrinsic;
+  return n;
+}
+
+bool CohesiveSystem::reaches_strength(int e, double sigma, double tau) const {
+  const JointLaw& L = law_[e];
+  return sigma >= L.tensile_strength || std::abs(tau) >= shear_strength(sigma, L.cohesion, L.tan_friction);
+}
+
+void CohesiveSystem::insert(const std::vector<Insertion>& list) {
+  if (list.empty()) return;
+  for (const Insertion& in : list) {
+    const int e = in.element;
+    if (e < 0 || e >= size() || !dormant_[e]) throw std::logic_error("CohesiveSystem::insert: element not dormant");
+    const JointLaw& L = law_[e];
+    // Separation on the pre-peak curves (2 x - x^2) f (law.hpp) whose traction is the continuum's, capped at the peak
+    // (x = 1); in compression the linear penalty (and no further than the cap, if any).
+    double sigma = in.sigma;
+    if (L.compressive_strength > 0.0) sigma = std::max(sigma, -L.compressive_strength);
+    double o0;
+    if (sigma >= 0.0) {
+      const double r = L.tensile_strength > 0.0 ? std::min(sigma / L.tensile_strength, 1.0) : 1.0;
+      o0 = (1.0 - std::sqrt(1.0 - r)) * L.opening_peak;
+    } else {
+      o0 = sigma / L.normal_stiffness;
+    }
+    const double f_s = shear_strength(std::min(sigma, 0.0), L.cohesion, L.tan_friction);
+    const double s_p = 2.0 * f_s * L.inv_shear_stiffness;
+    const double r = f_s > 0.0 ? std::min(std::abs(in.tau) / f_s, 1.0) : 1.0;
+    const double s0 = (in.tau < 0.0 ? -1.0 : 1.0) * (1.0 - std::sqrt(1.0 - r)) * s_p;
+    offset_[2 * std::size_t(e)] = o0;
+    offset_[2 * std::size_t(e) + 1] = s0;
+    // The points start from the law's state at (o_0, s_0): undamaged (at most at the peak), with its energy.
+    const PointResponse pr = evaluate_point(L, o0, s0, initial_history(L));
+    for (int i = 0; i < 3; ++i) history_[3 * std::size_t(e) + i] = pr.history;
+    energy_[e] = pr.energy * length_[e] * thickness_;
+    inserted_ += energy_[e];
+    dormant_[e] = 0;
+    --dormant_count_;
+    active_.push_back(e);
+  }
+  std::sort(active_.begin(), active_.end());
+  build_gather();
 }
 
 std::vector<BreakRecord> CohesiveSystem::update_damage(double time, double control_displacement, const double* x) {
@@ -426,7 +482,7 @@ void write_cracks_csv_row(std::ostream& os, const BreakRecord& r) {
 // libstdc++): add the field to save_state and load_state if it carries from one step to the next, then update the size.
 void CohesiveSystem::save_state(StateWriter& w) const {
 #if defined(__x86_64__) && defined(__GLIBCXX__)
-  static_assert(sizeof(CohesiveSystem) == 592, "CohesiveSystem changed: update save_state/load_state and this size");
+  static_assert(sizeof(CohesiveSystem) == 656, "CohesiveSystem changed: update save_state/load_state and this size");
   static_assert(sizeof(PointHistory) == 40, "PointHistory changed: check CohesiveSystem::save_state and this size");
 #endif
   w.section("cohesive");
@@ -440,6 +496,10 @@ void CohesiveSystem::save_state(StateWriter& w) const {
   w.pod(counts_);
   // law = "composite": its point histories (composite_index_ and composite_law_ are fixed when the system is built).
   w.vec(composite_history_);
+  // Extrinsic insertion.
+  w.vec(dormant_), w.vec(offset_);
+  w.pod(static_cast<std::int32_t>(dormant_count_));
+  w.pod(inserted_);
 }
 
 void CohesiveSystem::load_state(StateReader& r) {
@@ -470,6 +530,10 @@ void CohesiveSystem::load_state(StateReader& r) {
   stale_slots_ = std::size_t(r.get<std::uint64_t>());
   r.pod(counts_);
   r.vec_sized(composite_history_, composite_history_.size(), "composite point histories");
+  r.vec_sized(dormant_, ne, "cohesive dormant flags");
+  r.vec_sized(offset_, 2 * ne, "cohesive insertion offsets");
+  dormant_count_ = r.get<std::int32_t>();
+  r.pod(inserted_);
 }
 
 }  // namespace fdem::fracture

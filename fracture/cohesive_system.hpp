@@ -80,7 +80,29 @@ class CohesiveSystem {
                  const double* x_reference, int num_nodes);
 
   int size() const { return int(elems_.size()); }
-  int intact_count() const { return int(active_.size()); }  // elements still in the force loop
+  int intact_count() const { return int(active_.size()); }  // elements in the force loop
+
+  // Extrinsic insertion (CohesiveProps::extrinsic; fracture/README.md "Extrinsic insertion"). The elements of such a
+  // class start dormant: out of the force loop, their two sides held together by the engine (tied copies, one
+  // continuum). The engine computes the traction the continuum carries across a dormant edge, sigma (normal, tension
+  // positive) and tau (along t, the element's frame), both Pa, and inserts the element once it reaches the peak
+  // surface of the law: sigma >= f_t or |tau| >= c + max(0, -sigma) tan(phi). An inserted element starts on the
+  // pre-peak curve at the separation (o_0, s_0) whose traction is (sigma, tau) (at the peak when the surface was
+  // reached), kept as an offset of the geometric separation, which is zero at insertion: the traction stays
+  // continuous and the separation work from there to the break is what the law gives, G_I or G_II less the
+  // pre-peak part already stored. That stored part, E_0(o_0, s_0) h t, appears with the element (the continuum had
+  // no compliance to hold it): inserted_energy() sums it for the engine's balance.
+  int dormant_count() const { return dormant_count_; }
+  int extrinsic_count() const;  // elements of extrinsic classes, dormant or not
+  bool dormant(int e) const { return dormant_[e] != 0; }
+  bool reaches_strength(int e, double sigma, double tau) const;
+  struct Insertion {
+    int element;
+    double sigma, tau;  // Pa, the continuum's traction at insertion (see above)
+  };
+  // Inserts the listed dormant elements (any order; each once) and rebuilds the node gather.
+  void insert(const std::vector<Insertion>& list);
+  double inserted_energy() const { return inserted_; }  // J, cumulative (see above)
   const CohesiveElement& element(int e) const { return elems_[e]; }
   const JointLaw& law(int e) const { return law_[e]; }
   double length(int e) const { return length_[e]; }  // reference length h, m
@@ -89,7 +111,9 @@ class CohesiveSystem {
   // 2 sqrt(m / k), k the Gershgorin bound of the joint stiffness on that node (N/m). node_mass: kg per node
   // (nodes with m <= 0 are taken as fixed and skipped).
   // Returns +infinity when no element is intact. The engine combines it with the triangles' limit and a safety factor.
-  double stable_dt(const double* node_mass) const;
+  // rep (optional): a representative per node for nodes that move as one (the engine's tied copies; node_mass then
+  // holds the group's mass): the stiffnesses are summed per representative. Dormant elements do not act.
+  double stable_dt(const double* node_mass, const int* rep = nullptr) const;
 
   // Evaluate every intact element at positions x (2 * num_nodes, m), update its irreversible damage and
   // dissipation, and ADD its nodal forces (N, whole thickness) to f (2 * num_nodes). Deterministic: per-element
@@ -154,7 +178,11 @@ class CohesiveSystem {
   std::vector<double> break_DI_, break_DII_;
   std::vector<std::uint8_t> pending_;  // 1: fully damaged at the last add_forces, not yet removed
   std::vector<std::uint8_t> broken_;
-  std::vector<int> active_;            // intact elements, ascending
+  std::vector<int> active_;            // intact elements, ascending (inserted ones only, for extrinsic classes)
+  std::vector<std::uint8_t> dormant_;  // 1: extrinsic element not inserted yet
+  std::vector<double> offset_;         // o_0, s_0 per element (m): the separation at insertion (0 for intrinsic)
+  int dormant_count_ = 0;
+  double inserted_ = 0.0;              // J, sum of the pre-peak energies of the inserted elements
   int pending_count_ = 0;
   // Node -> contributions gather (CSR over the intact elements): for row r, node gather_node_[r] sums force_[gather_slot_[k]] (x) and
   // force_[gather_slot_[k] + 1] (y) for k in [gather_start_[r], gather_start_[r+1]), slots in element order.

@@ -34,6 +34,7 @@ struct CohesiveProps {
   bool composite = false;                // the composite law instead of the [K25] law
   double compressive_energy = unset;     // G_c, J/m^2 (> 0): compressive fracture energy of the cap (composite only)
   double cap_shear_factor = unset;       // C_s, - (> 0): cap sigma^2 + C_s tau^2 = f_m^2 (composite only)
+  bool extrinsic = false;                // inserted when the traction reaches the strength (cohesive_system.hpp)
 };
 
 // Problems with one class, one line each (empty when fine), for the engine to report against the case file.

@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -250,6 +251,79 @@ TEST_CASE("a run stopped half way through its fracture and restarted gives byte-
         CHECK(testing::read_text(part / "run.pvd") == testing::read_text(full / "run.pvd"));
         CHECK(testing::read_text(part / "summary.json").find("\"completed\"") != std::string::npos);
         CHECK(testing::read_text(part / "run.log").find("restart: from") != std::string::npos);
+    }
+}
+
+TEST_CASE("a run with extrinsic insertion stopped between insertions and restarted gives byte-identical history, cracks and final snapshot",
+          "[engine][regression]") {
+    // The wall above with the bricks' crack elements extrinsic (fracture/cohesive_system.hpp) and weaker bricks, so that
+    // all 10 are inserted in the shear stage, some before the stop and some after it: the restored dormant flags,
+    // offsets and tied copies decide the second half.
+    std::string wall = kWall;
+    for (const auto& [from, to] : std::vector<std::pair<std::string, std::string>>{
+             {"  penalty = 5e10\n", "  penalty = 5e10\n  insertion = \"extrinsic\"\n"},
+             {"tensile_strength = 1.0e6\n  cohesion = 1.4e6", "tensile_strength = 2.0e5\n  cohesion = 3.0e5"}}) {
+        const auto p = wall.find(from);
+        REQUIRE(p != std::string::npos);
+        wall.replace(p, from.size(), to);
+    }
+    const auto dir = testing::tmp_dir("restart_extrinsic");
+    const std::string case_file = testing::write_text(dir / "wall.toml", wall);
+    const auto full = dir / "full";
+    const auto r0 = run_cli("run \"" + case_file + "\" -o \"" + full.string() + "\"", 1, dir);
+    INFO(r0.err);
+    REQUIRE(r0.code == 0);
+    const std::string history = testing::read_text(full / "history.csv"), cracks = testing::read_text(full / "cracks.csv");
+    // The "inserted" column: stop at the first row with at least half of the final count.
+    const std::string header = history.substr(0, history.find('\n'));
+    long col = 0;
+    {
+        std::stringstream hs(header);
+        std::string name;
+        long i = 0;
+        col = -1;
+        while (std::getline(hs, name, ',')) {
+            if (name == "inserted") col = i;
+            ++i;
+        }
+    }
+    REQUIRE(col >= 0);
+    std::vector<std::pair<long, long>> ins;  // (step, inserted) per row
+    for (std::size_t pos = history.find('\n') + 1; pos < history.size(); pos = history.find('\n', pos) + 1) {
+        std::stringstream ls(history.substr(pos, history.find('\n', pos) - pos));
+        std::string field;
+        long step = 0, n = 0;
+        for (long i = 0; std::getline(ls, field, ','); ++i) {
+            if (i == 1) step = std::stol(field);
+            if (i == col) n = std::stol(field);
+        }
+        ins.emplace_back(step, n);
+    }
+    const long total = ins.back().second, steps = ins.back().first;
+    REQUIRE(total == 10);
+    long half = 0, at_stop = 0;
+    for (const auto& [st, n] : ins)
+        if (n >= total / 2) {
+            half = st, at_stop = n;
+            break;
+        }
+    INFO("stop after step " << half << " with " << at_stop << " of " << total << " inserted");
+    CHECK(at_stop > 0);
+    CHECK(at_stop < total);
+    const std::string final_snapshot = "snapshots/step_" + std::string(9 - std::to_string(steps).size(), '0') + std::to_string(steps) + ".vtu";
+    REQUIRE(std::filesystem::exists(full / final_snapshot));
+    for (int threads : {1, 2}) {
+        const auto part = dir / ("part_" + std::to_string(threads));
+        const auto r1 = run_cli("run \"" + case_file + "\" -o \"" + part.string() + "\" --stop-after-steps " + std::to_string(half),
+                                threads, dir);
+        INFO(threads << " thread(s): " << r1.err);
+        CHECK(r1.code == 138);
+        const auto r2 = run_cli("run \"" + case_file + "\" --restart \"" + part.string() + "\"", threads, dir);
+        INFO(r2.err);
+        REQUIRE(r2.code == 0);
+        CHECK(testing::read_text(part / "history.csv") == history);
+        CHECK(testing::read_text(part / "cracks.csv") == cracks);
+        CHECK(testing::read_text(part / final_snapshot) == testing::read_text(full / final_snapshot));
     }
 }
 
