@@ -731,6 +731,11 @@ CaseSpec load_case(const std::string& path, const std::vector<std::string>& over
                 m.fracture.extrinsic = fr.string("insertion", false, "when the cohesive elements join the model",
                                                  {"intrinsic", "extrinsic"})
                                            .value_or("intrinsic") == "extrinsic";
+                // contact_penalty: the crack faces' normal penalty once an element has broken (default: p_j).
+                m.fracture.contact_penalty =
+                    fr.number("contact_penalty", false, "a contact penalty > 0 in Pa for the crack faces (default: the penalty p_j)",
+                              positive)
+                        .value_or(std::nan(""));
                 if (m.fracture.extrinsic && (m.fracture.composite || m.fracture.mohr_coulomb))
                     fr.number("insertion", false, "insertion = \"extrinsic\" only with the [K25] law (law = \"k25\")",
                               [](double) { return false; });  // a string: reported with this expectation

@@ -42,6 +42,7 @@ struct JointSpec {
     double compressive_energy = std::nan("");     // J/m^2, G_c of the composite law's cap (NaN = none)
     double cap_shear_factor = std::nan("");       // -, C_s of the composite law's cap (NaN = none)
     bool extrinsic = false;                       // insertion = "extrinsic": materials only (fracture/README.md)
+    double contact_penalty = std::nan("");        // Pa, normal penalty of the crack faces (materials; NaN: p_j)
     int line = 0;
 };
 

@@ -173,8 +173,9 @@ Interactions::Interactions(const CaseSpec& spec, const Model& model) {
     for (int a = 0; a < nr; ++a) {
         const Material& ma = material_of(a);
         if (ma.fracture.present) {
-            // Crack faces: the joint penalty as normal penalty, the residual friction.
-            contact::ContactLaw l = contact::ContactLaw::penalty(crack_penalty[static_cast<std::size_t>(a)], std::tan(ma.fracture.residual_friction * M_PI / 180));
+            // Crack faces: the joint penalty as normal penalty (or the table's contact_penalty), the residual friction.
+            const double pc = std::isnan(ma.fracture.contact_penalty) ? crack_penalty[static_cast<std::size_t>(a)] : ma.fracture.contact_penalty;
+            contact::ContactLaw l = contact::ContactLaw::penalty(pc, std::tan(ma.fracture.residual_friction * M_PI / 180));
             l.name = "crack faces of " + ma.name;
             laws.set_crack(a, l);
         }

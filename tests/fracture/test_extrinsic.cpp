@@ -224,3 +224,31 @@ TEST_CASE("engine cantilever: a crackable material with extrinsic insertion has 
   // The intrinsic elements add the penalty's compliance: softer than the continuum.
   CHECK(std::abs(u_intr / u_cont) > 1.01);
 }
+
+TEST_CASE("contact_penalty sets the crack faces' penalty apart from p_j: the contact step bound scales as its inverse root",
+          "[engine][unit]") {
+  // The bar's only contact law is that of its crack faces (no interfaces), penalty p_j = 1e11 Pa by default; with
+  // contact_penalty = 1e9 Pa the contact springs' bound (6 p / H per triangle, contact_system.cpp) grows 10-fold.
+  const std::string geo = testing::read_text(cases_dir() / "bar_structured.geo");
+  const std::string base = testing::read_text(cases_dir() / "bar_structured.toml");
+  auto sim0 = make_sim("extrinsic_contact_penalty_default", base, {{"bar_structured.geo", geo}});
+  auto sim1 = make_sim("extrinsic_contact_penalty_1e9",
+                       replace_once(base, "  penalty = 1.0e11           # Pa\n", "  penalty = 1.0e11           # Pa\n  contact_penalty = 1e9\n"),
+                       {{"bar_structured.geo", geo}});
+  const double dt0 = sim0.interactions().contact_stable_dt(sim0.model());
+  const double dt1 = sim1.interactions().contact_stable_dt(sim1.model());
+  CHECK(dt1 / dt0 == Approx(10.0).epsilon(1e-12));
+  // The cohesive elements keep p_j.
+  CHECK(sim1.interactions().joints()->law(0).normal_stiffness == sim0.interactions().joints()->law(0).normal_stiffness);
+  // A value that is not a positive number is refused with the key.
+  const auto dir = testing::tmp_dir("extrinsic_contact_penalty_bad");
+  testing::write_text(dir / "bar_structured.geo", geo);
+  const std::string bad = testing::write_text(
+      dir / "case.toml", replace_once(base, "  penalty = 1.0e11           # Pa\n", "  penalty = 1.0e11           # Pa\n  contact_penalty = -1\n"));
+  try {
+    fdem::load_case(bad, {});
+    FAIL("a negative contact_penalty was accepted");
+  } catch (const std::exception& e) {
+    CHECK(std::string(e.what()).find("materials.stone.fracture.contact_penalty") != std::string::npos);
+  }
+}
