@@ -192,6 +192,32 @@ std::string state_of(const fdem::Simulation& sim) {
     return w.data();
 }
 
+// The run of case_file stopped after step `half` and restarted, with 1 and 2 threads, must reproduce the uninterrupted
+// run in `full` byte for byte (history, cracks, the final snapshot, run.pvd).
+void check_restart_identity(const std::string& case_file, const std::filesystem::path& dir, const std::filesystem::path& full,
+                            long half, const std::string& final_snapshot) {
+    const std::string history = testing::read_text(full / "history.csv"), cracks = testing::read_text(full / "cracks.csv");
+    for (int threads : {1, 2}) {
+        const auto part = dir / ("part_" + std::to_string(threads));
+        const auto r1 = run_cli("run \"" + case_file + "\" -o \"" + part.string() + "\" --stop-after-steps " + std::to_string(half),
+                                threads, dir);
+        INFO(threads << " thread(s): " << r1.err);
+        CHECK(r1.code == 138);  // stopped as by SIGUSR1, checkpoint written
+        REQUIRE(std::filesystem::exists(part / "checkpoint.bin"));
+        CHECK(checkpoint_step(part / "checkpoint.bin") == half);
+        CHECK(testing::read_text(part / "summary.json").find("\"interrupted\"") != std::string::npos);
+        const auto r2 = run_cli("run \"" + case_file + "\" --restart \"" + part.string() + "\"", threads, dir);
+        INFO(r2.err);
+        REQUIRE(r2.code == 0);
+        CHECK(testing::read_text(part / "history.csv") == history);
+        CHECK(testing::read_text(part / "cracks.csv") == cracks);
+        CHECK(testing::read_text(part / final_snapshot) == testing::read_text(full / final_snapshot));
+        CHECK(testing::read_text(part / "run.pvd") == testing::read_text(full / "run.pvd"));
+        CHECK(testing::read_text(part / "summary.json").find("\"completed\"") != std::string::npos);
+        CHECK(testing::read_text(part / "run.log").find("restart: from") != std::string::npos);
+    }
+}
+
 }  // namespace
 
 TEST_CASE("a run stopped half way through its fracture and restarted gives byte-identical history, cracks and final snapshot for 1 and 2 threads",
@@ -233,25 +259,7 @@ TEST_CASE("a run stopped half way through its fracture and restarted gives byte-
     const std::string final_snapshot = "snapshots/step_" + std::string(9 - std::to_string(steps).size(), '0') + std::to_string(steps) + ".vtu";
     REQUIRE(std::filesystem::exists(full / final_snapshot));
 
-    for (int threads : {1, 2}) {
-        const auto part = dir / ("part_" + std::to_string(threads));
-        const auto r1 = run_cli("run \"" + case_file + "\" -o \"" + part.string() + "\" --stop-after-steps " + std::to_string(half),
-                                threads, dir);
-        INFO(threads << " thread(s): " << r1.err);
-        CHECK(r1.code == 138);  // stopped as by SIGUSR1, checkpoint written
-        REQUIRE(std::filesystem::exists(part / "checkpoint.bin"));
-        CHECK(checkpoint_step(part / "checkpoint.bin") == half);
-        CHECK(testing::read_text(part / "summary.json").find("\"interrupted\"") != std::string::npos);
-        const auto r2 = run_cli("run \"" + case_file + "\" --restart \"" + part.string() + "\"", threads, dir);
-        INFO(r2.err);
-        REQUIRE(r2.code == 0);
-        CHECK(testing::read_text(part / "history.csv") == history);
-        CHECK(testing::read_text(part / "cracks.csv") == cracks);
-        CHECK(testing::read_text(part / final_snapshot) == testing::read_text(full / final_snapshot));
-        CHECK(testing::read_text(part / "run.pvd") == testing::read_text(full / "run.pvd"));
-        CHECK(testing::read_text(part / "summary.json").find("\"completed\"") != std::string::npos);
-        CHECK(testing::read_text(part / "run.log").find("restart: from") != std::string::npos);
-    }
+    check_restart_identity(case_file, dir, full, half, final_snapshot);
 }
 
 TEST_CASE("a run with extrinsic insertion stopped between insertions and restarted gives byte-identical history, cracks and final snapshot",
@@ -312,19 +320,7 @@ TEST_CASE("a run with extrinsic insertion stopped between insertions and restart
     CHECK(at_stop < total);
     const std::string final_snapshot = "snapshots/step_" + std::string(9 - std::to_string(steps).size(), '0') + std::to_string(steps) + ".vtu";
     REQUIRE(std::filesystem::exists(full / final_snapshot));
-    for (int threads : {1, 2}) {
-        const auto part = dir / ("part_" + std::to_string(threads));
-        const auto r1 = run_cli("run \"" + case_file + "\" -o \"" + part.string() + "\" --stop-after-steps " + std::to_string(half),
-                                threads, dir);
-        INFO(threads << " thread(s): " << r1.err);
-        CHECK(r1.code == 138);
-        const auto r2 = run_cli("run \"" + case_file + "\" --restart \"" + part.string() + "\"", threads, dir);
-        INFO(r2.err);
-        REQUIRE(r2.code == 0);
-        CHECK(testing::read_text(part / "history.csv") == history);
-        CHECK(testing::read_text(part / "cracks.csv") == cracks);
-        CHECK(testing::read_text(part / final_snapshot) == testing::read_text(full / final_snapshot));
-    }
+    check_restart_identity(case_file, dir, full, half, final_snapshot);
 }
 
 TEST_CASE("the whole state after a save and load and the rest of the run equals the uninterrupted run's byte for byte",

@@ -17,17 +17,7 @@ using fracture_test::OneElement;
 namespace {
 constexpr double kPi = 3.14159265358979323846;
 
-CohesiveProps stone(double penalty) {  // cases/README.md §A sandstone
-  CohesiveProps p;
-  p.tensile_strength = 3.7e6;
-  p.cohesion = 5.2e6;
-  p.friction_deg = 35.0;
-  p.residual_friction_deg = 30.0;
-  p.G_I = 110.0;
-  p.G_II = 770.0;
-  p.penalty = penalty;
-  return p;
-}
+CohesiveProps stone(double penalty) { return fracture_test::sandstone(penalty); }  // cases/README.md §A sandstone
 
 struct ModeIResult {
   double peak, work, dissipated, elastic_at_break, opening_at_break;

@@ -27,15 +27,8 @@ using fracture_test::OneElement;
 
 namespace {
 
-CohesiveProps stone_extrinsic(double penalty) {  // cases/README.md §A sandstone
-  CohesiveProps p;
-  p.tensile_strength = 3.7e6;
-  p.cohesion = 5.2e6;
-  p.friction_deg = 35.0;
-  p.residual_friction_deg = 30.0;
-  p.G_I = 110.0;
-  p.G_II = 770.0;
-  p.penalty = penalty;
+CohesiveProps stone_extrinsic(double penalty) {
+  CohesiveProps p = fracture_test::sandstone(penalty);
   p.extrinsic = true;
   return p;
 }

@@ -11,6 +11,19 @@
 
 namespace fracture_test {
 
+// The sandstone's cohesive properties (cases/README.md §A) with joint penalty p_j (Pa).
+inline fdem::fracture::CohesiveProps sandstone(double penalty) {
+  fdem::fracture::CohesiveProps p;
+  p.tensile_strength = 3.7e6;
+  p.cohesion = 5.2e6;
+  p.friction_deg = 35.0;
+  p.residual_friction_deg = 30.0;
+  p.G_I = 110.0;
+  p.G_II = 770.0;
+  p.penalty = penalty;
+  return p;
+}
+
 using fdem::fracture::CohesiveElement;
 using fdem::fracture::CohesiveProps;
 
