@@ -276,14 +276,14 @@ int Interactions::insert_cracks(const Model& model, const double* x) {
                     sg[0] += q[0], sg[1] += q[1], sg[2] += q[2], ++sides;
                 }
             for (double& q : sg) q /= sides;
-            // Frame of the element (cohesive_system.cpp): t along edge A's a0 -> a1, n = (t_y, -t_x) into side B.
-            double tx = x[2 * el.n[1]] - x[2 * el.n[0]], ty = x[2 * el.n[1] + 1] - x[2 * el.n[0] + 1];
-            const double len = std::hypot(tx, ty);
-            tx /= len, ty /= len;
+            // Frame of the element (cohesive_system.cpp): t along edge A's a0 -> a1, n = (t_y, -t_x) into side B, here
+            // not normalised: both tractions are quadratic in (t, n), so one division by |t|^2 does it.
+            const double tx = x[2 * el.n[1]] - x[2 * el.n[0]], ty = x[2 * el.n[1] + 1] - x[2 * el.n[0] + 1];
             const double nx = ty, ny = -tx;
+            const double inv_len2 = 1.0 / (tx * tx + ty * ty);
             // Traction on the plane of normal n: T = sigma n; sigma_n = n.T, tau = t.T.
             const double Tx = sg[0] * nx + sg[2] * ny, Ty = sg[2] * nx + sg[1] * ny;
-            const double sn = Tx * nx + Ty * ny, tau = Tx * tx + Ty * ty;
+            const double sn = (Tx * nx + Ty * ny) * inv_len2, tau = (Tx * tx + Ty * ty) * inv_len2;
             const bool due = joints_->reaches_strength(dormant_[i], sn, tau);
             due_[i] = due;
             due_traction_[2 * static_cast<std::size_t>(i)] = sn;

@@ -321,11 +321,6 @@ int CohesiveSystem::extrinsic_count() const {
   return n;
 }
 
-bool CohesiveSystem::reaches_strength(int e, double sigma, double tau) const {
-  const JointLaw& L = law_[e];
-  return sigma >= L.tensile_strength || std::abs(tau) >= shear_strength(sigma, L.cohesion, L.tan_friction);
-}
-
 void CohesiveSystem::insert(const std::vector<Insertion>& list) {
   if (list.empty()) return;
   for (const Insertion& in : list) {

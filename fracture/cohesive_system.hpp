@@ -95,7 +95,10 @@ class CohesiveSystem {
   int dormant_count() const { return dormant_count_; }
   int extrinsic_count() const;  // elements of extrinsic classes, dormant or not
   bool dormant(int e) const { return dormant_[e] != 0; }
-  bool reaches_strength(int e, double sigma, double tau) const;
+  bool reaches_strength(int e, double sigma, double tau) const {
+    const JointLaw& L = law_[e];
+    return sigma >= L.tensile_strength || std::abs(tau) >= shear_strength(sigma, L.cohesion, L.tan_friction);
+  }
   struct Insertion {
     int element;
     double sigma, tau;  // Pa, the continuum's traction at insertion (see above)
