@@ -233,70 +233,53 @@ double Interactions::contact_stable_dt(const Model& model, const double* mass) c
                     : std::numeric_limits<double>::infinity();
 }
 
-void Interactions::list_dormant(int n_triangles) {
-    dormant_.clear(), dormant_tris_.clear();
-    if (!joints_) return;
-    for (int e = 0; e < joints_->size(); ++e)
-        if (joints_->dormant(e)) {
-            dormant_.push_back(e);
-            const auto& el = joints_->element(e);
-            if (el.tri_a >= 0) dormant_tris_.push_back(el.tri_a);
-            if (el.tri_b >= 0) dormant_tris_.push_back(el.tri_b);
-        }
-    std::sort(dormant_tris_.begin(), dormant_tris_.end());
-    dormant_tris_.erase(std::unique(dormant_tris_.begin(), dormant_tris_.end()), dormant_tris_.end());
-    tri_slot_.assign(n_triangles, -1);
-    for (std::size_t i = 0; i < dormant_tris_.size(); ++i) tri_slot_[dormant_tris_[i]] = static_cast<int>(i);
-    tri_sigma_.assign(3 * dormant_tris_.size(), 0.0);
+void Interactions::list_dormant() {
+    dormant_.clear();
+    if (joints_)
+        for (int e = 0; e < joints_->size(); ++e)
+            if (joints_->dormant(e)) dormant_.push_back(e);
     due_.assign(dormant_.size(), 0);
     due_traction_.assign(2 * dormant_.size(), 0.0);
+    dormant_listed_ = true;
 }
 
-int Interactions::insert_cracks(const Model& model, const double* x) {
+int Interactions::insert_cracks(const double* x, const double* tri_sigma) {
     if (!has_dormant()) return 0;
-    if (tri_slot_.size() != static_cast<std::size_t>(model.n_triangles())) list_dormant(model.n_triangles());
-    const int nt = static_cast<int>(dormant_tris_.size()), ne = static_cast<int>(dormant_.size());
+    if (!dormant_listed_) list_dormant();
+    const int ne = static_cast<int>(dormant_.size());
     int found = 0;
-#pragma omp parallel if (ne >= 2048)
-    {
-#pragma omp for schedule(static)
-        for (int i = 0; i < nt; ++i) {
-            const int t = dormant_tris_[i];
-            triangle_stress(model.tris[t], model.mat[model.tris[t].mat], x, &tri_sigma_[3 * static_cast<std::size_t>(i)]);
-        }
-#pragma omp for schedule(static) reduction(+ : found)
-        for (int i = 0; i < ne; ++i) {
-            const auto& el = joints_->element(dormant_[i]);
-            // Mean stress of the two sides (one side on a free boundary: its own).
-            double sg[3] = {0, 0, 0};
-            int sides = 0;
-            for (int t : {el.tri_a, el.tri_b})
-                if (t >= 0) {
-                    const double* q = &tri_sigma_[3 * static_cast<std::size_t>(tri_slot_[t])];
-                    sg[0] += q[0], sg[1] += q[1], sg[2] += q[2], ++sides;
-                }
-            for (double& q : sg) q /= sides;
-            // Frame of the element (cohesive_system.cpp): t along edge A's a0 -> a1, n = (t_y, -t_x) into side B, here
-            // not normalised: both tractions are quadratic in (t, n), so one division by |t|^2 does it.
-            const double tx = x[2 * el.n[1]] - x[2 * el.n[0]], ty = x[2 * el.n[1] + 1] - x[2 * el.n[0] + 1];
-            const double nx = ty, ny = -tx;
-            const double inv_len2 = 1.0 / (tx * tx + ty * ty);
-            // Traction on the plane of normal n: T = sigma n; sigma_n = n.T, tau = t.T.
-            const double Tx = sg[0] * nx + sg[2] * ny, Ty = sg[2] * nx + sg[1] * ny;
-            const double sn = (Tx * nx + Ty * ny) * inv_len2, tau = (Tx * tx + Ty * ty) * inv_len2;
-            const bool due = joints_->reaches_strength(dormant_[i], sn, tau);
-            due_[i] = due;
-            due_traction_[2 * static_cast<std::size_t>(i)] = sn;
-            due_traction_[2 * static_cast<std::size_t>(i) + 1] = tau;
-            found += due;
-        }
+#pragma omp parallel for schedule(static) reduction(+ : found) if (ne >= 2048)
+    for (int i = 0; i < ne; ++i) {
+        const auto& el = joints_->element(dormant_[i]);
+        // Mean stress of the two sides (one side on a free boundary: its own).
+        double sg[3] = {0, 0, 0};
+        int sides = 0;
+        for (int t : {el.tri_a, el.tri_b})
+            if (t >= 0) {
+                const double* q = tri_sigma + 3 * static_cast<std::size_t>(t);
+                sg[0] += q[0], sg[1] += q[1], sg[2] += q[2], ++sides;
+            }
+        for (double& q : sg) q /= sides;
+        // Frame of the element (cohesive_system.cpp): t along edge A's a0 -> a1, n = (t_y, -t_x) into side B, here
+        // not normalised: both tractions are quadratic in (t, n), so one division by |t|^2 does it.
+        const double tx = x[2 * el.n[1]] - x[2 * el.n[0]], ty = x[2 * el.n[1] + 1] - x[2 * el.n[0] + 1];
+        const double nx = ty, ny = -tx;
+        const double inv_len2 = 1.0 / (tx * tx + ty * ty);
+        // Traction on the plane of normal n: T = sigma n; sigma_n = n.T, tau = t.T.
+        const double Tx = sg[0] * nx + sg[2] * ny, Ty = sg[2] * nx + sg[1] * ny;
+        const double sn = (Tx * nx + Ty * ny) * inv_len2, tau = (Tx * tx + Ty * ty) * inv_len2;
+        const bool due = joints_->reaches_strength(dormant_[i], sn, tau);
+        due_[i] = due;
+        due_traction_[2 * static_cast<std::size_t>(i)] = sn;
+        due_traction_[2 * static_cast<std::size_t>(i) + 1] = tau;
+        found += due;
     }
     if (found == 0) return 0;
     std::vector<fracture::CohesiveSystem::Insertion> list;
     for (int i = 0; i < ne; ++i)
         if (due_[i]) list.push_back({dormant_[i], due_traction_[2 * static_cast<std::size_t>(i)], due_traction_[2 * static_cast<std::size_t>(i) + 1]});
     joints_->insert(list);
-    list_dormant(model.n_triangles());
+    list_dormant();
     return found;
 }
 
@@ -385,7 +368,7 @@ double Interactions::friction_dissipation() const {
 // field to save_state and load_state if it changes during a run, then update the size.
 void Interactions::save_state(StateWriter& w) const {
 #if defined(__x86_64__) && defined(__GLIBCXX__)
-    static_assert(sizeof(Interactions) == 392, "Interactions changed: update save_state/load_state and this size");
+    static_assert(sizeof(Interactions) == 328, "Interactions changed: update save_state/load_state and this size");
 #endif
     w.section("interactions");
     w.str(cracks_csv_);

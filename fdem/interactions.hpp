@@ -41,11 +41,12 @@ public:
         if (contact_) contact_->set_compute_energy(on);
     }
     // Extrinsic insertion (fracture/cohesive_system.hpp): whether some elements are still dormant, and the check of
-    // one step: the Cauchy stress of the two triangles of every dormant element at positions x (their mean, the
-    // stress the tied continuum carries across the edge) gives the traction (sigma, tau) in the element's frame; the
-    // elements whose traction reached the law's peak surface are inserted. Returns how many were.
+    // one step: the Cauchy stress of the two triangles of every dormant element at positions x (tri_sigma: 3 per
+    // triangle, xx yy xy, Pa; their mean is the stress the tied continuum carries across the edge) gives the traction
+    // (sigma, tau) in the element's frame; the elements whose traction reached the law's peak surface are inserted.
+    // Returns how many were.
     bool has_dormant() const { return joints_ && joints_->dormant_count() > 0; }
-    int insert_cracks(const Model& model, const double* x);
+    int insert_cracks(const double* x, const double* tri_sigma);
     double inserted_energy() const { return joints_ ? joints_->inserted_energy() : 0.0; }  // J
     // Adds joint and contact forces (N) at positions x, velocities v, to f.
     void add_forces(const double* x, const double* v, double dt, double* f);
@@ -96,13 +97,11 @@ private:
     std::unique_ptr<contact::ContactSystem> contact_;
     std::unique_ptr<fracture::CohesiveSystem> joints_;
     std::string cracks_csv_;
-    std::vector<int> dormant_;         // dormant elements, ascending
-    std::vector<int> dormant_tris_;    // their triangles, ascending, unique
-    std::vector<double> tri_sigma_;    // Pa, Cauchy stress xx, yy, xy of dormant_tris_ (3 per entry)
-    std::vector<int> tri_slot_;        // triangle -> index into dormant_tris_ (-1: none)
+    std::vector<int> dormant_;         // dormant elements, ascending (listed on the first check and after insertions)
+    bool dormant_listed_ = false;
     std::vector<std::uint8_t> due_;    // per entry of dormant_: reached the strength this step
     std::vector<double> due_traction_; // sigma, tau per entry of dormant_ (Pa)
-    void list_dormant(int n_triangles);
+    void list_dormant();
     std::vector<mesh::CohesiveElement> dry_;
     std::vector<char> dry_open_, dry_slip_;
     std::vector<double> dry_len_, dry_ref_mid_;  // m: reference length and midpoint (2 per segment)

@@ -656,24 +656,16 @@ void Simulation::apply_time_dependent(double t) {
 
 void Simulation::step() {
     const double w0 = omp_get_wtime();
-    // Extrinsic insertion: dormant edges whose traction reached the strength get their cohesive element before this
-    // step's forces, their copies are untied, and the step shrinks if the lighter nodes need it. The velocity update
-    // of a step that changed it spans the mean of the two steps (central difference with a variable step,
-    // v^{n+1/2} = v^{n-1/2} + (dt^{n-1/2} + dt^{n+1/2}) / 2 a^n).
     const double dt_before = dt_;
-    if (ties_ && inter_.insert_cracks(model_, model_.x.data()) > 0) {
-        build_ties();
-        reduce_dt_after_insertion();
-    }
-    const double dt = dt_;
-    const double dtv = 0.5 * (dt_before + dt);
-    apply_time_dependent(time_);
     const int nt = model_.n_triangles(), nn = model_.n_nodes();
     const TriangleRef* tris = model_.tris.data();
     const MaterialConst* mats = model_.mat.data();
     const double* x = model_.x.data();
     const double* v = model_.v.data();
     double* tf = tf_.data();
+    // Extrinsic insertion: the triangles' stresses of this step for the check below (ties only).
+    if (ties_) tri_sigma_.resize(3 * static_cast<std::size_t>(nt));
+    double* tsig = ties_ ? tri_sigma_.data() : nullptr;
 
     // 2. Triangle forces; per block: viscous power and the first inverted triangle.
     const double w1 = omp_get_wtime();
@@ -686,8 +678,10 @@ void Simulation::step() {
         for (int e = b * kBlock; e < e1; ++e) {
             double p;
             const int cs = crush_.slot(e);  // crushing triangles: fdem/plasticity.hpp (state updated per triangle)
-            const double J = cs < 0 ? triangle_forces(tris[e], mats[tris[e].mat], x, v, tf + 6 * static_cast<std::size_t>(e), p)
+            double* sig = tsig ? tsig + 3 * static_cast<std::size_t>(e) : nullptr;
+            const double J = cs < 0 ? triangle_forces(tris[e], mats[tris[e].mat], x, v, tf + 6 * static_cast<std::size_t>(e), p, sig)
                                     : crush_.forces(cs, tris[e], x, v, tf + 6 * static_cast<std::size_t>(e), p);
+            if (sig && cs >= 0) triangle_stress(tris[e], mats[tris[e].mat], x, sig);  // elastic stress (not extrinsic)
             if (!(J > 0) && bad < 0) bad = e;
             pv += p;
         }
@@ -705,6 +699,19 @@ void Simulation::step() {
                  "') inverted (J <= 0) at (" + sci(cx, 6) + ", " + sci(cy, 6) + ") m");
         }
     }
+
+    const double wi = omp_get_wtime();
+    // Extrinsic insertion: dormant edges whose traction reached the strength get their cohesive element before this
+    // step's joint forces, their copies are untied, and the step shrinks if the lighter nodes need it. The velocity
+    // update of a step that changed it spans the mean of the two steps (central difference with a variable step,
+    // v^{n+1/2} = v^{n-1/2} + (dt^{n-1/2} + dt^{n+1/2}) / 2 a^n).
+    if (ties_ && inter_.insert_cracks(x, tsig) > 0) {
+        build_ties();
+        reduce_dt_after_insertion();
+    }
+    const double dt = dt_;
+    const double dtv = 0.5 * (dt_before + dt);
+    apply_time_dependent(time_);
 
     // Joint and contact forces, added to f_mod_ in a fixed order by their modules. The contact energy is only
     // evaluated on the steps whose energies are reported or checked.
@@ -885,10 +892,10 @@ void Simulation::step() {
     D_visc_ += dt * visc_power;
     unbalanced_ratio_ = scale > 0 ? unb / scale : 0;
     const double w4 = omp_get_wtime();
-    step_times_.triangles += w2 - w1;
+    step_times_.triangles += wi - w1;
     step_times_.interactions += w3 - w2;
     step_times_.integration += w4 - w3;
-    step_times_.other += w1 - w0;
+    step_times_.other += (w1 - w0) + (w2 - wi);  // with the insertion check and the loads of the step
     update_servos();
     time_ += dt;
     tilt_deg_ += tilt_rate_ * dt;

@@ -225,6 +225,7 @@ private:
     std::vector<double> tie_F_;              // N, per node: its group's internal (x, y) and external (x, y) force sums
     std::vector<double> tie_w_;              // -, per node: its mass over its group's mass
     std::vector<double> tie_inv_mass_;       // 1/kg, per node: 1 / (its group's mass)
+    std::vector<double> tri_sigma_;          // Pa, per triangle: Cauchy stress xx, yy, xy of the step (ties only)
     std::vector<double> eff_mass_;           // kg, per node: its group's mass (tied) or its own (empty: no ties)
     std::vector<int> tie_rep_;               // per node: its group's first node, or itself (empty: no ties)
     double dt_triangles_ = 0;                // s, the triangles' stable limit (does not change with the ties)

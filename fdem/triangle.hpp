@@ -81,9 +81,10 @@ inline void triangle_forces_from_tau(const TriangleRef& t, const double* F, doub
 }
 
 // Internal (elastic + viscous) forces of one triangle into f6. Returns J; `visc_power` gets the viscous
-// dissipation rate (W). J <= 0 means the triangle is inverted (the caller reports it).
+// dissipation rate (W). J <= 0 means the triangle is inverted (the caller reports it). sigma3 (optional): the elastic
+// Cauchy stress tau / J (xx, yy, xy, Pa), as triangle_stress gives it, for the extrinsic insertion check.
 inline double triangle_forces(const TriangleRef& t, const MaterialConst& m, const double* x, const double* v,
-                              double* f6, double& visc_power) {
+                              double* f6, double& visc_power, double* sigma3 = nullptr) {
     const int i0 = t.n[0], i1 = t.n[1], i2 = t.n[2];
     const double x0 = x[2 * i0], y0 = x[2 * i0 + 1];
     const double d00 = x[2 * i1] - x0, d10 = x[2 * i1 + 1] - y0;  // D column 0
@@ -96,6 +97,7 @@ inline double triangle_forces(const TriangleRef& t, const MaterialConst& m, cons
     if (!(J > 0)) {
         for (int k = 0; k < 6; ++k) f6[k] = 0;
         visc_power = 0;
+        if (sigma3) sigma3[0] = sigma3[1] = sigma3[2] = 0.0;
         return J;
     }
     // tau = mu (B - I) + lambda ln J I
@@ -104,6 +106,10 @@ inline double triangle_forces(const TriangleRef& t, const MaterialConst& m, cons
                            m.mu * (F10 * F10 + F11 * F11 - 1.0) + m.lambda * lnJ, m.mu * (F00 * F10 + F01 * F11)};
     const double Fm[4] = {F00, F01, F10, F11};
     triangle_forces_from_tau(t, Fm, J, tau, v, f6, visc_power);
+    if (sigma3) {
+        const double iJ = 1.0 / J;
+        sigma3[0] = tau[0] * iJ, sigma3[1] = tau[1] * iJ, sigma3[2] = tau[2] * iJ;
+    }
     return J;
 }
 
