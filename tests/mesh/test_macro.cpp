@@ -69,7 +69,7 @@ std::map<std::pair<std::string, std::string>, double> joint_lengths(const Topolo
 
 }  // namespace
 
-TEST_CASE("macro pier: six blocks tile the L x H rectangle; beam and base are separate bodies", "[unit][macro]") {
+TEST_CASE("macro pier: six blocks tile the L x H rectangle, beam and base are separate bodies", "[unit][macro]") {
     const MacroPierSpec s = lw_pier();
     const auto outlines = macro_block_outlines(s);
     REQUIRE(outlines.size() == 6);
