@@ -516,6 +516,37 @@ void read_wall(Ctx& ctx, Reader& r, mesh::WallSpec& w) {
     }
 }
 
+// [geometry] type = "macro": the macro-block pier (M-DEM); keys named after mesh::MacroPierSpec's fields. The
+// generator's check() (diagonals that would cross) runs later, with the mesh, reported against [geometry].
+void read_macro(Reader& r, mesh::MacroPierSpec& m) {
+    auto nonneg = [](double v) { return v == 0 || (v >= kMinLength && v <= kMaxLength); };
+    auto positive = [](double v) { return v >= kMinLength && v <= kMaxLength; };
+    m.length = r.number("length", true, "a pier length > 0 in m", positive).value_or(1);
+    m.height = r.number("height", true, "a pier height > 0 in m", positive).value_or(1);
+    m.texture_angle = r.number("texture_angle", true, "a texture angle in (0, 90) deg",
+                               [](double v) { return v > 0 && v < 90; }).value_or(45);
+    m.horizontal_joint = r.number("horizontal_joint", false, "a horizontal joint length > 0 in m (below length/2)",
+                                  positive).value_or(0.05);
+    m.mesh_size = r.number("mesh_size", true, "a mesh size > 0 in m", positive).value_or(1);
+    m.beam_height = r.number("beam_height", false, "a beam depth of 0 or in [1e-6, 1e4] m", nonneg).value_or(0);
+    m.beam_overhang = r.number("beam_overhang", false, "a beam overhang of 0 or in [1e-6, 1e4] m", nonneg).value_or(0);
+    m.base_height = r.number("base_height", false, "a base depth of 0 or in [1e-6, 1e4] m", nonneg).value_or(0);
+    m.base_overhang = r.number("base_overhang", false, "a base overhang of 0 or in [1e-6, 1e4] m", nonneg).value_or(0);
+    m.mesh_size_beam = r.number("mesh_size_beam", false, "a mesh size > 0 in m", positive).value_or(0);
+    m.mesh_size_base = r.number("mesh_size_base", false, "a mesh size > 0 in m", positive).value_or(0);
+}
+
+// Expected triangle count of a macro-block pier (equilateral triangles of edge h, as wall_triangle_estimate).
+double macro_triangle_estimate(const mesh::MacroPierSpec& m) {
+    const double per = 4.0 / std::sqrt(3.0);
+    if (!(m.mesh_size > 0)) return 0;
+    const double hb = m.mesh_size_base > 0 ? m.mesh_size_base : m.mesh_size;
+    const double hm = m.mesh_size_beam > 0 ? m.mesh_size_beam : m.mesh_size;
+    return per * m.length * m.height / (m.mesh_size * m.mesh_size) + 12 +
+           per * (m.length + 2 * m.beam_overhang) * m.beam_height / (hm * hm) +
+           per * (m.length + 2 * m.base_overhang) * m.base_height / (hb * hb);
+}
+
 // Cohesive keys shared by [materials.NAME.fracture] and bonded [[interfaces]]; stiffness keys only where allowed.
 void read_joint(Reader& r, JointSpec& j, bool allow_stiffness) {
     auto positive = [](double v) { return v > 0; };
@@ -667,7 +698,7 @@ CaseSpec load_case(const std::string& path, const std::vector<std::string>& over
         Reader r(ctx, *t, "geometry");
         GeometrySpec& g = spec.geometry;
         g.line = r.line();
-        g.type = r.string("type", true, "the geometry source", {"rectangle", "gmsh", "msh", "wall"}).value_or("");
+        g.type = r.string("type", true, "the geometry source", {"rectangle", "gmsh", "msh", "wall", "macro"}).value_or("");
         if (g.type == "rectangle") {
             auto origin = r.vec2("origin", false, "[x0, y0] in m");
             if (origin) g.x0 = (*origin)[0], g.y0 = (*origin)[1];
@@ -690,6 +721,9 @@ CaseSpec load_case(const std::string& path, const std::vector<std::string>& over
         } else if (g.type == "wall") {
             read_wall(ctx, r, g.wall);
             check_triangle_count(ctx, r, g.line, wall_triangle_estimate(g.wall));
+        } else if (g.type == "macro") {
+            read_macro(r, g.macro);
+            check_triangle_count(ctx, r, g.line, macro_triangle_estimate(g.macro));
         }
         g.min_angle = r.number("min_angle", false, "a minimum triangle angle in [0, 60) deg (sliver check)",
                                [](double v) { return v >= 0 && v < 60; }).value_or(10.0);

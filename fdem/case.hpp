@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "mesh/macro.hpp"
 #include "mesh/wall.hpp"
 
 namespace fdem {
@@ -81,7 +82,7 @@ struct Material {
 };
 
 struct GeometrySpec {
-    std::string type;  // "rectangle" | "gmsh" | "msh" | "wall"
+    std::string type;  // "rectangle" | "gmsh" | "msh" | "wall" | "macro"
     // rectangle
     double x0 = 0, y0 = 0;  // lower-left corner, m
     double width = 0;       // m
@@ -99,6 +100,8 @@ struct GeometrySpec {
     int roughness_seed = 1;
     // wall: the masonry wall generator; the TOML keys are the WallSpec field names (mesh/wall.hpp)
     mesh::WallSpec wall;
+    // macro: the macro-block pier generator (M-DEM); the TOML keys are the MacroPierSpec field names (mesh/macro.hpp)
+    mesh::MacroPierSpec macro;
     int line = 0;
 };
 

@@ -37,6 +37,7 @@
 #include "fdem/scene.hpp"
 #include "mesh/gmsh_source.hpp"
 #include "mesh/quality.hpp"
+#include "mesh/macro.hpp"
 #include "mesh/wall.hpp"
 
 namespace fdem {
@@ -84,6 +85,7 @@ mesh::Mesh make_mesh(const CaseSpec& spec) {
         else if (g.type == "gmsh") m = mesh::mesh_geo_file(g.file, g.size_factor);
         else if (g.type == "msh") m = mesh::read_msh_file(g.file);
         else if (g.type == "wall") m = mesh::generate_wall(g.wall);
+        else if (g.type == "macro") m = mesh::generate_macro_pier(g.macro);
         else throw InputError(spec.file + ": key 'geometry.type': unsupported geometry '" + g.type + "'");
         mesh::check_quality(m, g.min_angle);
     } catch (const mesh::MeshError& e) {

@@ -1,0 +1,190 @@
+// tests/mesh/test_macro.cpp: the macro-block pier generator (mesh/macro.hpp, issue 29, M-DEM of seeds/000).
+//
+// CLOSED FORMS (L length, H height, t = tan(phi), w horizontal joint, r = (L - w) / 2)
+//   the six blocks tile the pier: total block area L H;
+//   diagonal joints (cap, side): 4 r / cos(phi); vertical joint (side, side): H - 2 r t; horizontal joints
+//   (key, side): 2 w; key sides (cap, key): 2 w / cos(phi); beam and foundation against the caps: L each.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <filesystem>
+#include <map>
+#include <set>
+#include <string>
+#include <utility>
+
+#include "../core/engine_helpers.hpp"
+#include "helpers.hpp"
+#include "mesh/macro.hpp"
+#include "mesh/topology.hpp"
+
+using namespace fdem::mesh;
+using namespace fdem::mesh::testing;
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+// The JRC Ispra LW pier (CASES.md §D): 1.00 x 1.35 m, texture angle 28 deg, 50 mm horizontal joints.
+MacroPierSpec lw_pier(double mesh_size = 0.1) {
+    MacroPierSpec s;
+    s.length = 1.0;
+    s.height = 1.35;
+    s.texture_angle = 28.0;
+    s.horizontal_joint = 0.05;
+    s.mesh_size = mesh_size;
+    s.beam_height = 0.2;
+    s.base_height = 0.3;
+    s.base_overhang = 0.2;
+    s.mesh_size_beam = 0.1;
+    s.mesh_size_base = 0.15;
+    return s;
+}
+
+TopologyOptions joint_rules() {
+    TopologyOptions opt;
+    auto rule = [&](const char* a, const char* b, InterfaceKind k) { opt.interfaces.push_back({a, b, k}); };
+    rule("cap", "side", InterfaceKind::bonded);   // diagonal joints
+    rule("side", "side", InterfaceKind::bonded);  // vertical joint
+    rule("key", "side", InterfaceKind::bonded);   // horizontal joints
+    rule("cap", "key", InterfaceKind::tied);      // key and cap: one continuum
+    rule("beam", "cap", InterfaceKind::bonded);
+    rule("base", "cap", InterfaceKind::bonded);
+    return opt;
+}
+
+// Total length of the edges between two different bodies, per (sorted) region-name pair.
+std::map<std::pair<std::string, std::string>, double> joint_lengths(const Topology& topo) {
+    std::map<std::pair<std::string, std::string>, double> out;
+    const Mesh& m = topo.mesh;
+    for (int e = 0; e < topo.n_edges(); ++e) {
+        const int ta = topo.edge_tri[2 * e], tb = topo.edge_tri[2 * e + 1];
+        if (tb < 0 || m.tri_body[ta] == m.tri_body[tb]) continue;
+        std::string a = m.regions[m.tri_region[ta]], b = m.regions[m.tri_region[tb]];
+        if (b < a) std::swap(a, b);
+        out[{a, b}] += edge_length(topo, e);
+    }
+    return out;
+}
+
+}  // namespace
+
+TEST_CASE("macro pier: six blocks tile the L x H rectangle, beam and base are separate bodies", "[unit][macro]") {
+    const MacroPierSpec s = lw_pier();
+    const auto outlines = macro_block_outlines(s);
+    REQUIRE(outlines.size() == 6);
+    const Mesh m = generate_macro_pier(s);
+    REQUIRE(m.regions == std::vector<std::string>{"cap", "side", "key", "beam", "base"});
+    CHECK(m.n_bodies() == 8);
+    double blocks = 0;
+    for (const char* r : {"cap", "side", "key"}) blocks += mesh_area(m, m.find_region(r));
+    CHECK(std::abs(blocks - s.length * s.height) <= 1e-9 * s.length * s.height);
+    CHECK(std::abs(mesh_area(m, m.find_region("beam")) - s.length * s.beam_height) <= 1e-9);
+    CHECK(std::abs(mesh_area(m, m.find_region("base")) - (s.length + 2 * s.base_overhang) * s.base_height) <= 1e-9);
+    // Each body lies in one region, two bodies per block region.
+    std::map<int, std::set<int>> bodies_of_region;
+    for (int t = 0; t < m.n_triangles(); ++t) bodies_of_region[m.tri_region[t]].insert(m.tri_body[t]);
+    for (const char* r : {"cap", "side", "key"}) CHECK(bodies_of_region[m.find_region(r)].size() == 2);
+    for (const char* g : {"pier_bottom", "pier_top", "pier_left", "pier_right", "beam_top", "beam_left",
+                          "beam_right", "base_bottom", "base_left", "base_right", "toe_left", "toe_right"})
+        REQUIRE(m.find_group(g) != nullptr);
+    for (int k : m.find_group("pier_top")->nodes) CHECK(m.xy[2 * k + 1] == Approx(s.height).margin(1e-12));
+    for (int k : m.find_group("beam_top")->nodes) CHECK(m.xy[2 * k + 1] == Approx(1.55).margin(1e-12));
+    for (int k : m.find_group("base_bottom")->nodes) CHECK(m.xy[2 * k + 1] == Approx(-0.3).margin(1e-12));
+}
+
+TEST_CASE("macro pier: every joint family has its closed-form length and the mesh is conforming", "[unit][macro]") {
+    for (double h : {0.1, 0.05}) {
+        for (double phi : {28.0, 40.0}) {
+            MacroPierSpec s = lw_pier(h);
+            s.texture_angle = phi;
+            if (phi == 40.0) s.height = 2.0;  // the HW pier; (L - w) tan(40 deg) = 0.80 m fits
+            INFO("mesh_size " << h << " m, phi " << phi << " deg");
+            const Mesh m = generate_macro_pier(s);
+            const Topology topo = build_topology(m, joint_rules());
+            CHECK(topo.nonconforming_nodes == 0);
+            const double t = std::tan(phi * kPi / 180), c = std::cos(phi * kPi / 180);
+            const double w = s.horizontal_joint, r = 0.5 * (s.length - w);
+            const auto len = joint_lengths(topo);
+            REQUIRE(len.size() == 6);
+            CHECK(len.at({"cap", "side"}) == Approx(4 * r / c).epsilon(1e-9));
+            CHECK(len.at({"side", "side"}) == Approx(s.height - 2 * r * t).epsilon(1e-9));
+            CHECK(len.at({"key", "side"}) == Approx(2 * w).epsilon(1e-9));
+            CHECK(len.at({"cap", "key"}) == Approx(2 * w / c).epsilon(1e-9));
+            CHECK(len.at({"beam", "cap"}) == Approx(s.length).epsilon(1e-9));
+            CHECK(len.at({"base", "cap"}) == Approx(s.length).epsilon(1e-9));
+            // Bonded joints carry cohesive elements on both sides of every joint edge (conforming: the same nodes);
+            // the tied key sides are interior.
+            const double bonded = 4 * r / c + (s.height - 2 * r * t) + 2 * w + 2 * s.length;
+            CHECK(class_length(topo, EdgeClass::bonded) == Approx(bonded).epsilon(1e-9));
+            CHECK(class_length(topo, EdgeClass::crackable) == 0.0);
+        }
+    }
+}
+
+TEST_CASE("macro pier: bad specs give one-line problems naming the key", "[unit][macro]") {
+    MacroPierSpec s = lw_pier();
+    CHECK(check(s).empty());
+    for (double bad : {0.0, 90.0, -10.0, 120.0}) {
+        s.texture_angle = bad;
+        const auto problems = check(s);
+        REQUIRE(problems.size() == 1);
+        CHECK(problems[0].find("geometry.texture_angle") != std::string::npos);
+        CHECK(problems[0].find("(0, 90)") != std::string::npos);
+    }
+    CHECK_THROWS_WITH(generate_macro_pier(s), Catch::Contains("geometry.texture_angle"));
+    s = lw_pier();
+    s.texture_angle = 60;  // (1 - 0.05) tan 60 = 1.65 m > 1.35 m: the diagonals would cross
+    CHECK_THROWS_WITH(generate_macro_pier(s), Catch::Contains("geometry.height") && Catch::Contains("cross"));
+    s = lw_pier();
+    s.horizontal_joint = 0.5;
+    CHECK_THROWS_WITH(generate_macro_pier(s), Catch::Contains("geometry.horizontal_joint"));
+    s = lw_pier();
+    s.mesh_size = 0;
+    CHECK_THROWS_WITH(generate_macro_pier(s), Catch::Contains("geometry.mesh_size"));
+}
+
+TEST_CASE("macro pier through the case reader: a bad texture_angle names file, line and key", "[unit][macro]") {
+    const std::string good = R"([case]
+name = "macro"
+thickness = 0.25
+[geometry]
+type = "macro"
+length = 1.0
+height = 1.35
+texture_angle = 28.0
+mesh_size = 0.1
+[materials.brick]
+E = 1.491e9
+nu = 0.25
+density = 1800.0
+[regions]
+cap = "brick"
+side = "brick"
+key = "brick"
+[[stages]]
+duration = 0.001
+  [[stages.supports]]
+  group = "pier_bottom"
+  fix = "xy"
+)";
+    const auto dir = ::testing::tmp_dir("macro_case");
+    auto r = ::testing::run_fdem("check \"" + ::testing::write_text(dir / "good.toml", good) + "\"", dir);
+    INFO(r.out << r.err);
+    CHECK(r.code == 0);
+    std::string bad = good;
+    bad.replace(bad.find("texture_angle = 28.0"), 20, "texture_angle = 95.0");
+    r = ::testing::run_fdem("check \"" + ::testing::write_text(dir / "bad.toml", bad) + "\"", dir);
+    CHECK(r.code != 0);
+    CHECK(r.err.find("bad.toml:8") != std::string::npos);
+    CHECK(r.err.find("geometry.texture_angle") != std::string::npos);
+    CHECK(r.err.find("(0, 90) deg") != std::string::npos);
+}
+
+TEST_CASE("macro pier: the shipped JRC Ispra LW geometry check passes fdem check", "[unit][macro]") {
+    const auto dir = ::testing::tmp_dir("macro_lw_check");
+    const std::string path = std::string(FDEM_CASES_DIR) + "/jrc_ispra/macro_LW_check.toml";
+    const auto r = ::testing::run_fdem("check \"" + path + "\"", dir);
+    INFO(r.out << r.err);
+    CHECK(r.code == 0);
+}
