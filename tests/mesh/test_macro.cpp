@@ -25,7 +25,7 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
-// The JRC Ispra LW pier (CASES.md §D): 1.00 x 1.35 m, texture angle 28 deg, 50 mm horizontal joints.
+// The JRC Ispra LW pier (cases/README.md §D): 1.00 x 1.35 m, texture angle 28 deg, 50 mm horizontal joints.
 MacroPierSpec lw_pier(double mesh_size = 0.1) {
     MacroPierSpec s;
     s.length = 1.0;

@@ -164,6 +164,10 @@ def numerical_settings(tree: dict) -> dict:
                 ref = fr.get("penalty_ref")
                 pens.append(f"{name} p_j={fr['penalty']}" + (f" (ref {ref:g} Pa)" if isinstance(ref, (int, float))
                                                               else ""))
+            if isinstance(fr.get("contact_penalty"), (int, float)):  # the crack faces' contact penalty
+                pens.append(f"{name} crack faces p_n={fr['contact_penalty']:g} Pa")
+            if fr.get("insertion") == "extrinsic":
+                pens[-1] += " (extrinsic insertion)"
     for itf in tree.get("interfaces") or []:
         regs = "/".join(itf.get("regions", []))
         for k, unit in (("normal_penalty", "Pa"), ("tangential_penalty", "Pa"), ("normal_stiffness", "Pa/m"),

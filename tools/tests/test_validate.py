@@ -128,7 +128,8 @@ def test_rate_and_settings_of_the_wall_cases():
     assert key == "stages.2.supports.1.vx" and rate == 0.05
     s = validate.numerical_settings(tree)
     assert s["mesh_size_m"] == 0.025
-    assert "stone p_j=auto (ref 1e+10 Pa)" in s["penalties"] and "units/units normal_penalty=1e+10 Pa" in s["penalties"]
+    assert "stone p_j=auto (ref 1e+10 Pa)" in s["penalties"] and "units/units normal_penalty=1e+09 Pa" in s["penalties"]
+    assert "stone crack faces p_n=1e+09 Pa (extrinsic insertion)" in s["penalties"]
 
 
 def test_smoothing_window_removes_an_oscillation_of_its_own_wavelength():
