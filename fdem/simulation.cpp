@@ -706,7 +706,8 @@ void Simulation::step() {
     // Extrinsic insertion: dormant edges whose traction reached the strength get their cohesive element before this
     // step's joint forces, their copies are untied, and the step shrinks if the lighter nodes need it. The velocity
     // update of a step that changed it spans the mean of the two steps (central difference with a variable step,
-    // v^{n+1/2} = v^{n-1/2} + (dt^{n-1/2} + dt^{n+1/2}) / 2 a^n).
+    // v^{n+1/2} = v^{n-1/2} + (dt^{n-1/2} + dt^{n+1/2}) / 2 a^n; Belytschko, Liu & Moran, Nonlinear Finite Elements
+    // for Continua and Structures, 2000, §6.2).
     if (ties_ && inter_.insert_cracks(x, tsig) > 0) {
         build_ties();
         reduce_dt_after_insertion();

@@ -19,10 +19,16 @@
 #include <sstream>
 
 #include "mesh/gmsh_source.hpp"
+#include "mesh/occ_build.hpp"
 
 namespace fdem::mesh {
 
 namespace {
+
+using occ_build::add_group;
+using occ_build::add_polygon;
+using occ_build::curves_in;
+using occ_build::points_at;
 
 using Polygon = std::vector<std::array<double, 2>>;
 
@@ -228,42 +234,12 @@ std::vector<std::vector<std::array<double, 2>>> wall_unit_outlines(const WallSpe
 
 namespace {
 
-int add_polygon(const Polygon& p) {
-    std::vector<int> pts, lines;
-    for (const auto& v : p) pts.push_back(gmsh::model::occ::addPoint(v[0], v[1], 0));
-    for (std::size_t i = 0; i < pts.size(); ++i) lines.push_back(gmsh::model::occ::addLine(pts[i], pts[(i + 1) % pts.size()]));
-    return gmsh::model::occ::addPlaneSurface({gmsh::model::occ::addCurveLoop(lines)});
-}
 
 int add_box(double x0, double y0, double x1, double y1) {
     return add_polygon({{x0, y0}, {x1, y0}, {x1, y1}, {x0, y1}});
 }
 
-// The curves inside the box [x0, x1] x [y0, y1] (grown by tol) that bound one of `surfaces`.
-std::vector<int> curves_in(double x0, double y0, double x1, double y1, double tol, const std::set<int>& surfaces) {
-    gmsh::vectorpair found;
-    gmsh::model::getEntitiesInBoundingBox(x0 - tol, y0 - tol, -tol, x1 + tol, y1 + tol, tol, found, 1);
-    std::vector<int> out;
-    for (const auto& [dim, tag] : found) {
-        std::vector<int> up, down;
-        gmsh::model::getAdjacencies(dim, tag, up, down);
-        for (int sface : up)
-            if (surfaces.count(sface)) {
-                out.push_back(tag);
-                break;
-            }
-    }
-    std::sort(out.begin(), out.end());
-    return out;
-}
 
-std::vector<int> points_at(double x, double y, double tol) {
-    gmsh::vectorpair found;
-    gmsh::model::getEntitiesInBoundingBox(x - tol, y - tol, -tol, x + tol, y + tol, tol, found, 0);
-    std::vector<int> out;
-    for (const auto& dt : found) out.push_back(dt.second);
-    return out;
-}
 
 // unit_cracks = "middle": the two halves of a split unit are one body (one continuum with a potential crack), so
 // the triangles of the halves of outline i (split[i] not NaN; found by their centroid) get one body id; bodies are
@@ -294,10 +270,6 @@ void join_split_units(Mesh& m, const std::vector<Polygon>& outlines, const std::
     }
 }
 
-void add_group(int dim, const std::vector<int>& tags, const std::string& name) {
-    if (tags.empty()) return;
-    gmsh::model::setPhysicalName(dim, gmsh::model::addPhysicalGroup(dim, tags), name);
-}
 
 }  // namespace
 
