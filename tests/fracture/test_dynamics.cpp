@@ -14,17 +14,7 @@ using namespace fdem::fracture;
 using fracture_test::OneElement;
 
 namespace {
-CohesiveProps stone() {
-  CohesiveProps p;
-  p.tensile_strength = 3.7e6;
-  p.cohesion = 5.2e6;
-  p.friction_deg = 35.0;
-  p.residual_friction_deg = 30.0;
-  p.G_I = 110.0;
-  p.G_II = 770.0;
-  p.penalty = 2e10;
-  return p;
-}
+CohesiveProps stone() { return fracture_test::sandstone(2e10); }  // cases/README.md §A sandstone
 
 struct LeapFrog {
   CohesiveSystem sys;

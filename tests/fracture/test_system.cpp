@@ -21,17 +21,7 @@ using fracture_test::make_split_grid;
 using fracture_test::SplitGrid;
 
 namespace {
-CohesiveProps stone() {
-  CohesiveProps p;
-  p.tensile_strength = 3.7e6;
-  p.cohesion = 5.2e6;
-  p.friction_deg = 35.0;
-  p.residual_friction_deg = 30.0;
-  p.G_I = 110.0;
-  p.G_II = 770.0;
-  p.penalty = 4e10;
-  return p;
-}
+CohesiveProps stone() { return fracture_test::sandstone(4e10); }  // cases/README.md §A sandstone
 
 // Deterministic pseudo-random numbers in [-1, 1) (splitmix64), identical on every run and thread count.
 double noise(std::uint64_t i) {
