@@ -325,7 +325,7 @@ def k25_case(r, quick=False):
 #   contact dashpots {s['contact_damping']}, shear-stage local damping {s['damping']}, {s['rate']} m/s to {s['until'] * 1000:g} mm after a
 #   {s['drive_ramp']} s ramp) with the inertial mass x {s['mass_scale']} instead of x {K25['mass_scale']} ([numerics] mass_scale; gravity keeps the
 #   physical mass), time step x 3.16: 21,779 steps. Against this wall's converged curve (mass scaling 10 at half the
-#   rate, RESULTS.md §29): peak +1.9 %, whole curve 0-10 mm RMS 2.4 % of the peak, K_e -6.8 %; the 0.1 s ramp removed the start transient (-10 kN at 0.35 mm, a 10 kN
+#   rate, RESULTS.md §29): peak +2.3 %, whole curve 0-10 mm RMS 2.3 % of the peak, K_e -7.1 %; the 0.1 s ramp removed the start transient (-10 kN at 0.35 mm, a 10 kN
 #   drop at 1.1 mm) of the 0.005 s ramp. The family report is the validation; this is its fast preview."""
     else:
         settings_text = f"""# Mass scaling: inertial mass x {s['mass_scale']} ([numerics] mass_scale; gravity keeps the physical mass): time step
