@@ -35,10 +35,6 @@ std::string num(double v) {
     return s.str();
 }
 
-
-
-
-
 }  // namespace
 
 std::vector<std::string> check(const MacroPierSpec& s) {

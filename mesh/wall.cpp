@@ -239,8 +239,6 @@ int add_box(double x0, double y0, double x1, double y1) {
     return add_polygon({{x0, y0}, {x1, y0}, {x1, y1}, {x0, y1}});
 }
 
-
-
 // unit_cracks = "middle": the two halves of a split unit are one body (one continuum with a potential crack), so
 // the triangles of the halves of outline i (split[i] not NaN; found by their centroid) get one body id; bodies are
 // then renumbered in order of first appearance.
