@@ -14,6 +14,7 @@
 
 #include "mesh/gmsh_source.hpp"
 #include "mesh/occ_build.hpp"
+#include "mesh/spec_check.hpp"
 
 namespace fdem::mesh {
 
@@ -28,23 +29,15 @@ using Polygon = std::vector<std::array<double, 2>>;
 
 constexpr double kPi = 3.14159265358979323846;
 
-std::string num(double v) {
-    std::ostringstream s;
-    s.precision(6);
-    s << v;
-    return s.str();
-}
+using spec_check::num;
 
 }  // namespace
 
 std::vector<std::string> check(const MacroPierSpec& s) {
     std::vector<std::string> bad;
-    auto need_positive = [&](double v, const char* key) {
-        if (!(v > 0)) bad.push_back(std::string("geometry.") + key + " must be > 0 (m), got " + num(v));
-    };
-    auto need_nonnegative = [&](double v, const char* key) {
-        if (!(v >= 0)) bad.push_back(std::string("geometry.") + key + " must be >= 0 (m), got " + num(v));
-    };
+    const spec_check::Lengths len{bad};
+    auto need_positive = [&](double v, const char* key) { len.positive(v, key); };
+    auto need_nonnegative = [&](double v, const char* key) { len.nonnegative(v, key); };
     need_positive(s.length, "length");
     need_positive(s.height, "height");
     need_positive(s.mesh_size, "mesh_size");

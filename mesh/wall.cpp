@@ -20,6 +20,7 @@
 
 #include "mesh/gmsh_source.hpp"
 #include "mesh/occ_build.hpp"
+#include "mesh/spec_check.hpp"
 
 namespace fdem::mesh {
 
@@ -32,12 +33,7 @@ using occ_build::points_at;
 
 using Polygon = std::vector<std::array<double, 2>>;
 
-std::string num(double v) {
-    std::ostringstream s;
-    s.precision(6);
-    s << v;
-    return s.str();
-}
+using spec_check::num;
 
 double joint_of(const WallSpec& s) { return s.joint == "mortar" ? s.joint_thickness : 0.0; }
 double pitch_x(const WallSpec& s) { return s.unit_length + joint_of(s); }
@@ -90,12 +86,9 @@ Extent extent_of(const WallSpec& s) {
 
 std::vector<std::string> check(const WallSpec& s) {
     std::vector<std::string> bad;
-    auto need_positive = [&](double v, const char* key) {
-        if (!(v > 0)) bad.push_back(std::string("geometry.") + key + " must be > 0 (m), got " + num(v));
-    };
-    auto need_nonnegative = [&](double v, const char* key) {
-        if (!(v >= 0)) bad.push_back(std::string("geometry.") + key + " must be >= 0 (m), got " + num(v));
-    };
+    const spec_check::Lengths len{bad};
+    auto need_positive = [&](double v, const char* key) { len.positive(v, key); };
+    auto need_nonnegative = [&](double v, const char* key) { len.nonnegative(v, key); };
     need_positive(s.mesh_size, "mesh_size");
     need_nonnegative(s.mesh_size_beam, "mesh_size_beam");
     need_nonnegative(s.mesh_size_base, "mesh_size_base");

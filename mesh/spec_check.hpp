@@ -1,0 +1,30 @@
+// mesh/spec_check.hpp: the key checks the geometry generators (mesh/wall.cpp, mesh/macro.cpp) share: a number for a
+// message, and the "must be > 0" / ">= 0" checks of a length key, each adding one line to a list of problems.
+#pragma once
+
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace fdem::mesh::spec_check {
+
+// v with 6 significant digits, for messages.
+inline std::string num(double v) {
+    std::ostringstream s;
+    s.precision(6);
+    s << v;
+    return s.str();
+}
+
+// Problems of geometry keys, one line each ("geometry.KEY must be ... (m), got V").
+struct Lengths {
+    std::vector<std::string>& bad;
+    void positive(double v, const char* key) const {
+        if (!(v > 0)) bad.push_back(std::string("geometry.") + key + " must be > 0 (m), got " + num(v));
+    }
+    void nonnegative(double v, const char* key) const {
+        if (!(v >= 0)) bad.push_back(std::string("geometry.") + key + " must be >= 0 (m), got " + num(v));
+    }
+};
+
+}  // namespace fdem::mesh::spec_check
