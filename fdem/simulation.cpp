@@ -23,6 +23,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <ctime>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -53,6 +54,12 @@ constexpr double kPi = 3.14159265358979323846;
 double wall_clock() {
     using namespace std::chrono;
     return duration<double>(steady_clock::now().time_since_epoch()).count();
+}
+
+// CPU time of the process (s), summed over its threads: on a machine shared with other jobs it stays near what the
+// run would take alone, where the wall time grows with the load (summary.json cpu_time_s).
+double cpu_clock() {
+    return static_cast<double>(std::clock()) / CLOCKS_PER_SEC;
 }
 
 std::string human_time(double s) {
@@ -174,6 +181,7 @@ Simulation::Simulation(CaseSpec spec, Model model, RunOptions options)
         throw InputError(spec_.file + ": the time step comes out as " + sci(dt_) +
                          " s: expected a finite step > 0 (check materials.*.E and density, case.thickness, numerics.mass_scale and numerics.dt)");
     wall_start_ = wall_clock();
+    cpu_start_ = cpu_clock();
     last_checkpoint_wall_ = wall_start_;
     if (spec_.checkpoint_interval > 0) next_checkpoint_ = spec_.checkpoint_interval;
     if (!opt_.out_dir.empty()) {
@@ -1319,6 +1327,7 @@ void Simulation::fail(const std::string& what) {
                             std::to_string(steps_) + ", t = " + sci(time_, 6) + " s (dt = " + sci(dt_) +
                             " s, stable limit " + sci(dt_limit_) + " s)";
     wall_time_ = wall_clock() - wall_start_;
+    cpu_time_ = cpu_clock() - cpu_start_;
     log_ += "error: run failed: " + msg + "\n";  // run.log; the terminal gets it once, on stderr from main
     if (!opt_.out_dir.empty()) {
         flush_files();
@@ -1386,6 +1395,7 @@ void Simulation::interrupt(int sig, const std::string& why) {
     interrupted_signal_ = sig;
     if (!opt_.out_dir.empty()) write_checkpoint();
     wall_time_ = wall_clock() - wall_start_;
+    cpu_time_ = cpu_clock() - cpu_start_;
     if (opt_.progress) progress_line(true);
     const std::string by = !why.empty()       ? why
                            : sig == SIGINT    ? "interrupted by SIGINT"
@@ -1469,6 +1479,7 @@ void Simulation::run() {
         }
     }
     wall_time_ = wall_clock() - wall_start_;
+    cpu_time_ = cpu_clock() - cpu_start_;
     const double tps = static_cast<double>(steps_) * model_.n_triangles() / std::max(wall_time_, 1e-9);
     if (inter_.has_dry_joints())
         log("dry joint record: " + std::to_string(inter_.dry_open_count()) + " segments opened, " + std::to_string(inter_.dry_slip_count()) +
@@ -1479,7 +1490,8 @@ void Simulation::run() {
             std::to_string(J->extrinsic_count()) + " elements inserted; time step " + sci(dt_) + " s at the end (" +
             sci(dt_initial_) + " s at the start)");
     }
-    log("done: " + std::to_string(steps_) + " steps in " + human_time(wall_time_) + " (" + sci(tps, 3) + " triangle-steps/s)");
+    log("done: " + std::to_string(steps_) + " steps in " + human_time(wall_time_) + " (" + sci(tps, 3) + " triangle-steps/s; CPU time " +
+        human_time(cpu_time_) + ")");
     if (const contact::ContactSystem* c = inter_.contact()) {
         const auto& st = c->stats();
         log("contact: " + std::to_string(st.detections) + " detections, " + std::to_string(st.candidate_pairs) + " candidate pairs (" +
@@ -1554,6 +1566,7 @@ void Simulation::write_summary(const std::string& status, const std::string& mes
     j["steps"] = static_cast<long long>(steps_);
     const double wall = status == "running" ? 0.0 : wall_time_;
     j["wall_time_s"] = wall;
+    j["cpu_time_s"] = status == "running" ? 0.0 : cpu_time_;
     j["triangle_steps_per_s"] = wall > 0 ? static_cast<double>(steps_) * model_.n_triangles() / wall : 0.0;
     j["threads"] = omp_get_max_threads();
     j["time"] = time_;

@@ -266,6 +266,7 @@ private:
     std::vector<std::pair<double, std::string>> snapshots_;
     std::vector<StageResult> stage_results_;
     std::string log_;
+    double cpu_start_ = 0, cpu_time_ = 0;  // s, process CPU time (cpu_clock), summary.json cpu_time_s; not checkpointed
     double wall_start_ = 0, wall_time_ = 0, last_flush_ = 0, last_progress_ = 0, last_progress_log_ = 0;
     double dt_report_triangles_ = 0;
     StepTimes step_times_;

@@ -171,6 +171,14 @@ TEST_CASE("a run writes history and summary and snapshots and a pvd collection",
     CHECK(summary.find("\"status\": \"completed\"") != std::string::npos);
     CHECK(summary.find("\"dt\"") != std::string::npos);
     CHECK(summary.find("\"triangle_steps_per_s\"") != std::string::npos);
+    // The process CPU time beside the wall time: finite, >= 0, and at most the wall time times the threads (with
+    // 10 ms for the clocks' granularity).
+    std::smatch cpu, wall, threads;
+    REQUIRE(std::regex_search(summary, cpu, std::regex("\"cpu_time_s\": ([-0-9.eE+]+)")));
+    REQUIRE(std::regex_search(summary, wall, std::regex("\"wall_time_s\": ([-0-9.eE+]+)")));
+    REQUIRE(std::regex_search(summary, threads, std::regex("\"threads\": ([0-9]+)")));
+    CHECK(std::stod(cpu[1].str()) >= 0.0);
+    CHECK(std::stod(cpu[1].str()) <= std::stod(wall[1].str()) * std::stoi(threads[1].str()) + 0.01);
     const std::string pvd = testing::read_text(dir / "run" / "run.pvd");
     std::smatch m;
     REQUIRE(std::regex_search(pvd, m, std::regex("file=\"([^\"]+)\"")));

@@ -260,7 +260,7 @@ def collect(rec: dict) -> dict:
     s = read_summary(rec["run_dir"]) or {}
     rec["status"] = s.get("status", "not run" if rec.get("exit_code") is None else "no summary")
     rec["message"] = s.get("message", "")
-    for k in ("wall_time_s", "n_triangles", "n_nodes", "dt", "steps", "threads"):
+    for k in ("wall_time_s", "cpu_time_s", "n_triangles", "n_nodes", "dt", "steps", "threads"):
         rec[k] = s.get(k)
     rec["peak_load_N"] = curve_peak(s)
     ref = reference_peak(s)
@@ -277,14 +277,14 @@ def results_table(recs: list, path: str) -> str:
         for k in r["params"]:
             if k not in keys:
                 keys.append(k)
-    header = keys + ["name", "status", "exit_code", "resumed", "wall_time_s", "n_triangles", "dt", "steps",
+    header = keys + ["name", "status", "exit_code", "resumed", "wall_time_s", "cpu_time_s", "n_triangles", "dt", "steps",
                      "peak_load_kN", "reference_peak_kN", "reference_error"]
     rows = []
     for r in recs:
         kn = lambda v: v / 1e3 if v is not None else None  # noqa: E731
         rows.append([r["params"].get(k, "") for k in keys] +
                     [r["name"], r["status"], r.get("exit_code"), int(r["resumed"]), r.get("wall_time_s"),
-                     r.get("n_triangles"), r.get("dt"), r.get("steps"), kn(r.get("peak_load_N")),
+                     r.get("cpu_time_s"), r.get("n_triangles"), r.get("dt"), r.get("steps"), kn(r.get("peak_load_N")),
                      kn(r.get("reference_peak_N")), r.get("reference_error")])
     write_csv(path, header, [["" if v is None else v for v in row] for row in rows])
     return format_table(header, rows)

@@ -402,6 +402,7 @@ def cmd_speed(args):
     for r in recs:
         err = abs(r["peak_load_N"] - ref) / abs(ref) if r in ok else None
         row = {**r["params"], "status": r["status"], "wall_time_s": r.get("wall_time_s"),
+               "cpu_time_s": r.get("cpu_time_s"), "steps": r.get("steps"),
                "peak_load_kN": r["peak_load_N"] / 1e3 if r.get("peak_load_N") is not None else None,
                "error": err, "curve_rms": None, "curve_max": None, "K_e_error": None, "P_y_error": None,
                "ductility_error": None, "peak_error": None, "curve_note": "", "pareto": False, "run": r["name"]}

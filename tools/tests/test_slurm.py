@@ -74,11 +74,13 @@ def tools_cli(*args, env=None):
 
 
 def table(out):
-    """results.csv without the wall time (the only column that may differ between two runs of the same case)."""
+    """results.csv without the wall and CPU times (the only columns that may differ between two runs of the same
+    case)."""
     with open(os.path.join(out, "results.csv"), newline="") as f:
         rows = list(csv.DictReader(f))
     for r in rows:
         r.pop("wall_time_s")
+        r.pop("cpu_time_s")
     return rows
 
 
