@@ -152,8 +152,20 @@ def geometry(vtu: dict, scale: float = 1.0):
         else:
             first[g] = k
     mid_ref = 0.5 * (X[e_nodes[:, 0]] + X[e_nodes[:, 1]])
+    joints = None
+    cd = vtu["cell_data"]
+    if all(k in cd for k in ("cell_kind", "joint_state", "joint_opening", "joint_slip")):
+        offs = vtu["offsets"]
+        starts = np.concatenate(([0], offs[:-1]))
+        lsel = np.nonzero((vtu["types"] == 3) & (offs - starts == 2) & (cd["cell_kind"] == 1))[0]
+        conn = vtu["connectivity"]
+        joints = {"nodes": np.stack([conn[starts[lsel]], conn[starts[lsel] + 1]], axis=1),
+                  "state": np.asarray(cd["joint_state"])[lsel], "opening": np.asarray(cd["joint_opening"], float)[lsel],
+                  "slip": np.asarray(cd["joint_slip"], float)[lsel]}
+    bc = vtu["cell_data"].get("block_crushing")
+    crushing = np.asarray(bc, float)[sel] if bc is not None and bc.ndim == 1 and len(bc) == len(vtu["types"]) else None
     return {"x": x, "X": X, "tri": tri, "outline": np.array(outline).reshape(-1, 2), "edges": e_nodes,
-            "edge_mid_ref": mid_ref}
+            "edge_mid_ref": mid_ref, "crushing": crushing, "joints": joints}
 
 
 def match_edges(run_dir: str, geo: dict, pts, times):
@@ -224,13 +236,11 @@ def check_range(run, cr, time: float | None, displacement: float | None) -> None
 
 
 def draw(run_dir: str, prefix: str, time: float | None = None, displacement: float | None = None,
-         scale: float = 1.0, partial: bool = False) -> tuple:
+         scale: float = 1.0, partial: bool = False, joint_width: float | None = None) -> tuple:
     run = load_run(run_dir, allow_unfinished=partial, need_history=False)
     cr = read_cracks(run_dir)
     check_range(run, cr, time, displacement)
     if displacement is not None:
-        if not np.isfinite(cr["control_displacement"]).any():
-            raise ToolError(f"{run_dir}: cracks.csv has no control_displacement to select by displacement")
         h = run.history
         if h is not None and h.has("time"):
             try:
@@ -241,6 +251,9 @@ def draw(run_dir: str, prefix: str, time: float | None = None, displacement: flo
             except ToolError:
                 time = None
         if time is None:
+            if not np.isfinite(cr["control_displacement"]).any():
+                raise ToolError(f"{run_dir}: neither the history's curve nor cracks.csv's control_displacement "
+                                "to select by displacement")
             reach = np.nonzero(np.abs(cr["control_displacement"]) <= abs(displacement))[0]
             time = float(cr["time"][reach].max()) if len(reach) else 0.0
     snap = pick_snapshot(snapshots(run_dir), time)
@@ -250,11 +263,16 @@ def draw(run_dir: str, prefix: str, time: float | None = None, displacement: flo
     from .figures import new_figure, save
     fig, ax = new_figure(figsize=(7.5, 6.5))
     geo = None
+    crushed_patches = []
+    joint_counts = {}
     if snap is not None:
         geo = geometry(read_vtu(snap[1]), scale)
         x = geo["x"]
         ax.tripcolor(x[:, 0], x[:, 1], geo["tri"], facecolors=np.ones(len(geo["tri"])), cmap="Greys", vmin=0, vmax=8,
                      edgecolors="none", alpha=0.6)
+        crushed_patches = _draw_crushing(ax, geo)
+        if joint_width is not None:
+            joint_counts = _draw_joint_widths(ax, geo, joint_width)
         o = geo["outline"]
         if len(o):
             from matplotlib.collections import LineCollection
@@ -312,6 +330,11 @@ def draw(run_dir: str, prefix: str, time: float | None = None, displacement: flo
                 counts[f"{c}_{m}"] = 0
         for m in DRY_STYLE:
             counts[f"dry_{m}"] = 0
+    counts.update(joint_counts)
+    if geo is not None and geo["crushing"] is not None:
+        c = geo["crushing"]
+        counts["crushing"] = int(np.sum(c > CRUSH_STARTED))
+        counts["crushed"] = int(np.sum(c >= 1.0))
     if geo is None and keep.any():
         ax.autoscale_view()
     ax.set_aspect("equal")
@@ -327,12 +350,18 @@ def draw(run_dir: str, prefix: str, time: float | None = None, displacement: flo
     if scale != 1.0 and geo is not None:
         title += f", displacements x{scale:g}"
     ax.set_title(title, fontsize=9)
-    n_broken = sum(v for k, v in counts.items() if not k.startswith("dry_"))
+    n_broken = sum(v for k, v in counts.items() if k.startswith(("unit_", "interface_")))
     n_open, n_slip = counts["dry_open"], counts["dry_slip"]
     heading = ([f"{n_broken} broken elements"] if n_broken else []) + \
               ([f"dry joints opened: {n_open}, slipped: {n_slip}"] if n_open + n_slip else [])
+    if joint_counts.get("joint_open", 0) + joint_counts.get("joint_slip", 0):
+        heading.append(f"unbroken joints wider than {joint_width * 1e3:.3g} mm at this time")
+    handles, _ = ax.get_legend_handles_labels()
+    if geo is not None and crushed_patches:
+        handles += crushed_patches
+        heading.append(f"crushing blocks: {counts['crushing']} triangles softening, {counts['crushed']} crushed")
     if heading:
-        ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, title="\n".join(heading),
+        ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, title="\n".join(heading),
                   title_fontsize=8)
     else:
         ax.text(0.5, 0.02, f"no {what.replace(' and ', ' or ')} at this time", transform=ax.transAxes, ha="center",
@@ -340,6 +369,60 @@ def draw(run_dir: str, prefix: str, time: float | None = None, displacement: flo
     files = save(fig, prefix)
     return files, {"time": time, "snapshot": snap[1] if snap else None, "counts": counts,
                    "matched_reference_midpoints": matched if keep.any() else None}
+
+
+# Crushing of the triangles of a [materials.NAME.crushing] table (the VTU cell array block_crushing = kappa / kappa_u,
+# fdem/plasticity.hpp): triangles past the peak of the compressive law shaded light red, those with no strength left
+# dark red (the M-DEM paper's way of showing crushed regions, seeds/000 Fig. 3).
+CRUSH_STARTED = 1e-9
+CRUSH_COLOURS = {"softening": "#f4a6a6", "crushed": "#b01818"}
+
+
+def _draw_crushing(ax, geo) -> list:
+    """Shades the crushing triangles; returns legend patches (empty when none crush)."""
+    c = geo["crushing"]
+    if c is None:
+        return []
+    from matplotlib.patches import Patch
+    x = geo["x"]
+    patches = []
+    for name, sel in (("softening", (c > CRUSH_STARTED) & (c < 1.0)), ("crushed", c >= 1.0)):
+        n = int(np.sum(sel))
+        if not n:
+            continue
+        from matplotlib.collections import PolyCollection
+        ax.add_collection(PolyCollection(x[geo["tri"][sel]], facecolors=CRUSH_COLOURS[name], edgecolors="none",
+                                         zorder=1.5))
+        label = ("crushing (past the compressive peak)" if name == "softening" else "crushed (no strength left)")
+        patches.append(Patch(facecolor=CRUSH_COLOURS[name], label=f"{label} ({n})"))
+    return patches
+
+
+# Joints that do not break (the Mohr-Coulomb layers of law = "mohr_coulomb" never hand over to contact) show their
+# cracks as the opening and slip of their line cells in the snapshot: with --joint-width W the cohesive elements that
+# are not broken and open or slip by more than W are drawn (in the colours of modes I and II), the M-DEM paper's way
+# of showing cracks (seeds/000 Fig. 3: widths > 0.5 mm). Opened wins where both hold.
+JOINT_WIDTH_STYLE = {"joint_slip": {"color": MODE_COLOURS["II"], "lw": 2.2, "name": "joint slipped"},
+                     "joint_open": {"color": MODE_COLOURS["I"], "lw": 2.2, "name": "joint opened"}}
+
+
+def _draw_joint_widths(ax, geo, width: float) -> dict:
+    j = geo["joints"]
+    counts = {"joint_open": 0, "joint_slip": 0}
+    if j is None:
+        return counts
+    from matplotlib.collections import LineCollection
+    intact = j["state"] != 2
+    opened = intact & (np.nan_to_num(j["opening"]) > width)
+    slipped = intact & (np.abs(np.nan_to_num(j["slip"])) > width) & ~opened
+    for key, sel in (("joint_open", opened), ("joint_slip", slipped)):
+        n = int(np.sum(sel))
+        counts[key] = n
+        if n:
+            st = JOINT_WIDTH_STYLE[key]
+            ax.add_collection(LineCollection(geo["x"][j["nodes"][sel]], colors=st["color"], linewidths=st["lw"],
+                                             zorder=2.8, label=f"{st['name']} > {width * 1e3:.3g} mm ({n})"))
+    return counts
 
 
 def _threshold_text(run, key: str) -> str:
@@ -354,7 +437,11 @@ def _threshold_text(run, key: str) -> str:
 def cmd_cracks(args):
     prefix = args.out or os.path.join(args.run, "post", "cracks")
     disp = args.displacement * 1e-3 if args.displacement is not None else None
-    files, info = draw(args.run, prefix, time=args.time, displacement=disp, scale=args.scale, partial=args.partial)
+    if args.joint_width is not None and not (args.joint_width > 0):
+        raise ToolError(f"--joint-width: expected a width > 0 in mm, got {args.joint_width:g}")
+    width = args.joint_width * 1e-3 if args.joint_width is not None else None
+    files, info = draw(args.run, prefix, time=args.time, displacement=disp, scale=args.scale, partial=args.partial,
+                       joint_width=width)
     c = info["counts"]
     print(f"t = {info['time']:.6g} s, snapshot {info['snapshot'] or 'none (markers at reference midpoints)'}: "
           + ", ".join(f"{k} {v}" for k, v in c.items()))
@@ -369,12 +456,19 @@ def add_parser(sub):
                                    "beyond output.joint_open thick orange, slips beyond output.joint_slip thin green, "
                                    "counted apart. Uses cracks.csv and the .vtu snapshot at or before the chosen time. "
                                    "Prints the counts: unit_I ... interface_mixed (broken elements), dry_open, "
-                                   "dry_slip (dry-joint segments).")
+                                   "dry_slip (dry-joint segments); with --joint-width, joint_open and joint_slip "
+                                   "(unbroken cohesive elements wider than it); with crushing blocks, crushing and "
+                                   "crushed (triangles past the compressive peak, and with no strength left: shaded "
+                                   "light and dark red).")
     p.add_argument("run", metavar="RUN", help="fdem run folder")
     g = p.add_mutually_exclusive_group()
     g.add_argument("--time", type=float, help="time in s (default: the last snapshot)")
     g.add_argument("--displacement", type=float, help="control displacement in mm (the first time it is reached)")
     p.add_argument("--scale", type=float, default=1.0, help="displacement magnification of the drawing (default 1)")
     p.add_argument("--partial", action="store_true", help="accept a run whose summary is not 'completed'")
+    p.add_argument("--joint-width", type=float, metavar="MM",
+                   help="also draw the cohesive elements that are not broken but open (the colour of mode I) or slip (of "
+                        "mode II) by more than MM mm in the snapshot: the cracks of joints that never break (law = \"mohr_coulomb\"; "
+                        "the M-DEM paper draws widths > 0.5 mm)")
     p.add_argument("-o", "--out", help="output prefix (default RUN/post/cracks): writes PREFIX.png and PREFIX.svg")
     p.set_defaults(func=cmd_cracks)

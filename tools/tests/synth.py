@@ -10,12 +10,15 @@ BROKEN = ["broken_unit_I", "broken_unit_II", "broken_unit_mixed",
           "broken_interface_I", "broken_interface_II", "broken_interface_mixed"]
 
 
-def write_vtu(path, X, tri, disp, cell_data):
-    """VTK XML UnstructuredGrid, appended raw binary, header_type UInt64, like fdem/output.cpp."""
+def write_vtu(path, X, tri, disp, cell_data, lines=()):
+    """VTK XML UnstructuredGrid, appended raw binary, header_type UInt64, like fdem/output.cpp. lines: node pairs of
+    line cells after the triangles (cohesive elements); integer cell arrays are written Int32, float ones Float64."""
+    lines = np.asarray(lines, np.int64).reshape(-1, 2)
+    n_cells = len(tri) + len(lines)
     blob = bytearray()
     xml = ['<?xml version="1.0"?>\n<VTKFile type="UnstructuredGrid" version="1.0" byte_order="LittleEndian" '
            'header_type="UInt64">\n<UnstructuredGrid>\n'
-           f'<Piece NumberOfPoints="{len(X)}" NumberOfCells="{len(tri)}">\n']
+           f'<Piece NumberOfPoints="{len(X)}" NumberOfCells="{n_cells}">\n']
 
     def add(name, arr, vtype, nc):
         data = np.ascontiguousarray(arr).tobytes()
@@ -28,13 +31,18 @@ def write_vtu(path, X, tri, disp, cell_data):
     add("displacement", np.column_stack((disp, np.zeros(len(X)))).astype("<f8"), "Float64", 3)
     xml.append("</PointData>\n<CellData>\n")
     for name, a in cell_data.items():
-        add(name, np.asarray(a, "<i4"), "Int32", 1)
+        a = np.asarray(a)
+        if np.issubdtype(a.dtype, np.floating):
+            add(name, a.astype("<f8"), "Float64", 1)
+        else:
+            add(name, a.astype("<i4"), "Int32", 1)
     xml.append("</CellData>\n<Points>\n")
     add("Points", np.column_stack((X, np.zeros(len(X)))).astype("<f8"), "Float64", 3)
     xml.append("</Points>\n<Cells>\n")
-    add("connectivity", np.asarray(tri, "<i8").ravel(), "Int64", 1)
-    add("offsets", 3 * np.arange(1, len(tri) + 1, dtype="<i8"), "Int64", 1)
-    add("types", np.full(len(tri), 5, "u1"), "UInt8", 1)
+    add("connectivity", np.concatenate((np.asarray(tri, "<i8").ravel(), lines.ravel())).astype("<i8"), "Int64", 1)
+    add("offsets", np.concatenate((3 * np.arange(1, len(tri) + 1), 3 * len(tri) + 2 * np.arange(1, len(lines) + 1)))
+        .astype("<i8"), "Int64", 1)
+    add("types", np.concatenate((np.full(len(tri), 5), np.full(len(lines), 3))).astype("u1"), "UInt8", 1)
     xml.append('</Cells>\n</Piece>\n</UnstructuredGrid>\n<AppendedData encoding="raw">\n   _')
     with open(path, "wb") as f:
         f.write("".join(xml).encode())
@@ -110,7 +118,7 @@ def make_run(path, status="completed", fracture=True, n=60, peak=40e3, case="syn
             disp = np.zeros_like(X)
             disp[:, 0] = tk * 2e-3 * (X[:, 1] >= 0.1) + 1e-4 * tk * X[:, 1]
             name = f"snapshots/snap_{k:04d}.vtu"
-            write_vtu(os.path.join(path, name), X, tri, disp, {"material": np.zeros(len(tri)), "region": unit})
+            write_vtu(os.path.join(path, name), X, tri, disp, {"material": np.zeros(len(tri), int), "region": unit})
             entries.append((tk, name))
         with open(os.path.join(path, "run.pvd"), "w") as f:
             f.write('<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n  <Collection>\n')

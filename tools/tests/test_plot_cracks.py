@@ -268,3 +268,31 @@ def test_cracks_outside_the_run_exit_1_with_the_range(tmp_path, cli):
     assert rc == 1 and "outside the run" in err
     rc, out, err = cli("cracks", run, "--displacement", "10")  # the end of the run itself is inside
     assert rc == 0, err
+
+
+def test_crushing_blocks_and_joint_widths_drawn_and_counted(tmp_path, cli):
+    # The macro-block model's damage (issue 29): crushing triangles (block_crushing = kappa / kappa_u) shaded, and
+    # joints that never break (law = "mohr_coulomb") drawn where they open or slip by more than --joint-width.
+    run = make_run(str(tmp_path / "run"))
+    X, tri, unit = two_blocks()
+    nt = len(tri)
+    lines = [(10, 11), (11, 12), (12, 13), (13, 14)]  # the joint at y = 0.1 m, on the lower block's nodes
+    nan = float("nan")
+    cells = {"region": np.concatenate((unit, -np.ones(4, int))),
+             "cell_kind": np.concatenate((np.zeros(nt, int), np.ones(4, int))),
+             "joint_state": np.concatenate((-np.ones(nt, int), [0, 0, 2, 0])),
+             "joint_opening": np.concatenate((np.full(nt, nan), [1e-3, 0.1e-3, 2e-3, 0.0])),
+             "joint_slip": np.concatenate((np.full(nt, nan), [0.0, 0.8e-3, 0.0, -0.7e-3])),
+             "block_crushing": np.concatenate(([0.5, 1.0, 1.2], np.zeros(nt - 3), np.full(4, nan)))}
+    write_vtu(os.path.join(run, "snapshots", "snap_0002.vtu"), X, tri, np.zeros_like(X), cells, lines=lines)
+    files, info = cracks.draw(run, str(tmp_path / "c"), joint_width=0.5e-3)
+    c = info["counts"]
+    # opened: line 1 (1 mm); line 3 is broken (drawn by cracks.csv, not here); slipped: lines 2 and 4 (|0.8|, |-0.7| mm)
+    assert (c["joint_open"], c["joint_slip"]) == (1, 2)
+    assert (c["crushing"], c["crushed"]) == (3, 2)
+    files, info = cracks.draw(run, str(tmp_path / "d"), joint_width=0.9e-3)
+    assert (info["counts"]["joint_open"], info["counts"]["joint_slip"]) == (1, 0)
+    files, info = cracks.draw(run, str(tmp_path / "e"))  # no --joint-width: the joints are not drawn or counted
+    assert "joint_open" not in info["counts"] and info["counts"]["crushed"] == 2
+    rc, out, err = cli("cracks", run, "--joint-width", "0")
+    assert rc == 1 and "--joint-width" in err and "> 0" in err
