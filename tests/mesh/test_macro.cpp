@@ -181,9 +181,9 @@ duration = 0.001
     CHECK(r.err.find("(0, 90) deg") != std::string::npos);
 }
 
-TEST_CASE("macro pier: the shipped JRC Ispra LW geometry check passes fdem check", "[unit][macro]") {
+TEST_CASE("macro pier: the shipped JRC Ispra LW cyclic case (0.10 m) passes fdem check", "[unit][macro]") {
     const auto dir = ::testing::tmp_dir("macro_lw_check");
-    const std::string path = std::string(FDEM_CASES_DIR) + "/jrc_ispra/macro_LW_check.toml";
+    const std::string path = std::string(FDEM_CASES_DIR) + "/jrc_ispra/macro_LW_EL010.toml";
     const auto r = ::testing::run_fdem("check \"" + path + "\"", dir);
     INFO(r.out << r.err);
     CHECK(r.code == 0);
