@@ -418,7 +418,13 @@ def cmd_speed(args):
     if not valid:
         raise ToolError(f"no run has a {args.error} error (" + "; ".join(sorted({r['curve_note'] for r in rows
                                                                                  if r['curve_note']})) + ")")
-    front = [valid[i] for i in pareto_front([rows[i]["wall_time_s"] for i in valid], [rows[i][measure] for i in valid])]
+    tkey = "cpu_time_s" if getattr(args, "timing", "wall") == "cpu" else "wall_time_s"
+    if tkey == "cpu_time_s":
+        missing = [rows[i]["run"] for i in valid if rows[i]["cpu_time_s"] is None]
+        if missing:
+            raise ToolError(f"--timing cpu: no cpu_time_s in the summary of {len(missing)} run(s) (e.g. {missing[0]}; "
+                            "written by fdem since 27 Nov 2026): rerun them or use --timing wall")
+    front = [valid[i] for i in pareto_front([rows[i][tkey] for i in valid], [rows[i][measure] for i in valid])]
     for i in front:
         rows[i]["pareto"] = True
     header = list(rows[0].keys())
@@ -428,8 +434,8 @@ def cmd_speed(args):
                                                       "reference_curve": cref_src, "curve_to_m": u_to,
                                                       "curve_from_m": u_from, "front_error": args.error, "runs": rows})
     files = plot_speed(rows, dims, ref_src if args.error == "peak" else cref_src, os.path.join(out, "speed_study"),
-                       measure, args.error)
-    print(format_rows(rows, [k for k, _, _ in dims] + ["status", "wall_time_s", "peak_load_kN", "error", "curve_rms",
+                       measure, args.error, tkey)
+    print(format_rows(rows, [k for k, _, _ in dims] + ["status", "wall_time_s", "cpu_time_s", "peak_load_kN", "error", "curve_rms",
                                                        "curve_max", "K_e_error", "ductility_error", "pareto"]))
     print(f"reference peak load {ref / 1e3:.5g} kN: {ref_src}" + (f" ({ref_run})" if ref_run else ""))
     if cref_src:
@@ -440,7 +446,7 @@ def cmd_speed(args):
     return 0 if len(ok) == len(recs) else 2
 
 
-def plot_speed(rows, dims, ref_src, prefix, measure="error", label="peak"):
+def plot_speed(rows, dims, ref_src, prefix, measure="error", label="peak", tkey="wall_time_s"):
     from .figures import new_figure, save
     fig, ax = new_figure(figsize=(7.2, 5.0))
     rows = [{**r, "error": r[measure]} for r in rows]
@@ -456,10 +462,10 @@ def plot_speed(rows, dims, ref_src, prefix, measure="error", label="peak"):
     cmap = plt.get_cmap("viridis", max(2, len(v0)))
     for r in valid:
         e = max(r["error"], floor)
-        ax.plot(r["wall_time_s"], 100 * e, markers[v1.index(r[k1]) % len(markers)] if k1 else "o",
+        ax.plot(r[tkey], 100 * e, markers[v1.index(r[k1]) % len(markers)] if k1 else "o",
                 color=cmap(v0.index(r[k0])), ms=7, mec="k" if r["pareto"] else "none", mew=1.2, ls="none")
-    front = sorted([r for r in valid if r["pareto"]], key=lambda r: r["wall_time_s"])
-    ax.step([r["wall_time_s"] for r in front], [100 * max(r["error"], floor) for r in front], where="post",
+    front = sorted([r for r in valid if r["pareto"]], key=lambda r: r[tkey])
+    ax.step([r[tkey] for r in front], [100 * max(r["error"], floor) for r in front], where="post",
             color="k", lw=1.0, ls="--", label="Pareto front")
     from matplotlib.lines import Line2D
     handles = [Line2D([], [], color="k", lw=1.0, ls="--", label="Pareto front (black edge)")]
@@ -472,7 +478,7 @@ def plot_speed(rows, dims, ref_src, prefix, measure="error", label="peak"):
         ax.set_title("other dimensions: " + ", ".join(d[2] for d in dims[2:]) + " (not told apart)", fontsize=8)
     ax.set_xscale("log")
     ax.set_yscale("log")
-    ax.set_xlabel("wall time (s)")
+    ax.set_xlabel("CPU time (s)" if tkey == "cpu_time_s" else "wall time (s)")
     ax.set_ylabel({"peak": "peak-load error (%)", "curve_max": "largest curve difference (% of the reference peak)",
                    "curve_rms": "RMS curve difference (% of the reference peak)"}[label])
     ax.legend(handles=handles, fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0),
@@ -537,6 +543,10 @@ def add_parser(sub):
                                                                 "(default 5 %% of --curve-to)")
     s.add_argument("--error", choices=("peak", "curve_max", "curve_rms"), default="peak",
                    help="error of the Pareto front and the figure (default peak)")
+    s.add_argument("--timing", choices=("wall", "cpu"), default="wall",
+                   help="time of the Pareto front and the figure: the runs' wall time (default) or their CPU time "
+                        "(summary.json cpu_time_s; on a machine shared with other jobs it stays near the time of "
+                        "the run alone)")
     s.add_argument("--out-dir", help="study folder (default runs/study_speed_<case>)")
     s.set_defaults(func=cmd_speed)
     p.set_defaults(func=lambda a: p.print_help() or 1)

@@ -99,6 +99,17 @@ def test_speed_study_logic_with_fake_fdem(tmp_path, cli):
         dominated = any(q["wall_time_s"] <= r["wall_time_s"] and q["error"] < r["error"] for q in runs)
         assert r["pareto"] == (not dominated)
     assert (out / "speed_study.png").exists() and (out / "speed_study.svg").exists()
+    # --timing cpu: the front by the runs' CPU time (the fake's 0.02 / h (1 + damping) s), the table carries both times
+    rc, o, err = cli("study", "speed", case, "--sizes", "0.2,0.1", "--rates", "0.5,0", "--rate-key", "rate",
+                     "--damping", "0,0.1", "--damping-key", "damping", "--fdem", FAKE, "--out-dir", out, "--jobs", "2",
+                     "--timing", "cpu")
+    assert rc == 0, err
+    runs = json.loads((out / "speed_study.json").read_text())["runs"]
+    for r in runs:
+        h, damp = float(r["geometry.mesh_size"]), float(r["damping"])
+        assert r["cpu_time_s"] == pytest.approx(0.02 / h * (1 + damp), rel=1e-12)
+        dominated = any(q["cpu_time_s"] <= r["cpu_time_s"] and q["error"] < r["error"] for q in runs)
+        assert r["pareto"] == (not dominated)
     rc, o, err = cli("study", "speed", case, "--rates", "1,2", "--fdem", FAKE, "--out-dir", out)
     assert rc == 1 and "--rate-key" in err
 
