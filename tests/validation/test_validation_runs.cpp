@@ -87,12 +87,42 @@ TEST_CASE("single stone in tension, 25 mm: peak force f_t A within 5 %", "[regre
     CHECK(std::abs(std::abs(computed) - 74.0e3) <= 0.05 * 74.0e3);
 }
 
-// Issue 5 acceptance: the [K25]-style 100 kN dry-stone wall, published parameters, peak within 25 % of the measured
-// 44.73 kN (Lourenco et al. 2005), at the family setting (mass scaling 10, contact dashpots 0.3, local damping 0.05,
-// 0.01 m/s to 10 mm; about 10 minutes on 1 thread). The engine's reference check takes the raw largest load: 45.13 kN
-// (+0.9 %) with the build of 24 Nov; the family report's smoothed peak is 45.02 kN (RESULTS.md §17).
-TEST_CASE("dry-stone wall, N = 100 kN, [K25] style: peak within 25 % of the experiment", "[regression]") {
-    check_peak_against_test("lourenco2005/k25_N100.toml", "k25_N100", 0.25);
+// A [K25]-style dry-stone wall (cases/README.md §A, seeds/004 set-up): issue 5's acceptance, the peak within 25 % of
+// the test (issue 27 §2: none worse than 25 %), and issue 27 §2's, within 8 % of the published FDEM prediction of
+// [K25] Table 3 (the same model). The engine's reference check takes the raw largest load; the family report's peaks
+// are averaged over 0.5 mm. Measured on 27 Nov (lourenco2005/RESULTS.md §30, averaged; the 100 kN wall's raw peak
+// 39.42 kN): 13.64 / 39.23 / 74.39 / 91.73 kN against the tests' 20.23 / 44.73 / 69.96 / 102.95 kN and the
+// published 17.10 / 47.75 / 86.82 / 106.17 kN: 30 kN misses both limits, the others the published one, so THESE TESTS
+// FAIL until the model ingredient RESULTS.md §30 looks for is found (kept failing on purpose: they state the
+// acceptance, they are not loosened). Family setting (mass scaling 10, 0.01 m/s to 10 mm): 1.5-8 minutes each.
+static void check_dry_stone_wall(const std::string& rel_case, const std::string& name, double published) {
+    const std::string s = run_case(rel_case, name);
+    const double err = reference_number(s, "relative_error");
+    const double computed = std::abs(reference_number(s, "computed"));
+    INFO("peak " << computed << " N against " << reference_number(s, "value") << " N measured (error " << 100 * err
+                 << " %) and " << published << " N published (" << 100 * (computed / published - 1) << " %)");
+    CHECK(std::abs(err) <= 0.25);
+    CHECK(std::abs(computed / published - 1) <= 0.08);
+}
+
+TEST_CASE("dry-stone wall, N = 30 kN, [K25] style: peak within 25 % of the experiment and 8 % of the published FDEM",
+          "[regression]") {
+    check_dry_stone_wall("lourenco2005/k25_N30.toml", "k25_N30", 17.10e3);
+}
+
+TEST_CASE("dry-stone wall, N = 100 kN, [K25] style: peak within 25 % of the experiment and 8 % of the published FDEM",
+          "[regression]") {
+    check_dry_stone_wall("lourenco2005/k25_N100.toml", "k25_N100", 47.75e3);
+}
+
+TEST_CASE("dry-stone wall, N = 200 kN, [K25] style: peak within 25 % of the experiment and 8 % of the published FDEM",
+          "[regression]") {
+    check_dry_stone_wall("lourenco2005/k25_N200.toml", "k25_N200", 86.82e3);
+}
+
+TEST_CASE("dry-stone wall, N = 250 kN, [K25] style: peak within 25 % of the experiment and 8 % of the published FDEM",
+          "[regression]") {
+    check_dry_stone_wall("lourenco2005/k25_N250.toml", "k25_N250", 106.17e3);
 }
 
 // Issue 27 acceptance for the mortared walls (cases/README.md §B): the three held walls (top beam neither rotating nor moving
