@@ -93,7 +93,8 @@ def main():
         md = f"{r['mdem_peak']} / {r['mdem_k_el']} / {r['mdem_E_h']}" if r["mdem_peak"] != "" else "-"
         print(f"| {r['run']} | {r['triangles']} | {r['peak']:.2f} | {r['peak_err']:+.1f} % | {r['k_el']:.1f} | "
               f"{r['k_el_err']:+.1f} % | {r['E_h']:.0f} | {r['drift']:.2f} | {md} | {r['steps']} | "
-              f"{r['wall_time_s']:.0f} | {r['cpu_time_s']:.0f} |")
+              f"{r['wall_time_s']:.0f} | " + (f"{r['cpu_time_s']:.0f}" if r["cpu_time_s"] == r["cpu_time_s"] else "-")
+              + " |")
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
