@@ -1,0 +1,102 @@
+#!/usr/bin/env python3
+"""Speed against error of the default wall, before and after the settings of RESULTS.md §29 (issue 25): two
+`fdem-tools study speed` folders of the same grid (mass scaling), measured against the same reference curve, drawn
+as two fronts (wall time against the curve's RMS difference, and against the peak's difference) and tabulated.
+
+/usr/bin/python3 cases/lourenco2005/plot_front.py BEFORE_STUDY AFTER_STUDY [--out PREFIX]
+
+Each STUDY is a folder written by `fdem-tools study speed ... --reference-run REF --error curve_rms` (its
+speed_study.csv and runs/). Writes PREFIX.csv and PREFIX.png (default study_front_k25_N100_quick) and prints a
+markdown table and, for every run before, the least time after that reaches its curve RMS and its peak error.
+"""
+import argparse
+import csv
+import json
+import os
+
+
+def load(study, label):
+    rows = []
+    for r in csv.DictReader(open(os.path.join(study, "speed_study.csv"))):
+        if r["status"] != "completed":
+            continue
+        s = json.load(open(os.path.join(study, "runs", r["run"], "summary.json")))
+        rows.append(dict(settings=label, mass_scale=float(r["numerics.mass_scale"]), steps=int(s["steps"]),
+                         wall_time_s=float(r["wall_time_s"]), cpu_time_s=float(s.get("cpu_time_s") or "nan"), curve_rms=float(r["curve_rms"]),
+                         curve_max=float(r["curve_max"]), peak_error=float(r["peak_error"]),
+                         K_e_error=float(r["K_e_error"]), ductility_error=float(r["ductility_error"])))
+    return sorted(rows, key=lambda r: -r["mass_scale"])
+
+
+TIME = "cpu_time_s"  # the runs' CPU time (1 thread: the time of the run alone); wall_time_s if a study has none
+
+
+def least_time(rows, key, value):
+    ok = [r for r in rows if abs(r[key]) <= abs(value)]
+    return min(ok, key=lambda r: r[TIME]) if ok else None
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("before")
+    ap.add_argument("after")
+    ap.add_argument("--out", default="study_front_k25_N100_quick")
+    a = ap.parse_args()
+    global TIME
+    before, after = load(a.before, "before"), load(a.after, "after")
+    rows = before + after
+    if any(r["cpu_time_s"] != r["cpu_time_s"] for r in rows):  # NaN: a summary without cpu_time_s
+        TIME = "wall_time_s"
+    with open(a.out + ".csv", "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(rows[0]))
+        w.writeheader()
+        w.writerows(rows)
+    print("| settings | mass scaling | steps | wall time (s) | CPU time (s) | curve RMS | largest difference past 0.5 mm | peak | K_e | "
+          "ductility |")
+    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+    for r in rows:
+        print(f"| {r['settings']} | {r['mass_scale']:g} | {r['steps']:,} | {r['wall_time_s']:.1f} | {r['cpu_time_s']:.1f} | "
+              f"{100 * r['curve_rms']:.2f} % | {100 * r['curve_max']:.1f} % | {100 * r['peak_error']:+.2f} % | "
+              f"{100 * r['K_e_error']:+.1f} % | {100 * r['ductility_error']:+.1f} % |")
+    print()
+    print(f"times: {TIME}")
+    print("| before: mass scaling | its curve RMS | least time after reaching it | ratio of times | ratio of steps |"
+          " its peak error | least time after reaching it | ratio of times |")
+    print("|---:|---:|---|---:|---:|---:|---|---:|")
+    for r in before:
+        q = least_time(after, "curve_rms", r["curve_rms"])
+        p = least_time(after, "peak_error", r["peak_error"])
+        qs = (f"{q[TIME]:.1f} s (mass scaling {q['mass_scale']:g})", f"{r[TIME] / q[TIME]:.1f}",
+              f"{r['steps'] / q['steps']:.1f}") if q else ("not reached", "-", "-")
+        ps = (f"{p[TIME]:.1f} s (mass scaling {p['mass_scale']:g})",
+              f"{r[TIME] / p[TIME]:.1f}") if p else ("not reached", "-")
+        print(f"| {r['mass_scale']:g} | {100 * r['curve_rms']:.2f} % | {qs[0]} | {qs[1]} | {qs[2]} | "
+              f"{100 * r['peak_error']:+.2f} % | {ps[0]} | {ps[1]} |")
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.5))
+    for ax, key, name in ((axes[0], "curve_rms", "RMS curve difference, 0-10 mm (% of the reference peak)"),
+                          (axes[1], "peak_error", "peak difference (% of the reference peak)")):
+        for label, rs, style in (("before (intrinsic cracks, penalty 1e10 Pa, 0.005 s ramp)", before, "o--"),
+                                 ("after (extrinsic insertion, contact penalty 1e9 Pa, 0.1 s ramp)", after, "s-")):
+            t = [r[TIME] for r in rs]
+            e = [100 * abs(r[key]) for r in rs]
+            ax.plot(t, e, style, label=label)
+            for r, ti, ei in zip(rs, t, e):
+                ax.annotate(f"{r['mass_scale']:g}", (ti, ei), textcoords="offset points", xytext=(4, 3), fontsize=7)
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_xlabel(("CPU" if TIME == "cpu_time_s" else "wall") + " time, 1 thread (s)")
+        ax.set_ylabel(name, fontsize=8)
+        ax.grid(alpha=0.3, which="both")
+    axes[0].legend(fontsize=7)
+    fig.suptitle("Default wall (k25_N100_quick), mass scaling marked; reference: mass scaling 10 at half the rate",
+                 fontsize=9)
+    fig.tight_layout()
+    fig.savefig(a.out + ".png", dpi=130)
+    print(f"wrote {a.out}.csv, {a.out}.png")
+
+
+if __name__ == "__main__":
+    main()
