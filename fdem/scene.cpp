@@ -2,12 +2,75 @@
 #include "fdem/scene.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
+#include <string>
+#include <vector>
 
 #include "fdem/errors.hpp"
 #include "fdem/simulation.hpp"
+#include "mesh/gmsh_source.hpp"
+#include "mesh/macro.hpp"
+#include "mesh/quality.hpp"
+#include "mesh/wall.hpp"
 
 namespace fdem {
+
+mesh::Mesh make_mesh(const CaseSpec& spec) {
+    const GeometrySpec& g = spec.geometry;
+    mesh::Mesh m;
+    try {
+        if (g.type == "rectangle") m = mesh::mesh_rectangle(g.x0, g.y0, g.width, g.height, g.mesh_size);
+        else if (g.type == "gmsh") m = mesh::mesh_geo_file(g.file, g.size_factor);
+        else if (g.type == "msh") m = mesh::read_msh_file(g.file);
+        else if (g.type == "wall") m = mesh::generate_wall(g.wall);
+        else if (g.type == "macro") m = mesh::generate_macro_pier(g.macro);
+        else throw InputError(spec.file + ": key 'geometry.type': unsupported geometry '" + g.type + "'");
+        mesh::check_quality(m, g.min_angle);
+    } catch (const mesh::MeshError& e) {
+        throw InputError(spec.file + ":" + std::to_string(g.line) + ": [geometry]: " + e.what());
+    }
+    // Case-defined node groups, added as point groups so the topology carries them to every node copy.
+    for (const GroupSpec& gs : spec.groups) {
+        if (m.find_group(gs.name))
+            throw InputError(spec.file + ":" + std::to_string(gs.line) + ": key 'groups." + gs.name + "': the mesh already has a group of that name");
+        std::vector<int> candidates;
+        if (!gs.within.empty()) {
+            const auto* w = m.find_group(gs.within);
+            if (!w) throw InputError(spec.file + ":" + std::to_string(gs.line) + ": key 'groups." + gs.name + ".within': no group named '" + gs.within + "' in the mesh");
+            candidates = w->nodes;
+        } else {
+            for (int k = 0; k < m.n_nodes(); ++k) candidates.push_back(k);
+        }
+        mesh::PhysicalGroup grp;
+        grp.name = gs.name;
+        grp.dim = 0;
+        grp.within = gs.within;                        // copies on the within group's bodies only (topology)
+        grp.every_copy = gs.box && gs.within.empty();  // a box alone: every node copy in it
+        if (gs.box) {
+            const auto& b = *gs.box;
+            const double tol = 1e-9 * std::max({1.0, std::abs(b[0]), std::abs(b[1]), std::abs(b[2]), std::abs(b[3])});
+            for (int k : candidates)
+                if (m.xy[2 * k] >= b[0] - tol && m.xy[2 * k] <= b[2] + tol && m.xy[2 * k + 1] >= b[1] - tol && m.xy[2 * k + 1] <= b[3] + tol)
+                    grp.nodes.push_back(k);
+        } else {
+            double best = 1e300;
+            for (int k : candidates) best = std::min(best, std::hypot(m.xy[2 * k] - (*gs.nearest)[0], m.xy[2 * k + 1] - (*gs.nearest)[1]));
+            for (int k : candidates)
+                if (std::hypot(m.xy[2 * k] - (*gs.nearest)[0], m.xy[2 * k + 1] - (*gs.nearest)[1]) <= best * (1 + 1e-12) + 1e-15) grp.nodes.push_back(k);
+        }
+        if (grp.nodes.empty())
+            throw InputError(spec.file + ":" + std::to_string(gs.line) + ": key 'groups." + gs.name + "': selects no node of the mesh");
+        std::sort(grp.nodes.begin(), grp.nodes.end());
+        m.groups.push_back(std::move(grp));
+    }
+    MeshNames names;
+    names.regions = m.regions;
+    for (const auto& grp : m.groups) names.groups.push_back(grp.name), names.group_dims.push_back(grp.dim);
+    check_against_mesh(spec, names);
+    return m;
+}
+
 
 bool needs_topology(const CaseSpec& spec) {
     if (spec.geometry.split_all) return true;

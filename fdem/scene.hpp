@@ -10,6 +10,11 @@
 
 namespace fdem {
 
+// Builds the mesh the case's [geometry] describes (Gmsh API; rectangle, .geo, .msh, wall generator, macro-block
+// pier), checks its quality and adds the case-defined node groups, then checks the case's names against it. MeshError
+// becomes InputError naming the [geometry] line.
+mesh::Mesh make_mesh(const CaseSpec& spec);
+
 // Whether the case needs a topology: any interface rule that is not "tied", any material that may crack, or split = "all".
 bool needs_topology(const CaseSpec& spec);
 

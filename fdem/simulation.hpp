@@ -17,10 +17,6 @@
 
 namespace fdem {
 
-// Builds the mesh the case's [geometry] describes (Gmsh API) and checks the case's names against it.
-// (fdem/scene.hpp goes on to the topology and the model.)
-mesh::Mesh make_mesh(const CaseSpec& spec);
-
 struct RunOptions {
     std::string out_dir;     // run folder; empty: no files are written (tests)
     int threads = 0;         // 0: OpenMP's default
