@@ -1,0 +1,447 @@
+// fdem/integrator.cpp: the explicit central-difference integrator of Simulation: the time step, the tied groups of
+// extrinsic insertion and one step.
+//
+// One step (central differences with local damping, README "Physics"; [M04] ch. 4, [C79]), with x^n, v^{n-1/2} known:
+//   1. loads, gravity and prescribed velocities at time t^n (ramps, protocols, tilting);
+//   2. triangle forces f_int(x^n, v^{n-1/2}) in parallel, one 6-double record per triangle;
+//   3. node loop in parallel: gather the triangle records in CSR order, add applied loads and gravity,
+//      local damping f_d = -alpha |f| sign(v) on free DOFs ([C79]) and mass-proportional (Rayleigh alpha) damping -a m vbar
+//      (Belytschko, Liu & Moran 2000; vbar = (v^{n-1/2} + v^{n+1/2}) / 2, implicit in v, never limits the step), then
+//      v^{n+1/2} = ((1 - a dt / 2) v^{n-1/2} + dt (f + f_d) / m) / (1 + a dt / 2), or the prescribed value
+//      (reaction = m dv/dt - f),
+//      x^{n+1} = x^n + dt v^{n+1/2}.
+// Determinism: every parallel loop writes per-item results or per-block partial sums over fixed blocks of
+// kBlock items; partials are added serially in block order. No result depends on the thread count.
+// Energy: with vbar = (v^{n-1/2} + v^{n+1/2}) / 2, the kinetic energy change over a step is exactly
+// sum dt f . vbar, so external work and damping are accumulated as dt f . vbar and the balance
+// W_ext = K + E_el + D_damp + D_visc holds up to the O(dt^2) error of E_el alone.
+#include "fdem/simulation.hpp"
+
+#include <omp.h>
+#include <unistd.h>
+
+#include <csignal>
+
+#include <algorithm>
+#include <chrono>
+#include <ctime>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <iostream>
+#include <limits>
+#include <map>
+#include <set>
+#include <sstream>
+
+#include "fdem/errors.hpp"
+#include "fdem/scene.hpp"
+#include "fdem/sim_detail.hpp"
+
+namespace fdem {
+
+using namespace sim_detail;
+
+void Simulation::compute_dt() {
+    const StepLimit lim = triangle_step_limit(spec_, model_);
+    dt_limit_ = dt_triangles_ = lim.dt;
+    dt_element_ = lim.element;
+    // Contact dashpots lower the contact springs' stable step (damped central difference); the largest fraction
+    // any stage asks for sets it for the whole run, so that dt stays the same from stage to stage.
+    double xi_max = 0;
+    for (const StageSpec& st : spec_.stages)
+        if (st.contact_damping) xi_max = std::max(xi_max, *st.contact_damping);
+    xi_max_ = xi_max;
+    // Tied copies (extrinsic insertion) move as one node of their group's mass.
+    const double* mass = eff_mass_.empty() ? nullptr : eff_mass_.data();
+    const int* rep = tie_rep_.empty() ? nullptr : tie_rep_.data();
+    // The contact dashpots' coefficient beta = xi dt_contact_ comes from the copies' own masses, as without ties: on a
+    // tied group (heavier) that is a smaller fraction of critical, and it stays right for the copies an insertion
+    // unties. (From the groups' masses beta grew 1.45-fold on the default wall and a roughened wall's dashpots then
+    // booked ten times the work they did: the balance was off by 33 %.)
+    dt_contact_ = inter_.contact_stable_dt(model_);
+    dt_springs_ = inter_.stable_dt(model_, xi_max, mass, rep);
+    if (dt_springs_ < dt_limit_) dt_limit_ = dt_springs_, dt_element_ = -1;
+    dt_ = spec_.dt_override ? *spec_.dt_override : spec_.safety * dt_limit_;
+}
+
+void Simulation::build_ties() {
+    const fracture::CohesiveSystem* J = inter_.joints();
+    ties_ = J && J->dormant_count() > 0;
+    const int nn = model_.n_nodes();
+    tie_of_.clear(), tie_start_.clear(), tie_node_.clear();
+    if (!ties_) {
+        tie_F_.clear(), tie_w_.clear(), tie_inv_mass_.clear(), eff_mass_.clear(), tie_rep_.clear();
+        return;
+    }
+    std::vector<int> parent(nn);
+    for (int k = 0; k < nn; ++k) parent[k] = k;
+    auto find = [&parent](int k) {
+        while (parent[k] != k) k = parent[k] = parent[parent[k]];
+        return k;
+    };
+    for (int e = 0; e < J->size(); ++e) {
+        if (!J->dormant(e)) continue;
+        const int* n = J->element(e).n;
+        for (int k = 0; k < 2; ++k) {
+            const int a = find(n[k]), b = find(n[2 + k]);
+            if (a != b) parent[std::max(a, b)] = std::min(a, b);  // the root is the smallest member
+        }
+    }
+    // Groups of two or more, in order of their smallest member (the root), members ascending.
+    std::vector<int> count(nn, 0);
+    for (int k = 0; k < nn; ++k) ++count[find(k)];
+    tie_of_.assign(nn, -1);
+    std::vector<int> gid(nn, -1);
+    int ng = 0;
+    for (int k = 0; k < nn; ++k)
+        if (parent[k] == k && count[k] > 1) gid[k] = ng++;
+    tie_start_.assign(ng + 1, 0);
+    for (int k = 0; k < nn; ++k)
+        if (gid[find(k)] >= 0) ++tie_start_[gid[find(k)] + 1];
+    for (int g = 0; g < ng; ++g) tie_start_[g + 1] += tie_start_[g];
+    tie_node_.assign(tie_start_[ng], 0);
+    std::vector<int> fill(tie_start_.begin(), tie_start_.end() - 1);
+    for (int k = 0; k < nn; ++k) {
+        const int g = gid[find(k)];
+        if (g < 0) continue;
+        tie_of_[k] = g;
+        tie_node_[fill[g]++] = k;
+    }
+    tie_F_.assign(4 * static_cast<std::size_t>(nn), 0.0);
+    tie_w_.assign(nn, 1.0);
+    tie_inv_mass_.assign(nn, 0.0);
+    eff_mass_ = model_.mass;
+    tie_rep_.resize(nn);
+    for (int k = 0; k < nn; ++k) tie_rep_[k] = k;
+    for (int g = 0; g < ng; ++g) {
+        double M = 0;
+        for (int j = tie_start_[g]; j < tie_start_[g + 1]; ++j) M += model_.mass[tie_node_[j]];
+        for (int j = tie_start_[g]; j < tie_start_[g + 1]; ++j) {
+            const int k = tie_node_[j];
+            tie_w_[k] = model_.mass[k] / M;
+            tie_inv_mass_[k] = 1.0 / M;
+            eff_mass_[k] = M;
+            tie_rep_[k] = tie_node_[tie_start_[g]];
+        }
+    }
+    if (stage_ >= 0) check_ties();
+}
+
+void Simulation::reduce_dt_after_insertion() {
+    if (spec_.dt_override) return;  // numerics.dt: the user's step
+    const double* mass = eff_mass_.empty() ? nullptr : eff_mass_.data();
+    const int* rep = tie_rep_.empty() ? nullptr : tie_rep_.data();
+    // The contact dashpots keep their coefficient beta = xi dt_contact_ of the copies' masses (compute_dt): at most
+    // xi of critical on any node, so xi bounds the damped step.
+    const double springs = inter_.stable_dt(model_, xi_max_, mass, rep);
+    const double dt = spec_.safety * std::min(dt_triangles_, springs);
+    if (!(dt < dt_)) return;
+    dt_ = dt;
+    if (springs < dt_limit_) dt_limit_ = springs, dt_springs_ = springs, dt_element_ = -1;
+    if (dt_ < 0.9 * dt_logged_) {
+        dt_logged_ = dt_;
+        log("time step: " + sci(dt_) + " s from t = " + sci(time_) + " s (cracks inserted, nodes untied)");
+    }
+}
+
+void Simulation::check_ties() const {
+    if (!ties_) return;
+    const int ng = static_cast<int>(tie_start_.size()) - 1;
+    for (int g = 0; g < ng; ++g) {
+        const int k0 = tie_node_[tie_start_[g]];
+        for (int j = tie_start_[g] + 1; j < tie_start_[g + 1]; ++j) {
+            const int k = tie_node_[j];
+            for (int c = 0; c < 2; ++c) {
+                const int d0 = 2 * k0 + c, d = 2 * k + c;
+                if (dof_kind_[d] == dof_kind_[d0] && dof_owner_[d] == dof_owner_[d0]) continue;
+                const int owner = dof_owner_[d] >= 0 ? dof_owner_[d] : dof_owner_[d0];
+                const std::string grp = owner >= 0 ? supports_[owner].group : std::string("?");
+                throw InputError(spec_.file + ": stage " + std::to_string(stage_ + 1) + ": the support of group '" + grp +
+                                 "' holds only some of the copies of the node at (" + sci(model_.X[2 * k], 6) + ", " +
+                                 sci(model_.X[2 * k + 1], 6) + ") m, which move as one node until a crack is inserted "
+                                 "there (insertion = \"extrinsic\"); expected a group that takes every copy (a box, "
+                                 "or a curve or surface of the whole unit)");
+            }
+        }
+    }
+}
+
+void Simulation::step() {
+    const double w0 = omp_get_wtime();
+    const double dt_before = dt_;
+    const int nt = model_.n_triangles(), nn = model_.n_nodes();
+    const TriangleRef* tris = model_.tris.data();
+    const MaterialConst* mats = model_.mat.data();
+    const double* x = model_.x.data();
+    const double* v = model_.v.data();
+    double* tf = tf_.data();
+    // Extrinsic insertion: the triangles' stresses of this step for the check below (ties only).
+    if (ties_) tri_sigma_.resize(3 * static_cast<std::size_t>(nt));
+    double* tsig = ties_ ? tri_sigma_.data() : nullptr;
+
+    // 2. Triangle forces; per block: viscous power and the first inverted triangle.
+    const double w1 = omp_get_wtime();
+    const int ntb = (nt + kBlock - 1) / kBlock;
+#pragma omp parallel for schedule(static) if (ntb > 1)
+    for (int b = 0; b < ntb; ++b) {
+        double pv = 0;
+        int bad = -1;
+        const int e1 = std::min(nt, (b + 1) * kBlock);
+        for (int e = b * kBlock; e < e1; ++e) {
+            double p;
+            const int cs = crush_.slot(e);  // crushing triangles: fdem/plasticity.hpp (state updated per triangle)
+            double* sig = tsig ? tsig + 3 * static_cast<std::size_t>(e) : nullptr;
+            const double J = cs < 0 ? triangle_forces(tris[e], mats[tris[e].mat], x, v, tf + 6 * static_cast<std::size_t>(e), p, sig)
+                                    : crush_.forces(cs, tris[e], x, v, tf + 6 * static_cast<std::size_t>(e), p);
+            if (sig && cs >= 0) triangle_stress(tris[e], mats[tris[e].mat], x, sig);  // elastic stress (not extrinsic)
+            if (!(J > 0) && bad < 0) bad = e;
+            pv += p;
+        }
+        block_a_[b] = pv;
+        block_bad_[b] = bad;
+    }
+    double visc_power = 0;
+    for (int b = 0; b < ntb; ++b) {
+        visc_power += block_a_[b];
+        if (block_bad_[b] >= 0) {
+            const int e = block_bad_[b];
+            const TriangleRef& t = tris[e];
+            const double cx = (x[2 * t.n[0]] + x[2 * t.n[1]] + x[2 * t.n[2]]) / 3, cy = (x[2 * t.n[0] + 1] + x[2 * t.n[1] + 1] + x[2 * t.n[2] + 1]) / 3;
+            fail("triangle " + std::to_string(e) + " (region '" + model_.mesh.regions[model_.mesh.tri_region[e]] +
+                 "') inverted (J <= 0) at (" + sci(cx, 6) + ", " + sci(cy, 6) + ") m");
+        }
+    }
+
+    const double wi = omp_get_wtime();
+    // Extrinsic insertion: dormant edges whose traction reached the strength get their cohesive element before this
+    // step's joint forces, their copies are untied, and the step shrinks if the lighter nodes need it. The velocity
+    // update of a step that changed it spans the mean of the two steps (central difference with a variable step,
+    // v^{n+1/2} = v^{n-1/2} + (dt^{n-1/2} + dt^{n+1/2}) / 2 a^n; Belytschko, Liu & Moran, Nonlinear Finite Elements
+    // for Continua and Structures, 2000, §6.2).
+    if (ties_ && inter_.insert_cracks(x, tsig) > 0) {
+        build_ties();
+        reduce_dt_after_insertion();
+    }
+    const double dt = dt_;
+    const double dtv = 0.5 * (dt_before + dt);
+    apply_time_dependent(time_);
+
+    // Joint and contact forces, added to f_mod_ in a fixed order by their modules. The contact energy is only
+    // evaluated on the steps whose energies are reported or checked.
+    inter_.want_energy(history_due(time_ + dt, steps_ + 1) || (steps_ + 1) % 1000 == 0 || energy_every_step_);
+    const double w2 = omp_get_wtime();
+    inter_.add_forces(x, v, dt, f_mod_.data());
+    const double w3 = omp_get_wtime();
+
+    // Rigid groups first: one velocity per group and component from the resultant of its nodes' forces,
+    // v^{n+1/2} = v^{n-1/2} + dt (F + F_d) / M with F = sum of the nodal forces, M = sum of the nodal masses and the
+    // [C79] local damping F_d = -alpha |F| sign(v) on the resultant. The node loop then treats those DOFs as
+    // prescribed: their reactions redistribute the forces inside the group and sum to F_d, which the loop books as
+    // work; rigid_damp_ moves that share from work to damping after the loop. Serial, in support and node order.
+    double rigid_damp = 0, rigid_damp_half = 0;  // J: dt F_d v_bar and dt/2 F_d v^{n+1/2}
+    double rigid_mass = 0, rigid_mass_half = 0;  // J: the same for the mass-proportional damping force -a M v_bar
+    // Filtered local damping: each DOF's moving mean vref += wf (v - vref), the exact one-step weight of an
+    // exponential mean over tau for a velocity held over the step.
+    const double wf = tau_ld_ > 0 ? -std::expm1(-dt / tau_ld_) : 0.0;
+    double* vref = tau_ld_ > 0 ? v_ref_.data() : nullptr;
+    const double hm = 0.5 * dtv * beta_mass_;
+    for (std::size_t id = 0; id < supports_.size(); ++id) {
+        ActiveSupport& s = supports_[id];
+        if (s.mode != DofMode::rigid) continue;
+        const int c = s.comp;
+        double F = 0, M = 0;
+        for (int k : s.nodes) {
+            const int d = 2 * k + c;
+            if (dof_owner_[d] != static_cast<int>(id)) continue;
+            double f = f_mod_[d] + f_ext_[d] + model_.grav_mass[k] * applied_gravity_[c];
+            for (int j = model_.inc_ptr[k]; j < model_.inc_ptr[k + 1]; ++j) f += tf[2 * static_cast<std::size_t>(model_.inc_idx[j]) + c];
+            F += f, M += model_.mass[k];
+        }
+        if (!(M > 0)) continue;
+        const double vold = s.v_common;
+        const double vrel = tau_ld_ > 0 ? vold - s.v_ref : vold;
+        const double Fd = vrel > 0 ? -alpha_ * std::abs(F) : vrel < 0 ? alpha_ * std::abs(F) : 0.0;
+        const double vnew = ((1 - hm) * vold + dtv * (F + Fd) / M) / (1 + hm);
+        const double Fm = -beta_mass_ * M * 0.5 * (vold + vnew);
+        rigid_damp += dt * Fd * 0.5 * (vold + vnew);
+        rigid_damp_half += 0.5 * dt * Fd * vnew;
+        rigid_mass += dt * Fm * 0.5 * (vold + vnew);
+        rigid_mass_half += 0.5 * dt * Fm * vnew;
+        s.v_common = vnew;
+        if (tau_ld_ > 0) s.v_ref += wf * (vnew - s.v_ref);
+        for (int k : s.nodes)
+            if (dof_owner_[2 * k + c] == static_cast<int>(id)) dof_vel_[2 * k + c] = vnew;
+    }
+
+    // Tied copies (extrinsic insertion): each group's internal and external force sums, so that every member
+    // takes the same acceleration F / M (the node loop below) and books its mass share m / M of the work.
+    if (ties_) {
+        const int ng = static_cast<int>(tie_start_.size()) - 1;
+        const double* fm = f_mod_.data();
+        const double gx = applied_gravity_[0], gy = applied_gravity_[1];
+#pragma omp parallel for schedule(static) if (ng > 2048)
+        for (int g = 0; g < ng; ++g) {
+            double S[4] = {0, 0, 0, 0};
+            for (int j = tie_start_[g]; j < tie_start_[g + 1]; ++j) {
+                const int k = tie_node_[j];
+                S[0] += fm[2 * k], S[1] += fm[2 * k + 1];
+                for (int i = model_.inc_ptr[k]; i < model_.inc_ptr[k + 1]; ++i) {
+                    const double* r = tf + 2 * static_cast<std::size_t>(model_.inc_idx[i]);
+                    S[0] += r[0], S[1] += r[1];
+                }
+                S[2] += f_ext_[2 * k] + model_.grav_mass[k] * gx;
+                S[3] += f_ext_[2 * k + 1] + model_.grav_mass[k] * gy;
+            }
+            for (int j = tie_start_[g]; j < tie_start_[g + 1]; ++j)
+                for (int c = 0; c < 4; ++c) tie_F_[4 * static_cast<std::size_t>(tie_node_[j]) + c] = S[c];
+        }
+    }
+    const int* tie_of = ties_ ? tie_of_.data() : nullptr;
+    const double* tieF = ties_ ? tie_F_.data() : nullptr;
+    const double* tie_w = ties_ ? tie_w_.data() : nullptr;
+    const double* tie_im = ties_ ? tie_inv_mass_.data() : nullptr;
+
+    // 3. Node loop.
+    const int nnb = (nn + kBlock - 1) / kBlock;
+    const double alpha = alpha_;
+    const double beta_mass = beta_mass_;
+    const double gx = applied_gravity_[0], gy = applied_gravity_[1];
+    const int* inc_ptr = model_.inc_ptr.data();
+    const int* inc_idx = model_.inc_idx.data();
+    const double* mass = model_.mass.data();
+    const double* gmass = model_.grav_mass.data();
+    const double* inv_mass = model_.inv_mass.data();
+    double* xw = model_.x.data();
+    double* vw = model_.v.data();
+    const double* fext = f_ext_.data();
+    double* fmod = f_mod_.data();
+    const uint8_t* kind = dof_kind_.data();
+    const double* vpres = dof_vel_.data();
+    double* reac = reaction_.data();
+#pragma omp parallel for schedule(static) if (nnb > 1)
+    for (int b = 0; b < nnb; ++b) {
+        double dW = 0, dD = 0, unb = 0, scale = 0, K = 0, cW = 0, cD = 0, dM = 0, cM = 0;
+        int bad = -1;
+        const int k1 = std::min(nn, (b + 1) * kBlock);
+        for (int k = b * kBlock; k < k1; ++k) {
+            double fi0 = fmod[2 * k], fi1 = fmod[2 * k + 1];
+            fmod[2 * k] = 0, fmod[2 * k + 1] = 0;
+            for (int j = inc_ptr[k]; j < inc_ptr[k + 1]; ++j) {
+                const double* r = tf + 2 * static_cast<std::size_t>(inc_idx[j]);
+                fi0 += r[0], fi1 += r[1];
+            }
+            double fe[2] = {fext[2 * k] + gmass[k] * gx, fext[2 * k + 1] + gmass[k] * gy};
+            double fin[2] = {fi0, fi1};
+            // A tied copy: the scale takes its own forces; its motion the group's resultant over the group's mass,
+            // the same bits for every member; its books the share w = m / M of the group's forces.
+            const double sc[2] = {std::abs(fin[0]) + std::abs(fe[0]), std::abs(fin[1]) + std::abs(fe[1])};
+            double w = 1.0, im = inv_mass[k];
+            if (tie_of && tie_of[k] >= 0) {
+                const double* S = tieF + 4 * static_cast<std::size_t>(k);
+                fin[0] = S[0], fin[1] = S[1], fe[0] = S[2], fe[1] = S[3];
+                w = tie_w[k], im = tie_im[k];
+            }
+            for (int c = 0; c < 2; ++c) {
+                const int d = 2 * k + c;
+                const double f = fin[c] + fe[c];
+                const double vold = vw[d];
+                double vnew;
+                if (kind[d] == 0) {
+                    // [C79] local damping: -alpha |f| sign(v), or sign(v - vref) with the filter.
+                    const double vrel = vref ? vold - vref[d] : vold;
+                    const double fd = vrel > 0 ? -alpha * std::abs(f) : vrel < 0 ? alpha * std::abs(f) : 0.0;
+                    vnew = ((1 - hm) * vold + dtv * (f + fd) * im) / (1 + hm);
+                    const double vbar = 0.5 * (vold + vnew);
+                    dW += w * dt * fe[c] * vbar;
+                    dD -= w * dt * fd * vbar;
+                    cW += w * 0.5 * dt * fe[c] * vnew;
+                    cD -= w * 0.5 * dt * fd * vnew;
+                    if (hm > 0) {  // -a m vbar: work dt (-a m vbar) vbar, and its share up to t^n
+                        const double fm = -beta_mass * mass[k] * vbar;
+                        dM -= dt * fm * vbar;
+                        cM -= 0.5 * dt * fm * vnew;
+                    }
+                    unb += w * std::abs(f);
+                    scale += sc[c];
+                } else {
+                    vnew = kind[d] == 1 ? 0.0 : vpres[d];
+                    const double R = mass[k] * (vnew - vold) / dtv - w * f;
+                    reac[d] = R;
+                    dW += dt * (w * fe[c] + R) * 0.5 * (vold + vnew);
+                    cW += 0.5 * dt * (w * fe[c] + R) * vnew;
+                    scale += sc[c];
+                }
+                K += 0.5 * mass[k] * vold * vnew;
+                if (vref) vref[d] += wf * (vnew - vref[d]);
+                if (!std::isfinite(vnew) && bad < 0) bad = k;
+                vw[d] = vnew;
+                xw[d] += dt * vnew;
+            }
+        }
+        block_a_[b] = dW, block_b_[b] = dD, block_c_[b] = unb, block_d_[b] = scale;
+        block_e_[b] = K, block_f_[b] = cW, block_g_[b] = cD, block_h_[b] = dM, block_i_[b] = cM;
+        block_bad_[b] = bad;
+    }
+    double dW = 0, dD = 0, unb = 0, scale = 0, dM = 0;
+    kinetic_n_ = 0, work_half_ = 0, damp_half_ = 0, mass_half_ = 0;
+    for (int b = 0; b < nnb; ++b) {
+        dW += block_a_[b], dD += block_b_[b], unb += block_c_[b], scale += block_d_[b];
+        kinetic_n_ += block_e_[b], work_half_ += block_f_[b], damp_half_ += block_g_[b];
+        dM += block_h_[b], mass_half_ += block_i_[b];
+        if (block_bad_[b] >= 0) {
+            const int k = block_bad_[b];
+            fail("node " + std::to_string(k) + " has a non-finite velocity (NaN/inf) near (" + sci(model_.X[2 * k], 6) + ", " +
+                 sci(model_.X[2 * k + 1], 6) + ") m");
+        }
+    }
+    dW -= rigid_damp, dD -= rigid_damp;
+    work_half_ -= rigid_damp_half, damp_half_ -= rigid_damp_half;
+    // The rigid groups' reactions carried their mass damping force too: from work to damping, like F_d.
+    dW -= rigid_mass, dM -= rigid_mass;
+    work_half_ -= rigid_mass_half, mass_half_ -= rigid_mass_half;
+    D_mass_ += dM;
+    W_ext_ += dW;
+    D_damp_ += dD;
+    D_visc_ += dt * visc_power;
+    unbalanced_ratio_ = scale > 0 ? unb / scale : 0;
+    const double w4 = omp_get_wtime();
+    step_times_.triangles += wi - w1;
+    step_times_.interactions += w3 - w2;
+    step_times_.integration += w4 - w3;
+    step_times_.other += (w1 - w0) + (w2 - wi);  // with the insertion check and the loads of the step
+    update_servos();
+    time_ += dt;
+    tilt_deg_ += tilt_rate_ * dt;
+    ++steps_;
+    if (inter_.has_joints()) {
+        const int broke = inter_.after_step(time_, control_displacement(), model_.x.data());
+        broken_total_ += broke;
+    }
+
+    // Outputs.
+    if (!opt_.out_dir.empty()) {
+        if (history_due(time_, steps_)) {
+            const double hi = history_interval();
+            record_dry_joints();
+            write_history_row();
+            if (hi > 0) next_history_ += hi * std::max(1.0, std::floor((time_ - next_history_) / hi) + 1);
+        }
+        if (time_ + 1e-9 * dt >= next_snapshot_) {
+            write_snapshot();
+            const double si = snapshot_interval();
+            next_snapshot_ += si * std::max(1.0, std::floor((time_ - next_snapshot_) / si) + 1);
+        }
+        if ((steps_ & 255) == 0) {
+            const double now = wall_clock();
+            if (now - last_flush_ > 5) flush_files();
+        }
+    }
+    if (opt_.progress && (steps_ & 255) == 0) progress_line(false);
+    if (opt_.progress_log && (steps_ & 255) == 0) progress_log_line();
+    if (steps_ % 1000 == 0) check_energy(energies());
+    step_times_.other += omp_get_wtime() - w4;
+}
+
+}  // namespace fdem
