@@ -36,17 +36,12 @@ using spec_check::num;
 std::vector<std::string> check(const MacroPierSpec& s) {
     std::vector<std::string> bad;
     const spec_check::Lengths len{bad};
-    auto need_positive = [&](double v, const char* key) { len.positive(v, key); };
-    auto need_nonnegative = [&](double v, const char* key) { len.nonnegative(v, key); };
-    need_positive(s.length, "length");
-    need_positive(s.height, "height");
-    need_positive(s.mesh_size, "mesh_size");
-    need_nonnegative(s.mesh_size_beam, "mesh_size_beam");
-    need_nonnegative(s.mesh_size_base, "mesh_size_base");
-    need_nonnegative(s.beam_height, "beam_height");
-    need_nonnegative(s.beam_overhang, "beam_overhang");
-    need_nonnegative(s.base_height, "base_height");
-    need_nonnegative(s.base_overhang, "base_overhang");
+    len.positive(s.length, "length");
+    len.positive(s.height, "height");
+    len.positive(s.mesh_size, "mesh_size");
+    spec_check::beam_and_sizes(len, s);
+    len.nonnegative(s.base_height, "base_height");
+    len.nonnegative(s.base_overhang, "base_overhang");
     if (!(s.texture_angle > 0 && s.texture_angle < 90))
         bad.push_back("geometry.texture_angle must be in (0, 90) deg, got " + num(s.texture_angle));
     if (!(s.horizontal_joint > 0 && s.horizontal_joint < 0.5 * s.length))

@@ -27,4 +27,14 @@ struct Lengths {
     }
 };
 
+// The keys of the beam on top and the mesh sizes of beam and base, which the wall and the macro pier share, in the
+// order both report them: mesh_size_beam, mesh_size_base, beam_height, beam_overhang (each >= 0; 0 = default / none).
+template <class Spec>
+void beam_and_sizes(const Lengths& len, const Spec& s) {
+    len.nonnegative(s.mesh_size_beam, "mesh_size_beam");
+    len.nonnegative(s.mesh_size_base, "mesh_size_base");
+    len.nonnegative(s.beam_height, "beam_height");
+    len.nonnegative(s.beam_overhang, "beam_overhang");
+}
+
 }  // namespace fdem::mesh::spec_check

@@ -87,29 +87,24 @@ Extent extent_of(const WallSpec& s) {
 std::vector<std::string> check(const WallSpec& s) {
     std::vector<std::string> bad;
     const spec_check::Lengths len{bad};
-    auto need_positive = [&](double v, const char* key) { len.positive(v, key); };
-    auto need_nonnegative = [&](double v, const char* key) { len.nonnegative(v, key); };
-    need_positive(s.mesh_size, "mesh_size");
-    need_nonnegative(s.mesh_size_beam, "mesh_size_beam");
-    need_nonnegative(s.mesh_size_base, "mesh_size_base");
-    need_nonnegative(s.beam_height, "beam_height");
-    need_nonnegative(s.beam_overhang, "beam_overhang");
-    need_nonnegative(s.base_overhang, "base_overhang");
+    len.positive(s.mesh_size, "mesh_size");
+    spec_check::beam_and_sizes(len, s);
+    len.nonnegative(s.base_overhang, "base_overhang");
     if (s.joint != "dry" && s.joint != "mortar")
         bad.push_back("geometry.joint must be \"dry\" or \"mortar\", got \"" + s.joint + "\"");
-    if (s.joint == "mortar") need_positive(s.joint_thickness, "joint_thickness");
+    if (s.joint == "mortar") len.positive(s.joint_thickness, "joint_thickness");
     if (s.base != "none" && s.base != "fixed" && s.base != "slab")
         bad.push_back("geometry.base must be \"none\", \"fixed\" or \"slab\", got \"" + s.base + "\"");
-    if (s.base == "slab") need_positive(s.base_height, "base_height");
+    if (s.base == "slab") len.positive(s.base_height, "base_height");
     if (s.unit_cracks != "anywhere" && s.unit_cracks != "middle")
         bad.push_back("geometry.unit_cracks must be \"anywhere\" or \"middle\", got \"" + s.unit_cracks + "\"");
     if (s.unit_cracks == "middle" && !s.stones.empty())
         bad.push_back("geometry.unit_cracks = \"middle\" needs generated courses, not stones");
 
     if (s.stones.empty()) {
-        need_positive(s.length, "length");
-        need_positive(s.unit_length, "unit_length");
-        need_positive(s.unit_height, "unit_height");
+        len.positive(s.length, "length");
+        len.positive(s.unit_length, "unit_length");
+        len.positive(s.unit_height, "unit_height");
         if (s.courses < 0) bad.push_back("geometry.courses must be >= 0, got " + std::to_string(s.courses));
         if (s.courses == 0 && !(s.height > 0))
             bad.push_back("geometry: give the wall height or the number of courses");
