@@ -5,9 +5,20 @@ each at 0.10 m (the macro side of the speed-against-error comparison with the mi
 
 /usr/bin/python3 cases/jrc_ispra/make_cases.py
 """
+import csv
 import os
 
 HERE = os.path.dirname(os.path.abspath(__file__))
+
+
+def read_reference():
+    """The piers' test data (cases/README.md §D) and seeds/000's M-DEM numbers, by pier: reference.csv beside this
+    file, shared with make_micro.py and summarise.py."""
+    with open(os.path.join(HERE, "reference.csv"), newline="") as f:
+        return {r["pier"]: r for r in csv.DictReader(f)}
+
+
+REF = read_reference()
 
 RATE = 0.01          # m/s, loading rate (monotonic and every leg of the cycles)
 MASS_SCALE = 1       # no mass scaling: the pier's own vibration, excited at every turn of the drive, must stay well
@@ -22,13 +33,15 @@ CORNER = 0.01        # s, corner smoothing of the protocol: the velocity turns o
 N_TOP = 150000.0     # N, sigma_0 = 0.6 MPa over 1.00 x 0.25 m
 
 PIERS = {
-    "LW": dict(height=1.35, peak=84240.0, k_el=90.36, label="low wall, 1.35 m: diagonal shear",
+    "LW": dict(height=float(REF["LW"]["height_m"]), peak=round(1e3 * float(REF["LW"]["experiment_kN"]), 6),
+               k_el=float(REF["LW"]["k_el_kN_per_mm"]), label="low wall, 1.35 m: diagonal shear",
                # (amplitude m, cycles): two cycles per amplitude, three in the second-to-last phase, then a last
                # cycle at about 8 mm (0.60 % drift), as seeds/000 describes the LW protocol (its figure is lost)
                protocol=[(0.0005, 2), (0.001, 2), (0.002, 2), (0.003, 2), (0.004, 2), (0.005, 2), (0.006, 2),
                          (0.007, 3), (0.008, 1)],
                mono_until=0.008),
-    "HW": dict(height=2.00, peak=72180.0, k_el=43.91, label="high wall, 2.00 m: flexure and rocking",
+    "HW": dict(height=float(REF["HW"]["height_m"]), peak=round(1e3 * float(REF["HW"]["experiment_kN"]), 6),
+               k_el=float(REF["HW"]["k_el_kN_per_mm"]), label="high wall, 2.00 m: flexure and rocking",
                # two cycles per amplitude up to about 13 mm (0.65 % drift), seeds/000 (its figure is lost)
                protocol=[(0.0005, 2), (0.001, 2), (0.002, 2), (0.003, 2), (0.004, 2), (0.006, 2), (0.008, 2),
                          (0.010, 2), (0.012, 2), (0.013, 2)],

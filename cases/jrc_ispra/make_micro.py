@@ -8,6 +8,7 @@ micro-model as the Vermeltfoort walls (cases/vermeltfoort/make_cases.py), monoto
 """
 import math
 import os
+import sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 
@@ -17,11 +18,17 @@ THICKNESS = 0.25       # m
 N = 150.0e3            # N, sigma_0 0.6 MPa x 1.00 x 0.25 m
 UNIT_L = 0.25          # m, stretcher length seen in the elevation
 UNIT_H = 0.055         # m
+sys.path.insert(0, HERE)
+from make_cases import read_reference  # noqa: E402  (the piers' test data: reference.csv)
+
+REF = read_reference()
 PIERS = {
     # name: height (m), courses, measured peak (N), measured stiffness (kN/mm), failure, end of the pushover (m)
-    "LW": dict(height=1.35, courses=21, peak=84.24e3, stiffness=90.36, until=0.008, failure="diagonal shear"),
-    "HW": dict(height=2.00, courses=31, peak=72.18e3, stiffness=43.91, until=0.013,
-               failure="flexure and rocking (bed joints of the top and bottom courses open)"),
+    name: dict(height=float(REF[name]["height_m"]), courses=courses, peak=round(1e3 * float(REF[name]["experiment_kN"]), 6),
+               stiffness=float(REF[name]["k_el_kN_per_mm"]), until=until, failure=failure)
+    for name, courses, until, failure in (
+        ("LW", 21, 0.008, "diagonal shear"),
+        ("HW", 31, 0.013, "flexure and rocking (bed joints of the top and bottom courses open)"))
 }
 
 # --- masonry (seeds/000 Table 1 as read in macro_LW_EL010.toml) ---

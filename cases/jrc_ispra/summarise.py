@@ -21,13 +21,16 @@ import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, "..", "..", "tools"))
+sys.path.insert(0, HERE)
 
-TEST = {"LW": dict(peak=84.24, k_el=90.36, drift=0.60, E_h=2251.61, height=1.35),
-        "HW": dict(peak=72.18, k_el=43.91, drift=0.65, E_h=1768.55, height=2.00)}
-# seeds/000, results table (Fig. 3(e)): BS_p kN, k_el kN/mm, drift %, E_h J of the M-DEM runs
-MDEM = {("LW", "EL005"): (86.77, 91.76, 0.63, 2678.37), ("LW", "EL010"): (91.34, 89.56, 0.71, 2871.22),
-        ("LW", "EL020"): (83.82, 93.47, 0.65, 2134.23), ("HW", "EL005"): (69.29, 44.53, 0.67, 581.76),
-        ("HW", "EL010"): (70.62, 47.48, 0.69, 567.23), ("HW", "EL020"): (76.60, 45.11, 0.78, 785.37)}
+from make_cases import read_reference  # noqa: E402  (reference.csv: the test and seeds/000's M-DEM numbers)
+
+_REF = read_reference()
+TEST = {p: dict(peak=float(r["experiment_kN"]), k_el=float(r["k_el_kN_per_mm"]), drift=float(r["drift_pct"]),
+                E_h=float(r["E_h_J"]), height=float(r["height_m"])) for p, r in _REF.items()}
+# seeds/000, results table (Fig. 3(e)): BS_p kN, k_el kN/mm, E_h J of the M-DEM runs
+MDEM = {(p, el): (float(r[f"mdem_{el}_kN"]), float(r[f"mdem_k_el_{el}"]), float(r[f"mdem_E_h_{el}_J"]))
+        for p, r in _REF.items() for el in ("EL005", "EL010", "EL020")}
 
 
 def read(run):
@@ -78,7 +81,7 @@ def main():
         m = MDEM.get((pier, el))
         table.append(dict(run=name, pier=pier, peak=peak, peak_err=100 * (peak / t["peak"] - 1), k_el=k_el,
                           k_el_err=100 * (k_el / t["k_el"] - 1), E_h=E_h, drift=100 * umax / 1e3 / t["height"],
-                          mdem_peak=m[0] if m else "", mdem_k_el=m[1] if m else "", mdem_E_h=m[3] if m else "",
+                          mdem_peak=m[0] if m else "", mdem_k_el=m[1] if m else "", mdem_E_h=m[2] if m else "",
                           wall_time_s=s.get("wall_time_s"), cpu_time_s=s.get("cpu_time_s", float("nan")),
                           steps=s.get("steps"), triangles=s.get("n_triangles")))
         curves.append((name, pier, u, H))

@@ -6,12 +6,11 @@ as two fronts (wall time against the curve's RMS difference, and against the pea
 /usr/bin/python3 cases/lourenco2005/plot_front.py BEFORE_STUDY AFTER_STUDY [--out PREFIX]
 
 Each STUDY is a folder written by `fdem-tools study speed ... --reference-run REF --error curve_rms` (its
-speed_study.csv and runs/). Writes PREFIX.csv and PREFIX.png (default study_front_k25_N100_quick) and prints a
+speed_study.csv, with the runs' steps and wall and CPU times). Writes PREFIX.csv and PREFIX.png (default study_front_k25_N100_quick) and prints a
 markdown table and, for every run before, the least time after that reaches its curve RMS and its peak error.
 """
 import argparse
 import csv
-import json
 import os
 
 
@@ -20,9 +19,8 @@ def load(study, label):
     for r in csv.DictReader(open(os.path.join(study, "speed_study.csv"))):
         if r["status"] != "completed":
             continue
-        s = json.load(open(os.path.join(study, "runs", r["run"], "summary.json")))
-        rows.append(dict(settings=label, mass_scale=float(r["numerics.mass_scale"]), steps=int(s["steps"]),
-                         wall_time_s=float(r["wall_time_s"]), cpu_time_s=float(s.get("cpu_time_s") or "nan"), curve_rms=float(r["curve_rms"]),
+        rows.append(dict(settings=label, mass_scale=float(r["numerics.mass_scale"]), steps=int(r["steps"]),
+                         wall_time_s=float(r["wall_time_s"]), cpu_time_s=float(r["cpu_time_s"] or "nan"), curve_rms=float(r["curve_rms"]),
                          curve_max=float(r["curve_max"]), peak_error=float(r["peak_error"]),
                          K_e_error=float(r["K_e_error"]), ductility_error=float(r["ductility_error"])))
     return sorted(rows, key=lambda r: -r["mass_scale"])
