@@ -152,7 +152,7 @@ void ContactSystem::release_vertex_of(int node) {
     r = 1;
 }
 
-double ContactSystem::stable_dt(const double* x, const double* node_mass) const {
+std::vector<double> ContactSystem::triangle_stiffness(const double* x) const {
     // Per material: the stiffest stiffness-law slope (Pa/m) and the largest penalty (Pa) it can meet.
     std::vector<double> k_max(n_mat_, 0.0), p_max(n_mat_, 0.0);
     auto account = [&](int m, int li) {
@@ -167,23 +167,42 @@ double ContactSystem::stable_dt(const double* x, const double* node_mass) const 
         account(a, crack_law_[a]);
         for (int b = 0; b < n_mat_; ++b) account(a, interface_law_[a * n_mat_ + b]);
     }
-    double dt = std::numeric_limits<double>::infinity();
+    std::vector<double> k(n_tri_, 0.0);
     for (int t = 0; t < n_tri_; ++t) {
         double T[6];
         gather(x, tri_ + 3 * t, T);
         const double h = smallest_altitude(T);
-        double lmax = 0.0, m = std::numeric_limits<double>::infinity();
-        for (int k = 0; k < 3; ++k) {
-            const int j = (k + 1) % 3;
-            lmax = std::max(lmax, std::hypot(T[2 * j] - T[2 * k], T[2 * j + 1] - T[2 * k + 1]));
-            m = std::min(m, node_mass[tri_[3 * t + k]]);
+        double lmax = 0.0;
+        for (int i = 0; i < 3; ++i) {
+            const int j = (i + 1) % 3;
+            lmax = std::max(lmax, std::hypot(T[2 * j] - T[2 * i], T[2 * j + 1] - T[2 * i + 1]));
         }
         // Penalty law: pressure/overlap slope 3 p (1/H_a + 1/H_b) <= 6 p / H ([MA00] phi = 3 min L_k).
         const double slope = std::max(k_max[material_[t]], 6.0 * p_max[material_[t]] / h);  // Pa/m
-        const double k = slope * thickness_ * lmax;                                          // N/m
-        if (k > 0.0) dt = std::min(dt, 2.0 * std::sqrt(m / k));
+        k[t] = slope * thickness_ * lmax;                                                    // N/m
+    }
+    return k;
+}
+
+double ContactSystem::stable_dt(const double* x, const double* node_mass) const {
+    const std::vector<double> k = triangle_stiffness(x);
+    double dt = std::numeric_limits<double>::infinity();
+    for (int t = 0; t < n_tri_; ++t) {
+        double m = std::numeric_limits<double>::infinity();
+        for (int i = 0; i < 3; ++i) m = std::min(m, node_mass[tri_[3 * t + i]]);
+        if (k[t] > 0.0) dt = std::min(dt, 2.0 * std::sqrt(m / k[t]));
     }
     return dt;
+}
+
+void ContactSystem::required_mass(const double* x, double dt, double* need) const {
+    const std::vector<double> k = triangle_stiffness(x);
+    const double q = 0.25 * dt * dt;  // 2 sqrt(m / k) >= dt  <=>  m >= k dt^2 / 4
+    for (int t = 0; t < n_tri_; ++t)
+        for (int i = 0; i < 3; ++i) {
+            double& m = need[tri_[3 * t + i]];
+            m = std::max(m, k[t] * q);
+        }
 }
 
 double ContactSystem::effective_buffer(const double* x) const {

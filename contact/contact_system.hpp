@@ -84,6 +84,10 @@ public:
     // 2 sqrt(m / k), m the lightest node mass of the triangle (kg), k = (stiffest normal or tangential slope of
     // the laws its material can meet, Pa/m) * t * (longest edge). x: positions (m) for the element sizes.
     double stable_dt(const double* x, const double* node_mass) const;
+    // The same bound solved for the mass (per-node mass scaling, [numerics] mass_scaling = "per_node"): every node
+    // of a triangle that can touch needs m >= k dt^2 / 4 for its springs to be stable at step dt; need[node] (kg) is
+    // raised to that, never lowered.
+    void required_mass(const double* x, double dt, double* need) const;
 
     // One step: re-detects when 2 * (sum of dt max|v| since the last detection) would exceed the buffer, then
     // evaluates all pairs and adds the contact forces (N) to f. dt in s.
@@ -127,6 +131,8 @@ public:
     void load_state(StateReader& r);
 
 private:
+    // k of stable_dt per triangle (N/m): the stiffest slope its material can meet times t times its longest edge.
+    std::vector<double> triangle_stiffness(const double* x) const;
     void detect(const double* x);
     int law_of(int ta, int tb) const;
 

@@ -927,6 +927,10 @@ CaseSpec load_case(const std::string& path, const std::vector<std::string>& over
         if (auto dt = r.number("dt", false, "a fixed time step > 0 in s", positive)) spec.dt_override = dt;
         spec.mass_scale = r.number("mass_scale", false, "an inertial mass multiplier in [1, 1e12] (quasi-static density scaling)",
                                    [](double v) { return v >= 1 && v <= 1e12; }).value_or(1.0);
+        spec.per_node_mass = r.string("mass_scaling", false,
+                                      "\"uniform\" (every mass times mass_scale) or \"per_node\" (and nodes whose springs "
+                                      "need it heavier, for the triangles' time step)",
+                                      {"uniform", "per_node"}).value_or("uniform") == "per_node";
         r.finish();
     }
 

@@ -43,15 +43,71 @@ namespace fdem {
 
 using namespace sim_detail;
 
-void Simulation::compute_dt() {
-    const StepLimit lim = triangle_step_limit(spec_, model_);
-    dt_limit_ = dt_triangles_ = lim.dt;
-    dt_element_ = lim.element;
+double Simulation::contact_xi_max() const {
     // Contact dashpots lower the contact springs' stable step (damped central difference); the largest fraction
     // any stage asks for sets it for the whole run, so that dt stays the same from stage to stage.
     double xi_max = 0;
     for (const StageSpec& st : spec_.stages)
         if (st.contact_damping) xi_max = std::max(xi_max, *st.contact_damping);
+    return xi_max;
+}
+
+// Per-node mass scaling ([numerics] mass_scaling = "per_node"). Uniform density scaling (mass_scale) lengthens every
+// period alike, so the stiffest springs in the model, the contact and joint penalties on the nodes along the joints,
+// keep setting the step while the wall's own sway, which sets how fast it can be loaded quasi-statically, grows with
+// the whole mass. Here the step is the triangles' limit at mass_scale, and only the nodes whose springs would need
+// a smaller one are made heavier, each just enough (m = k dt^2 / 4 with the bounds of stable_dt), as the Itasca codes
+// scale each gridpoint's mass for its own stiffness. A tied group (extrinsic insertion) is raised as one: its copies
+// keep their shares. Done once, at set-up, on the reference configuration: the masses stay constant in the run (the
+// energy books and the restart stay exact), and cracks inserted later may still shrink the step
+// (reduce_dt_after_insertion). Gravity keeps the physical mass.
+void Simulation::scale_node_masses() {
+    if (!spec_.per_node_mass || spec_.dt_override) return;
+    const int nn = model_.n_nodes();
+    // The springs are made stable at `margin` times the triangles' limit dt_t, not at dt_t itself: a node carries both, and
+    // the highest frequency of the two together is at most sqrt(omega_t^2 + omega_s^2) (Weyl's inequality), so with
+    // the step safety * dt_t the sum stays stable when safety^2 (1 + 1 / margin^2) <= 1 (margin 4/3 at the default safety
+    // 0.8). Made exactly stable at dt_t (margin 1), the default wall at mass scaling 30 blew up in its precompression.
+    const double s2 = spec_.safety * spec_.safety;
+    const double margin = s2 < 0.9 ? std::max(1.0, 1.0 / std::sqrt(1.0 / s2 - 1.0)) : 3.0;
+    const double dt = margin * triangle_step_limit(spec_, model_).dt;
+    std::vector<double> need(nn, 0.0);
+    inter_.required_mass(model_, contact_xi_max(), dt, ties_ ? tie_rep_.data() : nullptr, need.data());
+    double before = 0, after = 0;
+    for (int k = 0; k < nn; ++k) before += model_.mass[k];
+    int raised = 0;
+    auto raise = [&](int k, double f) {
+        model_.mass[k] *= f;
+        model_.inv_mass[k] = 1.0 / model_.mass[k];
+        ++raised;
+    };
+    std::vector<char> done(nn, 0);
+    if (ties_) {
+        const int ng = static_cast<int>(tie_start_.size()) - 1;
+        for (int g = 0; g < ng; ++g) {
+            double M = 0, N = 0;
+            for (int j = tie_start_[g]; j < tie_start_[g + 1]; ++j) {
+                const int k = tie_node_[j];
+                M += model_.mass[k], N = std::max(N, need[k]);
+                done[k] = 1;
+            }
+            if (N > M)
+                for (int j = tie_start_[g]; j < tie_start_[g + 1]; ++j) raise(tie_node_[j], N / M);
+        }
+    }
+    for (int k = 0; k < nn; ++k)
+        if (!done[k] && need[k] > model_.mass[k]) raise(k, need[k] / model_.mass[k]);
+    for (int k = 0; k < nn; ++k) after += model_.mass[k];
+    mass_raised_nodes_ = raised;
+    mass_raised_ratio_ = before > 0 ? after / before : 1.0;
+    if (raised > 0) build_ties();  // the groups' masses and the copies' shares
+}
+
+void Simulation::compute_dt() {
+    const StepLimit lim = triangle_step_limit(spec_, model_);
+    dt_limit_ = dt_triangles_ = lim.dt;
+    dt_element_ = lim.element;
+    const double xi_max = contact_xi_max();
     xi_max_ = xi_max;
     // Tied copies (extrinsic insertion) move as one node of their group's mass.
     const double* mass = eff_mass_.empty() ? nullptr : eff_mass_.data();

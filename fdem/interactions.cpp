@@ -228,6 +228,14 @@ double Interactions::stable_dt(const Model& model, double xi_contact, const doub
     return dt;
 }
 
+void Interactions::required_mass(const Model& model, double xi_contact, double dt, const int* rep, double* need) const {
+    if (joints_) joints_->required_mass(dt, rep, need);
+    if (contact_) {
+        const double damped = xi_contact > 0 ? std::sqrt(1 + xi_contact * xi_contact) - xi_contact : 1.0;
+        contact_->required_mass(model.X.data(), dt / damped, need);
+    }
+}
+
 double Interactions::contact_stable_dt(const Model& model, const double* mass) const {
     return contact_ ? contact_->stable_dt(model.X.data(), mass ? mass : model.mass.data())
                     : std::numeric_limits<double>::infinity();

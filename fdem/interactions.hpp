@@ -30,6 +30,9 @@ public:
     // mass, rep (optional): the nodal masses to use instead of the model's, and a representative per node for nodes
     // that move as one (tied copies: mass holds the group's mass; fracture/cohesive_system.hpp).
     double stable_dt(const Model& model, double xi_contact = 0.0, const double* mass = nullptr, const int* rep = nullptr) const;
+    // stable_dt solved for the masses (per-node mass scaling): need[k] (kg) is raised to the least mass node k (for
+    // joints with rep: its representative) needs for the joint and contact springs to be stable at step dt.
+    void required_mass(const Model& model, double xi_contact, double dt, const int* rep, double* need) const;
     // Undamped stable step of the contact springs alone (s), +inf without contact: beta = xi * this.
     double contact_stable_dt(const Model& model, const double* mass = nullptr) const;
     void set_contact_dashpot(double beta_s) {

@@ -174,6 +174,10 @@ void Simulation::run() {
     if (spec_.mass_scale != 1)
         log("mass scaling: inertial mass x " + sci(spec_.mass_scale) + " (time step x " + sci(std::sqrt(spec_.mass_scale)) +
             "); gravity uses the physical mass");
+    if (spec_.per_node_mass)
+        log("per-node mass scaling: " + std::to_string(mass_raised_nodes_) + " of " + std::to_string(model_.n_nodes()) +
+            " nodes made heavier for their springs to be stable at the triangles' step; total inertial mass x " +
+            sci(mass_raised_ratio_));
     if (!spec_.dt_override && spec_.safety > 1)
         log("warning: numerics.safety = " + sci(spec_.safety) + " > 1: the time step exceeds the stability limit");
     if (!opt_.out_dir.empty()) write_summary("running", "");

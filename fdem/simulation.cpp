@@ -68,6 +68,7 @@ Simulation::Simulation(CaseSpec spec, Model model, RunOptions options)
     mon_first_peak_.assign(spec_.monitors.size(), 0.0);
     crush_.setup(spec_, model_);
     build_ties();
+    scale_node_masses();
     compute_dt();
     dt_initial_ = dt_logged_ = dt_;
     // Derived quantities must be finite (issue 26: a huge mass_scale gave dt = 1e148 s, NaN energies and "completed").
@@ -527,6 +528,8 @@ void Simulation::write_summary(const std::string& status, const std::string& mes
     if (!spec_.geometry.file.empty()) set["geometry_file"] = spec_.geometry.file;
     set["safety"] = spec_.safety;
     set["mass_scale"] = spec_.mass_scale;
+    set["mass_scaling"] = spec_.per_node_mass ? "per_node" : "uniform";
+    if (spec_.per_node_mass) set["mass_scaling_nodes_raised"] = mass_raised_nodes_, set["mass_scaling_total_ratio"] = mass_raised_ratio_;
     if (spec_.dt_override) set["dt_fixed_s"] = *spec_.dt_override;
     Json mats = Json::object();
     for (const auto& m : spec_.materials) {

@@ -144,6 +144,8 @@ private:
     // node. build_ties groups them (union-find over the dormant elements' node pairs; groups in order of their first
     // node, members ascending); check_ties refuses a support that holds only some copies of a group.
     void build_ties();
+    void scale_node_masses();  // [numerics] mass_scaling = "per_node" (integrator.cpp)
+    double contact_xi_max() const;
     void check_ties() const;
     void apply_time_dependent(double t);
     double protocol_displacement(const ActiveSupport& s, double tau) const;
@@ -226,6 +228,8 @@ private:
     std::vector<int> tie_rep_;               // per node: its group's first node, or itself (empty: no ties)
     double dt_triangles_ = 0;                // s, the triangles' stable limit (does not change with the ties)
     double xi_max_ = 0;                      // largest contact dashpot fraction of any stage
+    int mass_raised_nodes_ = 0;              // per-node mass scaling: nodes made heavier, and the total inertial
+    double mass_raised_ratio_ = 1;           // mass after it over the total before
     double dt_initial_ = 0;                  // s, the step at the start (the restart check compares it)
     double dt_logged_ = 0;                   // s, the last step reported in the log
     void reduce_dt_after_insertion();        // the step after nodes were untied: never larger, smaller if needed

@@ -204,7 +204,7 @@ void CohesiveSystem::build_gather() {
   stale_slots_ = 0;
 }
 
-double CohesiveSystem::stable_dt(const double* node_mass, const int* rep) const {
+std::vector<double> CohesiveSystem::node_stiffness(const int* rep) const {
   // Gershgorin bound of one element's stiffness row for a node: the 2x2 block R^T diag(K_n, K_s) R has absolute row
   // sum <= K_max + |K_n - K_s| / 2, and the Simpson-lumped couplings of a node to the 4 nodes sum to h t (1/3 + 1/6 +
   // 1/3 + 1/6) = h t. So omega^2 <= k / m with k = h t (K_max + |K_n - K_s|/2) summed over the node's elements,
@@ -217,10 +217,21 @@ double CohesiveSystem::stable_dt(const double* node_mass, const int* rep) const 
     const double k = length_[e] * thickness_ * K;
     for (int j = 0; j < 4; ++j) k_node[rep ? rep[elems_[e].n[j]] : elems_[e].n[j]] += k;
   }
+  return k_node;
+}
+
+double CohesiveSystem::stable_dt(const double* node_mass, const int* rep) const {
+  const std::vector<double> k_node = node_stiffness(rep);
   double dt = std::numeric_limits<double>::infinity();
   for (int v = 0; v < num_nodes_; ++v)
     if (k_node[v] > 0.0 && node_mass[v] > 0.0) dt = std::min(dt, 2.0 * std::sqrt(node_mass[v] / k_node[v]));
   return dt;
+}
+
+void CohesiveSystem::required_mass(double dt, const int* rep, double* need) const {
+  const std::vector<double> k_node = node_stiffness(rep);
+  const double q = 0.25 * dt * dt;  // 2 sqrt(m / k) >= dt  <=>  m >= k dt^2 / 4
+  for (int v = 0; v < num_nodes_; ++v) need[v] = std::max(need[v], k_node[v] * q);
 }
 
 void CohesiveSystem::add_forces(const double* x, double* f) {

@@ -117,6 +117,9 @@ class CohesiveSystem {
   // rep (optional): a representative per node for nodes that move as one (the engine's tied copies; node_mass then
   // holds the group's mass): the stiffnesses are summed per representative. Dormant elements do not act.
   double stable_dt(const double* node_mass, const int* rep = nullptr) const;
+  // The same bound solved for the mass (per-node mass scaling): need[v] (kg, v a node or, with rep, a
+  // representative) is raised to k dt^2 / 4 where that is larger, so its joint springs are stable at step dt.
+  void required_mass(double dt, const int* rep, double* need) const;
 
   // Evaluate every intact element at positions x (2 * num_nodes, m), update its irreversible damage and
   // dissipation, and ADD its nodal forces (N, whole thickness) to f (2 * num_nodes). Deterministic: per-element
@@ -163,6 +166,8 @@ class CohesiveSystem {
   void load_state(StateReader& r);
 
  private:
+  // k of stable_dt per node (or representative, with rep): the Gershgorin bounds of its intact elements, N/m.
+  std::vector<double> node_stiffness(const int* rep) const;
   std::vector<CohesiveElement> elems_;
   std::vector<CohesiveProps> props_;
   bool has_cap_ = false;  // some class has a compressive cap (output of crushing)

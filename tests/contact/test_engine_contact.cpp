@@ -753,3 +753,98 @@ contact_damping = )" + std::to_string(xi) + "\n";
         }
     }
 }
+
+TEST_CASE("engine: per-node mass scaling makes the springs stable at the triangles' step, keeps gravity on the physical "
+          "mass and leaves a stack standing",
+          "[engine][regression]") {
+    // The stack of 10 blocks of the test above with softer blocks (E 0.1 GPa) and stiff dry joints (k_n 1e11 Pa/m),
+    // so that under uniform density scaling the contact springs, not the triangles, set the step, by a factor 1.5. With mass_scaling = "per_node" every node whose
+    // springs need it is made heavier (integrator.cpp scale_node_masses): the springs' bound must then reach the
+    // margin 4/3 over the triangles' (safety 0.8: 0.8^2 (1 + (3/4)^2) = 1), the step be 0.8 of the triangles' limit,
+    // the settled stack carry exactly its physical weight on the base (gravity does not see the added mass) and
+    // stand still, with the energy books closed.
+    auto text = [](const std::string& scaling) {
+        return R"(
+[case]
+name = "stack_pn"
+thickness = 0.1
+[geometry]
+type = "wall"
+length = 0.2
+courses = 10
+unit_length = 0.2
+unit_height = 0.1
+bond = "stack"
+joint = "dry"
+base = "slab"
+base_height = 0.1
+base_overhang = 0.3
+mesh_size = 0.05
+mesh_size_base = 0.1
+[materials.m]
+E = 1.0e8
+nu = 0.2
+density = 2000.0
+[regions]
+units = "m"
+base = "m"
+[[interfaces]]
+regions = ["units", "units"]
+kind = "dry"
+friction = 30.0
+normal_stiffness = 1e11
+[[interfaces]]
+regions = ["units", "base"]
+kind = "dry"
+friction = 30.0
+normal_stiffness = 1e11
+[numerics]
+mass_scale = 1
+mass_scaling = ")" + scaling + R"("
+[[stages]]
+name = "settle"
+duration = 0.5
+local_damping = 0.7
+gravity = [0.0, -9.81]
+  [[stages.supports]]
+  group = "base"
+  fix = "xy"
+[[stages]]
+name = "free"
+duration = 1.0
+local_damping = 0.0
+)";
+    };
+    auto uni = make_contact_sim("engine_stack_uniform", {}, text("uniform"));
+    auto sim = make_contact_sim("engine_stack_per_node", {}, text("per_node"));
+    const double dt_tri = fdem::triangle_step_limit(sim.spec(), sim.model()).dt;
+    // Uniform scaling: the springs set the step (the premise of the test).
+    REQUIRE(uni.dt() < 0.8 * dt_tri * (1 - 1e-9));
+    // Per node: the springs' bound reaches 4/3 of the triangles' limit; the step is the triangles'.
+    CHECK(sim.interactions().stable_dt(sim.model()) >= (4.0 / 3.0) * dt_tri * (1 - 1e-12));
+    CHECK(sim.dt() == Approx(0.8 * dt_tri).epsilon(1e-12));
+    // No node lost mass; some gained.
+    double m_uni = 0, m_pn = 0;
+    int heavier = 0;
+    for (int k = 0; k < sim.model().n_nodes(); ++k) {
+        CHECK(sim.model().mass[k] >= uni.model().mass[k]);
+        heavier += sim.model().mass[k] > uni.model().mass[k] ? 1 : 0;
+        m_uni += uni.model().mass[k], m_pn += sim.model().mass[k];
+    }
+    CHECK(heavier > 0);
+    BalanceWatch bal;
+    run_stage(sim, 0, bal);
+    // Settled: the base's vertical reaction is the physical weight of units and base, 2000 kg/m^3 x (10 x 0.2 x 0.1
+    // + 0.8 x 0.1) m^2 x 0.1 m x 9.81 m/s^2 = 549.36 N (with the added inertial mass, m_pn / m_uni as much).
+    double ry = 0;
+    for (int k : nodes_of(sim, "base")) ry += sim.reactions()[2 * k + 1];
+    const std::vector<double> x0 = sim.model().x;
+    run_stage(sim, 1, bal);
+    const double shift = max_shift(sim, "units", x0);
+    std::printf("[engine stack per-node] dt %.3g s (uniform %.3g s), inertial mass x %.3f over uniform, base reaction %.2f N, "
+                "drift %.3g m, worst balance %.3g %%\n",
+                sim.dt(), uni.dt(), m_pn / m_uni, ry, shift, 100 * bal.engine);
+    CHECK(ry == Approx(549.36).epsilon(1e-3));
+    CHECK(shift < 1e-6);
+    CHECK(bal.engine < 0.01);
+}
