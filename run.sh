@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # ./run.sh [CASE.toml] [fdem run options]: install what is missing, build, run a case.
 # With no case, runs the default wall case (the 100 kN dry-stone wall of Lourenco et al. 2005, [K25] style, 25 mm, at
-# the QUICK setting: the family's settings with mass scaling 100, 2-4 minutes on 2 threads, see its header) and prints
+# the QUICK setting: the family's settings with per-node mass scaling 15, under a minute on 2 threads, see its header) and prints
 # its peak load against the experiment.
 set -euo pipefail
 cd "$(dirname "$0")"
