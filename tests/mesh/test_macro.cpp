@@ -188,3 +188,31 @@ TEST_CASE("macro pier: the shipped JRC Ispra LW cyclic case (0.10 m) passes fdem
     INFO(r.out << r.err);
     CHECK(r.code == 0);
 }
+
+// Recorded on commit 0e27abe (before the outline and Gmsh code was shared with type = "macro_wall"): the LW pier at
+// 0.1 m must keep its triangles, its node coordinates and its connectivity.
+TEST_CASE("macro pier: the LW pier mesh is the one recorded before the macro_wall refactor", "[regression][macro]") {
+    const Mesh m = generate_macro_pier(lw_pier());
+    REQUIRE(m.n_triangles() == 522);
+    REQUIRE(m.n_nodes() == 292);
+    double sx = 0, sy = 0, sr = 0;
+    for (int k = 0; k < m.n_nodes(); ++k) {
+        sx += m.xy[2 * k];
+        sy += m.xy[2 * k + 1];
+        sr += m.xy[2 * k] * m.xy[2 * k] + m.xy[2 * k + 1] * m.xy[2 * k + 1];
+    }
+    CHECK(sx == Approx(145.95608973691591).epsilon(1e-12));
+    CHECK(sy == Approx(181.84670932548138).epsilon(1e-12));
+    CHECK(sr == Approx(302.42518381679918).epsilon(1e-12));
+    const std::map<int, std::pair<double, double>> nodes = {{0, {0.76249999999999951, 1.2237190099803987}},
+                                                            {97, {0.18472268940857622, 0.62628993913910758}},
+                                                            {146, {0.24461689592367603, 0.95168156235272527}},
+                                                            {291, {-0.089897955821496067, 0.0}}};
+    for (const auto& [k, p] : nodes) {
+        CHECK(m.xy[2 * k] == Approx(p.first).margin(1e-12));
+        CHECK(m.xy[2 * k + 1] == Approx(p.second).margin(1e-12));
+    }
+    long long weighted = 0;  // connectivity fingerprint: sum of (position in tri mod 7 + 1) * node index
+    for (std::size_t i = 0; i < m.tri.size(); ++i) weighted += static_cast<long long>(i % 7 + 1) * m.tri[i];
+    CHECK(weighted == 863643);
+}
