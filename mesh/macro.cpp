@@ -1,4 +1,5 @@
-// mesh/macro.cpp: macro-block pier -> OCC surfaces -> boolean fragment -> Gmsh mesh -> Mesh (layout: macro.hpp).
+// mesh/macro.cpp: macro-block pier or wall -> OCC surfaces -> boolean fragment -> Gmsh mesh -> Mesh (layout:
+// macro.hpp). panel_outlines builds one panel's blocks for both; mesh_blocks does the Gmsh part for both.
 //
 // The block outlines are plain vertex lists built from one set of doubles (r, y_t, y_b, L/2, L - r), so a corner
 // shared by two blocks is the same double on both sides and the fragment merges it exactly (areas preserved).
@@ -56,64 +57,123 @@ std::vector<std::string> check(const MacroPierSpec& s) {
     return bad;
 }
 
-std::vector<std::vector<std::array<double, 2>>> macro_block_outlines(const MacroPierSpec& s) {
-    const auto problems = check(s);
-    if (!problems.empty()) {
-        std::string msg = problems.front();
-        for (std::size_t i = 1; i < problems.size(); ++i) msg += "; " + problems[i];
-        throw MeshError(msg);
-    }
-    const double L = s.length, H = s.height, w = s.horizontal_joint;
-    const double t = std::tan(s.texture_angle * kPi / 180.0);
+namespace {
+
+// The tall layout of macro.hpp on the panel [x0, x1] x [y0, y1]. For the pier (x0 = y0 = 0, x1 = L, y1 = H) every
+// expression below gives the same double as the pier code before the wall existed (0 + a = a, L - 0 = L).
+std::vector<Polygon> tall_panel(double x0, double y0, double x1, double y1, double t, double w) {
+    const double L = x1 - x0;
     const double r = 0.5 * (L - w);  // horizontal run of each diagonal
-    const double xl = r, xm = 0.5 * L, xr = L - r;
-    const double yt = H - r * t, yb = r * t;
+    const double xl = x0 + r, xm = x0 + 0.5 * L, xr = x1 - r;
+    const double yt = y1 - r * t, yb = y0 + r * t;
     const double kt = yt + 0.5 * w * t, kb = yb - 0.5 * w * t;  // key apexes
     return {
-        {{0, H}, {xl, yt}, {xm, kt}, {xr, yt}, {L, H}},             // cap, top
-        {{0, 0}, {L, 0}, {xr, yb}, {xm, kb}, {xl, yb}},             // cap, bottom
-        {{0, 0}, {xl, yb}, {xm, yb}, {xm, yt}, {xl, yt}, {0, H}},   // side, left
-        {{L, 0}, {L, H}, {xr, yt}, {xm, yt}, {xm, yb}, {xr, yb}},   // side, right
-        {{xl, yt}, {xm, yt}, {xr, yt}, {xm, kt}},                   // key, top
-        {{xl, yb}, {xm, kb}, {xr, yb}, {xm, yb}},                   // key, bottom
+        {{x0, y1}, {xl, yt}, {xm, kt}, {xr, yt}, {x1, y1}},             // cap, top
+        {{x0, y0}, {x1, y0}, {xr, yb}, {xm, kb}, {xl, yb}},             // cap, bottom
+        {{x0, y0}, {xl, yb}, {xm, yb}, {xm, yt}, {xl, yt}, {x0, y1}},   // side, left
+        {{x1, y0}, {x1, y1}, {xr, yt}, {xm, yt}, {xm, yb}, {xr, yb}},   // side, right
+        {{xl, yt}, {xm, yt}, {xr, yt}, {xm, kt}},                       // key, top
+        {{xl, yb}, {xm, kb}, {xr, yb}, {xm, yb}},                       // key, bottom
     };
 }
 
-Mesh generate_macro_pier(const MacroPierSpec& s) {
-    const auto outlines = macro_block_outlines(s);  // throws the check() problems
-    const double L = s.length, H = s.height;
-    const bool has_beam = s.beam_height > 0, has_base = s.base_height > 0;
-    const double top = H + s.beam_height, bottom = -s.base_height;
-    const double scale = std::max(L + 2 * std::max(s.beam_overhang, s.base_overhang), top - bottom);
+void throw_problems(const std::vector<std::string>& problems) {
+    if (problems.empty()) return;
+    std::string msg = problems.front();
+    for (std::size_t i = 1; i < problems.size(); ++i) msg += "; " + problems[i];
+    throw MeshError(msg);
+}
+
+}  // namespace
+
+std::vector<std::vector<std::array<double, 2>>> panel_outlines(double x0, double y0, double x1, double y1,
+                                                               double tan_phi, double w, bool transposed) {
+    if (!transposed) return tall_panel(x0, y0, x1, y1, tan_phi, w);
+    // Tall in swapped coordinates (x' = y, y' = x) with slope dy'/dx' = 1 / tan_phi, then swapped back; the swap
+    // mirrors, so each outline is reversed to stay counter-clockwise.
+    auto out = tall_panel(y0, x0, y1, x1, 1.0 / tan_phi, w);
+    for (auto& poly : out) {
+        for (auto& v : poly) std::swap(v[0], v[1]);
+        std::reverse(poly.begin(), poly.end());
+    }
+    return out;
+}
+
+std::vector<std::vector<std::array<double, 2>>> macro_block_outlines(const MacroPierSpec& s) {
+    throw_problems(check(s));
+    const double t = std::tan(s.texture_angle * kPi / 180.0);
+    return panel_outlines(0.0, 0.0, s.length, s.height, t, s.horizontal_joint, false);
+}
+
+namespace {
+
+// What the shared Gmsh part needs: the masonry blocks with their region index, the region names in order, and the
+// frame (extent of the masonry, beam, base, mesh sizes) common to MacroPierSpec and MacroWallSpec.
+struct BlockSet {
+    std::vector<Polygon> outlines;
+    std::vector<int> region;                 // index into region_names, per outline
+    std::vector<std::string> region_names;   // masonry regions; "beam" and "base" follow
+    const char* edge_prefix = "pier";        // curve groups PREFIX_bottom, _top, _left, _right
+    const char* what = "the macro-block pier";  // for messages
+    double length = 0, height = 0;           // m, masonry extent [0, length] x [0, height]
+    double beam_height = 0, beam_overhang = 0, base_height = 0, base_overhang = 0;  // m
+    double mesh_size = 0, mesh_size_beam = 0, mesh_size_base = 0;                   // m
+};
+
+template <class Spec>
+BlockSet frame_of(const Spec& s) {
+    BlockSet b;
+    b.length = s.length;
+    b.height = s.height;
+    b.beam_height = s.beam_height;
+    b.beam_overhang = s.beam_overhang;
+    b.base_height = s.base_height;
+    b.base_overhang = s.base_overhang;
+    b.mesh_size = s.mesh_size;
+    b.mesh_size_beam = s.mesh_size_beam;
+    b.mesh_size_base = s.mesh_size_base;
+    return b;
+}
+
+// Blocks, beam and base -> OCC surfaces -> one boolean fragment (shared nodes on every joint) -> point sizes ->
+// physical groups (regions first, in order) -> 2D mesh. The surfaces are added in the order given, beam and base
+// last, so the pier's mesh is the one it had before the wall shared this code.
+Mesh mesh_blocks(const BlockSet& b) {
+    const double L = b.length, H = b.height;
+    const bool has_beam = b.beam_height > 0, has_base = b.base_height > 0;
+    const double top = H + b.beam_height, bottom = -b.base_height;
+    const double scale = std::max(L + 2 * std::max(b.beam_overhang, b.base_overhang), top - bottom);
     const double tol = 1e-5 * scale;  // OCC bounding boxes carry its tolerance (~1e-7 m)
-    const double h_blocks = s.mesh_size;
-    const double h_beam = s.mesh_size_beam > 0 ? s.mesh_size_beam : s.mesh_size;
-    const double h_base = s.mesh_size_base > 0 ? s.mesh_size_base : s.mesh_size;
+    const double h_beam = b.mesh_size_beam > 0 ? b.mesh_size_beam : b.mesh_size;
+    const double h_base = b.mesh_size_base > 0 ? b.mesh_size_base : b.mesh_size;
+    const int n_masonry = static_cast<int>(b.region_names.size());
+    const int beam_role = n_masonry, base_role = n_masonry + 1;
+    const std::string what = b.what;
 
     GmshSession session;
     try {
         gmsh::model::add("macro");
         gmsh::vectorpair inputs;
-        std::vector<int> role;  // 0 cap, 1 side, 2 key, 3 beam, 4 base
-        for (std::size_t i = 0; i < outlines.size(); ++i) {
-            inputs.push_back({2, add_polygon(outlines[i])});
-            role.push_back(static_cast<int>(i / 2));
+        std::vector<int> role;  // region index; beam_role, base_role
+        for (std::size_t i = 0; i < b.outlines.size(); ++i) {
+            inputs.push_back({2, add_polygon(b.outlines[i])});
+            role.push_back(b.region[i]);
         }
         if (has_beam) {
-            inputs.push_back({2, add_polygon({{-s.beam_overhang, H}, {L + s.beam_overhang, H},
-                                              {L + s.beam_overhang, top}, {-s.beam_overhang, top}})});
-            role.push_back(3);
+            inputs.push_back({2, add_polygon({{-b.beam_overhang, H}, {L + b.beam_overhang, H},
+                                              {L + b.beam_overhang, top}, {-b.beam_overhang, top}})});
+            role.push_back(beam_role);
         }
         if (has_base) {
-            inputs.push_back({2, add_polygon({{-s.base_overhang, bottom}, {L + s.base_overhang, bottom},
-                                              {L + s.base_overhang, 0.0}, {-s.base_overhang, 0.0}})});
-            role.push_back(4);
+            inputs.push_back({2, add_polygon({{-b.base_overhang, bottom}, {L + b.base_overhang, bottom},
+                                              {L + b.base_overhang, 0.0}, {-b.base_overhang, 0.0}})});
+            role.push_back(base_role);
         }
         gmsh::vectorpair out;
         std::vector<gmsh::vectorpair> map;
         gmsh::model::occ::fragment(inputs, {}, out, map);
         throw_on_gmsh_error("fragmenting the macro-blocks, beam and base");
-        std::array<std::set<int>, 5> by_role;
+        std::vector<std::set<int>> by_role(static_cast<std::size_t>(n_masonry + 2));
         for (std::size_t i = 0; i < map.size() && i < inputs.size(); ++i)
             for (const auto& dt : map[i])
                 if (dt.first == 2) by_role[role[i]].insert(dt.second);
@@ -136,44 +196,58 @@ Mesh generate_macro_pier(const MacroPierSpec& s) {
                 }
             }
         };
-        for (int k = 0; k < 3; ++k) size_points(by_role[k], h_blocks);
-        size_points(by_role[3], h_beam);
-        size_points(by_role[4], h_base);
+        for (int k = 0; k < n_masonry; ++k) size_points(by_role[k], b.mesh_size);
+        size_points(by_role[beam_role], h_beam);
+        size_points(by_role[base_role], h_base);
         for (const auto& [pt, h] : point_size) gmsh::model::mesh::setSize({{0, pt}}, h);
 
-        // Regions first, in the documented order.
-        const char* names[] = {"cap", "side", "key", "beam", "base"};
-        for (int k = 0; k < 5; ++k) add_group(2, {by_role[k].begin(), by_role[k].end()}, names[k]);
+        // Regions first, in the documented order (a region without blocks gets no group).
+        for (int k = 0; k < n_masonry; ++k) add_group(2, {by_role[k].begin(), by_role[k].end()}, b.region_names[k]);
+        add_group(2, {by_role[beam_role].begin(), by_role[beam_role].end()}, "beam");
+        add_group(2, {by_role[base_role].begin(), by_role[base_role].end()}, "base");
         std::set<int> blocks;
-        for (int k = 0; k < 3; ++k) blocks.insert(by_role[k].begin(), by_role[k].end());
-        add_group(1, curves_in(0, 0, L, 0, tol, blocks), "pier_bottom");
-        add_group(1, curves_in(0, H, L, H, tol, blocks), "pier_top");
-        add_group(1, curves_in(0, 0, 0, H, tol, blocks), "pier_left");
-        add_group(1, curves_in(L, 0, L, H, tol, blocks), "pier_right");
+        for (int k = 0; k < n_masonry; ++k) blocks.insert(by_role[k].begin(), by_role[k].end());
+        const std::string pre = b.edge_prefix;
+        add_group(1, curves_in(0, 0, L, 0, tol, blocks), pre + "_bottom");
+        add_group(1, curves_in(0, H, L, H, tol, blocks), pre + "_top");
+        add_group(1, curves_in(0, 0, 0, H, tol, blocks), pre + "_left");
+        add_group(1, curves_in(L, 0, L, H, tol, blocks), pre + "_right");
+        const std::set<int>& beam = by_role[beam_role];
+        const std::set<int>& base = by_role[base_role];
         if (has_beam) {
-            add_group(1, curves_in(-s.beam_overhang, top, L + s.beam_overhang, top, tol, by_role[3]), "beam_top");
-            add_group(1, curves_in(-s.beam_overhang, H, -s.beam_overhang, top, tol, by_role[3]), "beam_left");
-            add_group(1, curves_in(L + s.beam_overhang, H, L + s.beam_overhang, top, tol, by_role[3]), "beam_right");
+            add_group(1, curves_in(-b.beam_overhang, top, L + b.beam_overhang, top, tol, beam), "beam_top");
+            add_group(1, curves_in(-b.beam_overhang, H, -b.beam_overhang, top, tol, beam), "beam_left");
+            add_group(1, curves_in(L + b.beam_overhang, H, L + b.beam_overhang, top, tol, beam), "beam_right");
         }
         if (has_base) {
-            add_group(1, curves_in(-s.base_overhang, bottom, L + s.base_overhang, bottom, tol, by_role[4]), "base_bottom");
-            add_group(1, curves_in(-s.base_overhang, bottom, -s.base_overhang, 0, tol, by_role[4]), "base_left");
-            add_group(1, curves_in(L + s.base_overhang, bottom, L + s.base_overhang, 0, tol, by_role[4]), "base_right");
+            add_group(1, curves_in(-b.base_overhang, bottom, L + b.base_overhang, bottom, tol, base), "base_bottom");
+            add_group(1, curves_in(-b.base_overhang, bottom, -b.base_overhang, 0, tol, base), "base_left");
+            add_group(1, curves_in(L + b.base_overhang, bottom, L + b.base_overhang, 0, tol, base), "base_right");
         }
         add_group(0, points_at(0, 0, tol), "toe_left");
         add_group(0, points_at(L, 0, tol), "toe_right");
 
         gmsh::model::mesh::generate(2);
-        throw_on_gmsh_error("meshing the macro-block pier");
+        throw_on_gmsh_error("meshing " + what);
         return extract_current_model();
     } catch (const MeshError&) {
         throw;
     } catch (const std::exception& ex) {
-        throw MeshError(std::string("Gmsh failed on the macro-block pier: ") + ex.what());
+        throw MeshError("Gmsh failed on " + what + ": " + ex.what());
     } catch (...) {
-        throw_on_gmsh_error("Gmsh failed on the macro-block pier");
-        throw MeshError("Gmsh failed on the macro-block pier");
+        throw_on_gmsh_error("Gmsh failed on " + what);
+        throw MeshError("Gmsh failed on " + what);
     }
+}
+
+}  // namespace
+
+Mesh generate_macro_pier(const MacroPierSpec& s) {
+    BlockSet b = frame_of(s);
+    b.outlines = macro_block_outlines(s);  // throws the check() problems
+    b.region = {0, 0, 1, 1, 2, 2};
+    b.region_names = {"cap", "side", "key"};
+    return mesh_blocks(b);
 }
 
 }  // namespace fdem::mesh
