@@ -250,4 +250,167 @@ Mesh generate_macro_pier(const MacroPierSpec& s) {
     return mesh_blocks(b);
 }
 
+// ---- type = "macro_wall" (layout: macro.hpp "WALL WITH OPENINGS") ----
+
+namespace {
+
+// A rectangular cell of the wall's partition.
+struct Cell {
+    double x0, y0, x1, y1;  // m
+    int kind;               // 0 pier panel, 1 spandrel panel, 2 node
+    std::string name;       // for messages: "pier panel 1", "spandrel above opening 2", ...
+};
+
+// The openings' input indices (0-based) sorted by x.
+std::vector<std::size_t> by_x(const MacroWallSpec& s) {
+    std::vector<std::size_t> order(s.openings.size());
+    for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+    std::stable_sort(order.begin(), order.end(),
+                     [&](std::size_t a, std::size_t b) { return s.openings[a].x < s.openings[b].x; });
+    return order;
+}
+
+// The partition: pier panels left to right, then spandrels (per opening: above, below), then nodes (per pier:
+// above, below). Assumes the openings passed check(). Every coordinate is one of the spec's doubles (0, x,
+// x + width, y, y + height, length, height), so touching cells share exact corners.
+std::vector<Cell> wall_cells(const MacroWallSpec& s) {
+    const auto order = by_x(s);
+    const double ys = s.openings.front().y, yl = ys + s.openings.front().height, H = s.height;
+    std::vector<double> px0{0.0}, px1;  // pier columns
+    for (std::size_t i : order) {
+        px1.push_back(s.openings[i].x);
+        px0.push_back(s.openings[i].x + s.openings[i].width);
+    }
+    px1.push_back(s.length);
+    std::vector<Cell> cells;
+    for (std::size_t p = 0; p < px0.size(); ++p)
+        cells.push_back({px0[p], ys, px1[p], yl, 0, "pier panel " + std::to_string(p + 1)});
+    for (std::size_t k = 0; k < order.size(); ++k) {
+        const std::string o = " opening " + std::to_string(order[k] + 1);
+        if (yl < H) cells.push_back({px1[k], yl, px0[k + 1], H, 1, "spandrel above" + o});
+        if (ys > 0) cells.push_back({px1[k], 0.0, px0[k + 1], ys, 1, "spandrel below" + o});
+    }
+    for (std::size_t p = 0; p < px0.size(); ++p) {
+        if (yl < H) cells.push_back({px0[p], yl, px1[p], H, 2, "node above pier " + std::to_string(p + 1)});
+        if (ys > 0) cells.push_back({px0[p], 0.0, px1[p], ys, 2, "node below pier " + std::to_string(p + 1)});
+    }
+    return cells;
+}
+
+// Tall layout when H_p > (L_p - w) t, else transposed (macro.hpp: one of the two always holds).
+bool is_tall(const Cell& c, double t, double w) { return c.y1 - c.y0 > (c.x1 - c.x0 - w) * t; }
+
+std::string range(double a, double b) { return "[" + num(a) + ", " + num(b) + "]"; }
+
+}  // namespace
+
+std::vector<std::string> check(const MacroWallSpec& s) {
+    std::vector<std::string> bad;
+    const spec_check::Lengths len{bad};
+    len.positive(s.length, "length");
+    len.positive(s.height, "height");
+    len.positive(s.mesh_size, "mesh_size");
+    spec_check::beam_and_sizes(len, s);
+    len.nonnegative(s.base_height, "base_height");
+    len.nonnegative(s.base_overhang, "base_overhang");
+    if (!(s.texture_angle > 0 && s.texture_angle < 90))
+        bad.push_back("geometry.texture_angle must be in (0, 90) deg, got " + num(s.texture_angle));
+    if (!(s.horizontal_joint > 0))
+        bad.push_back("geometry.horizontal_joint must be > 0 (m), got " + num(s.horizontal_joint));
+    if (s.openings.empty()) {
+        bad.push_back("geometry.openings: macro_wall needs at least one opening ([[geometry.openings]] {x, y, width, "
+                      "height}); a wall without openings is one pier: type = \"macro\"");
+        return bad;
+    }
+    auto key = [](std::size_t i) { return "geometry.openings[" + std::to_string(i + 1) + "]"; };
+    for (std::size_t i = 0; i < s.openings.size(); ++i) {
+        const auto& o = s.openings[i];
+        if (!(o.width > 0)) bad.push_back(key(i) + ".width must be > 0 (m), got " + num(o.width));
+        if (!(o.height > 0)) bad.push_back(key(i) + ".height must be > 0 (m), got " + num(o.height));
+    }
+    if (!bad.empty()) return bad;
+    // One row: the first opening sets the sill and lintel.
+    const auto& first = s.openings.front();
+    for (std::size_t i = 1; i < s.openings.size(); ++i) {
+        const auto& o = s.openings[i];
+        if (o.y != first.y)
+            bad.push_back(key(i) + ".y = " + num(o.y) + " m differs from geometry.openings[1].y = " + num(first.y) +
+                          " m: macro_wall needs one row of openings (the same y and the same height for all)");
+        if (o.height != first.height)
+            bad.push_back(key(i) + ".height = " + num(o.height) + " m differs from geometry.openings[1].height = " +
+                          num(first.height) + " m: macro_wall needs one row of openings (the same y and the same "
+                          "height for all)");
+    }
+    if (!(first.y >= 0)) bad.push_back(key(0) + ".y (the sill) must be >= 0 (m), got " + num(first.y));
+    if (!(first.y + first.height <= s.height))
+        bad.push_back(key(0) + ": the lintel y + height = " + num(first.y + first.height) +
+                      " m is above the wall's geometry.height = " + num(s.height) + " m");
+    // Piers of positive length at both ends and between openings (in x order).
+    const auto order = by_x(s);
+    const auto& lo = s.openings[order.front()];
+    if (!(lo.x > 0))
+        bad.push_back(key(order.front()) + ".x = " + num(lo.x) +
+                      " m leaves no pier at the wall's left end (x = 0): an opening must lie strictly inside the wall");
+    const auto& hi = s.openings[order.back()];
+    if (!(hi.x + hi.width < s.length))
+        bad.push_back(key(order.back()) + ": x + width = " + num(hi.x + hi.width) +
+                      " m leaves no pier at the wall's right end (geometry.length = " + num(s.length) +
+                      " m): an opening must lie strictly inside the wall");
+    for (std::size_t k = 0; k + 1 < order.size(); ++k) {
+        const auto& a = s.openings[order[k]];
+        const auto& b = s.openings[order[k + 1]];
+        if (!(b.x > a.x + a.width))
+            bad.push_back(key(order[k]) + " (x in " + range(a.x, a.x + a.width) + " m) and " + key(order[k + 1]) +
+                          " (x in " + range(b.x, b.x + b.width) +
+                          " m) overlap or touch: macro_wall needs a pier of positive length between two openings");
+    }
+    if (!bad.empty()) return bad;
+    // Every panel's keys must fit: w below half the panel's length (tall) or height (transposed).
+    const double t = std::tan(s.texture_angle * kPi / 180.0), w = s.horizontal_joint;
+    for (const Cell& c : wall_cells(s)) {
+        if (c.kind == 2) continue;
+        const bool tall = is_tall(c, t, w);
+        const double side = tall ? c.x1 - c.x0 : c.y1 - c.y0;
+        if (!(w < 0.5 * side))
+            bad.push_back("geometry.horizontal_joint = " + num(w) + " m does not fit the " + c.name + " (x in " +
+                          range(c.x0, c.x1) + " m, y in " + range(c.y0, c.y1) + " m, " +
+                          (tall ? "tall layout): must be below half its length, " : "transposed layout): must be "
+                                                                                    "below half its height, ") +
+                          num(0.5 * side) + " m");
+    }
+    return bad;
+}
+
+std::vector<MacroWallBlock> macro_wall_blocks(const MacroWallSpec& s) {
+    throw_problems(check(s));
+    const double t = std::tan(s.texture_angle * kPi / 180.0), w = s.horizontal_joint;
+    static const char* const kPanelRegions[2][3] = {{"cap", "side", "key"},
+                                                    {"spandrel_cap", "spandrel_side", "spandrel_key"}};
+    std::vector<MacroWallBlock> out;
+    for (const Cell& c : wall_cells(s)) {
+        if (c.kind == 2) {
+            out.push_back({{{c.x0, c.y0}, {c.x1, c.y0}, {c.x1, c.y1}, {c.x0, c.y1}}, "node", false});
+            continue;
+        }
+        const bool transposed = !is_tall(c, t, w);
+        const auto polys = panel_outlines(c.x0, c.y0, c.x1, c.y1, t, w, transposed);
+        for (std::size_t i = 0; i < polys.size(); ++i) out.push_back({polys[i], kPanelRegions[c.kind][i / 2], transposed});
+    }
+    return out;
+}
+
+Mesh generate_macro_wall(const MacroWallSpec& s) {
+    const auto blocks = macro_wall_blocks(s);  // throws the check() problems
+    BlockSet b = frame_of(s);
+    b.region_names = {"cap", "side", "key", "spandrel_cap", "spandrel_side", "spandrel_key", "node"};
+    b.edge_prefix = "wall";
+    b.what = "the macro-block wall";
+    for (const auto& blk : blocks) {
+        b.outlines.push_back(blk.outline);
+        b.region.push_back(static_cast<int>(std::find(b.region_names.begin(), b.region_names.end(), blk.region) -
+                                            b.region_names.begin()));
+    }
+    return mesh_blocks(b);
+}
+
 }  // namespace fdem::mesh
