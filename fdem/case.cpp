@@ -547,6 +547,49 @@ double macro_triangle_estimate(const mesh::MacroPierSpec& m) {
            per * (m.length + 2 * m.base_overhang) * m.base_height / (hb * hb);
 }
 
+// [geometry] type = "macro_wall": the macro-block wall with one row of openings (mesh/macro.hpp); keys named after
+// mesh::MacroWallSpec's fields, the openings as in read_wall. The generator's check() (one row, piers of positive
+// length, the keys fitting every panel) runs later, with the mesh, reported against [geometry].
+void read_macro_wall(Ctx& ctx, Reader& r, mesh::MacroWallSpec& m) {
+    auto nonneg = [](double v) { return v == 0 || (v >= kMinLength && v <= kMaxLength); };
+    auto positive = [](double v) { return v >= kMinLength && v <= kMaxLength; };
+    m.length = r.number("length", true, "a wall length > 0 in m", positive).value_or(1);
+    m.height = r.number("height", true, "a wall height > 0 in m", positive).value_or(1);
+    m.texture_angle = r.number("texture_angle", true, "a texture angle in (0, 90) deg",
+                               [](double v) { return v > 0 && v < 90; }).value_or(45);
+    m.horizontal_joint = r.number("horizontal_joint", false, "a horizontal joint length > 0 in m", positive).value_or(0.05);
+    m.mesh_size = r.number("mesh_size", true, "a mesh size > 0 in m", positive).value_or(1);
+    m.beam_height = r.number("beam_height", false, "a beam depth of 0 or in [1e-6, 1e4] m", nonneg).value_or(0);
+    m.beam_overhang = r.number("beam_overhang", false, "a beam overhang of 0 or in [1e-6, 1e4] m", nonneg).value_or(0);
+    m.base_height = r.number("base_height", false, "a base depth of 0 or in [1e-6, 1e4] m", nonneg).value_or(0);
+    m.base_overhang = r.number("base_overhang", false, "a base overhang of 0 or in [1e-6, 1e4] m", nonneg).value_or(0);
+    m.mesh_size_beam = r.number("mesh_size_beam", false, "a mesh size > 0 in m", positive).value_or(0);
+    m.mesh_size_base = r.number("mesh_size_base", false, "a mesh size > 0 in m", positive).value_or(0);
+    for (const toml::table* t : r.tables("openings", true, "[[geometry.openings]] blocks { x, y, width, height }")) {
+        Reader o(ctx, *t, r.key_path("openings." + std::to_string(m.openings.size() + 1)));
+        mesh::MacroWallOpening op;
+        op.x = o.number("x", true, "the opening's left edge in m").value_or(0);
+        op.y = o.number("y", true, "the opening's bottom edge (sill) in m").value_or(0);
+        op.width = o.number("width", true, "a width > 0 in m", positive).value_or(0);
+        op.height = o.number("height", true, "a height > 0 in m", positive).value_or(0);
+        o.finish();
+        m.openings.push_back(op);
+    }
+}
+
+// Expected triangle count of a macro-block wall: the masonry area less the openings, beam and base.
+double macro_wall_triangle_estimate(const mesh::MacroWallSpec& m) {
+    const double per = 4.0 / std::sqrt(3.0);
+    if (!(m.mesh_size > 0)) return 0;
+    const double hb = m.mesh_size_base > 0 ? m.mesh_size_base : m.mesh_size;
+    const double hm = m.mesh_size_beam > 0 ? m.mesh_size_beam : m.mesh_size;
+    double area = m.length * m.height;
+    for (const auto& o : m.openings) area -= o.width * o.height;
+    return per * std::max(area, 0.0) / (m.mesh_size * m.mesh_size) + 12.0 * (2 * m.openings.size() + 1) +
+           per * (m.length + 2 * m.beam_overhang) * m.beam_height / (hm * hm) +
+           per * (m.length + 2 * m.base_overhang) * m.base_height / (hb * hb);
+}
+
 // Cohesive keys shared by [materials.NAME.fracture] and bonded [[interfaces]]; stiffness keys only where allowed.
 void read_joint(Reader& r, JointSpec& j, bool allow_stiffness) {
     auto positive = [](double v) { return v > 0; };
@@ -698,7 +741,7 @@ CaseSpec load_case(const std::string& path, const std::vector<std::string>& over
         Reader r(ctx, *t, "geometry");
         GeometrySpec& g = spec.geometry;
         g.line = r.line();
-        g.type = r.string("type", true, "the geometry source", {"rectangle", "gmsh", "msh", "wall", "macro"}).value_or("");
+        g.type = r.string("type", true, "the geometry source", {"rectangle", "gmsh", "msh", "wall", "macro", "macro_wall"}).value_or("");
         if (g.type == "rectangle") {
             auto origin = r.vec2("origin", false, "[x0, y0] in m");
             if (origin) g.x0 = (*origin)[0], g.y0 = (*origin)[1];
@@ -724,6 +767,9 @@ CaseSpec load_case(const std::string& path, const std::vector<std::string>& over
         } else if (g.type == "macro") {
             read_macro(r, g.macro);
             check_triangle_count(ctx, r, g.line, macro_triangle_estimate(g.macro));
+        } else if (g.type == "macro_wall") {
+            read_macro_wall(ctx, r, g.macro_wall);
+            check_triangle_count(ctx, r, g.line, macro_wall_triangle_estimate(g.macro_wall));
         }
         g.min_angle = r.number("min_angle", false, "a minimum triangle angle in [0, 60) deg (sliver check)",
                                [](double v) { return v >= 0 && v < 60; }).value_or(10.0);

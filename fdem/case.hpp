@@ -82,7 +82,7 @@ struct Material {
 };
 
 struct GeometrySpec {
-    std::string type;  // "rectangle" | "gmsh" | "msh" | "wall" | "macro"
+    std::string type;  // "rectangle" | "gmsh" | "msh" | "wall" | "macro" | "macro_wall"
     // rectangle
     double x0 = 0, y0 = 0;  // lower-left corner, m
     double width = 0;       // m
@@ -102,6 +102,8 @@ struct GeometrySpec {
     mesh::WallSpec wall;
     // macro: the macro-block pier generator (M-DEM); the TOML keys are the MacroPierSpec field names (mesh/macro.hpp)
     mesh::MacroPierSpec macro;
+    // macro_wall: the macro-block wall with one row of openings; the TOML keys are the MacroWallSpec field names
+    mesh::MacroWallSpec macro_wall;
     int line = 0;
 };
 

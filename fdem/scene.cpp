@@ -25,6 +25,7 @@ mesh::Mesh make_mesh(const CaseSpec& spec) {
         else if (g.type == "msh") m = mesh::read_msh_file(g.file);
         else if (g.type == "wall") m = mesh::generate_wall(g.wall);
         else if (g.type == "macro") m = mesh::generate_macro_pier(g.macro);
+        else if (g.type == "macro_wall") m = mesh::generate_macro_wall(g.macro_wall);
         else throw InputError(spec.file + ": key 'geometry.type': unsupported geometry '" + g.type + "'");
         mesh::check_quality(m, g.min_angle);
     } catch (const mesh::MeshError& e) {

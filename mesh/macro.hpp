@@ -1,4 +1,4 @@
-// mesh/macro.hpp: the macro-block pier generator (M-DEM, issue 29; Gmsh C++ API, OpenCASCADE kernel).
+// mesh/macro.hpp: the macro-block pier and wall generators (M-DEM, issue 29; Gmsh C++ API, OpenCASCADE kernel).
 //
 // The M-DEM paper (seeds/000, "A novel macro-distinct element model (M-DEM) for the in-plane analysis of URM
 // structures") cuts a masonry pier into a few deformable macro-blocks along potential failure planes set by the
@@ -41,6 +41,45 @@
 //   1D curves: "pier_bottom", "pier_top" (block edges on y = 0 and y = H), "pier_left", "pier_right" (on x = 0,
 //   x = L), and as in mesh/wall.hpp "beam_top", "beam_left", "beam_right", "base_bottom", "base_left", "base_right".
 //   0D points: "toe_left" (0, 0), "toe_right" (L, 0) as in mesh/wall.hpp.
+//
+// TRANSPOSED PANEL (used by the wall below; the single pier is always tall)
+//   A squat panel (H <= (L - w) t) gets the same layout with x and y swapped: the tall layout is built in swapped
+//   coordinates (x' = y, y' = x: a panel of length H and height L) with slope 1 / t, so that the diagonals keep
+//   dy/dx = t in the wall, and swapped back. Its condition, L > (H - w) / t, holds whenever the tall one fails:
+//   H <= (L - w) t < L t + w gives (H - w) / t < L. The caps are then the left and right end blocks, the "side"
+//   blocks the bottom and top ones, the central joint is horizontal (y = y0 + H/2, length L - (H - w) / t) and the
+//   short joints vertical. The keys need w < H/2 (tall: w < L/2).
+//
+// WALL WITH OPENINGS (type = "macro_wall"; our own equivalent-frame reading: seeds/000 models single piers only)
+//   The wall occupies x in [0, length], y in [0, height]; one row of openings [x, x + width] x [y_s, y_l] with the
+//   same sill y_s >= 0 and lintel y_l = y_s + height <= wall height H for all. Columns, left to right: piers
+//   P_1..P_n (n = openings + 1, each of positive length) and the openings O_1..O_(n-1) between them. Bands: lower
+//   [0, y_s] (if y_s > 0), middle [y_s, y_l], upper [y_l, H] (if y_l < H). Cells:
+//     pier column x middle band      pier panel: the macro layout above (tall or transposed), regions cap, side, key;
+//     opening column x upper / lower spandrel panel: the same, regions spandrel_cap, spandrel_side, spandrel_key;
+//     pier column x upper / lower    one plain elastic block, region "node" (the equivalent frame's rigid node:
+//                                    here deformable, the case gives it the masonry);
+//     opening column x middle band   empty.
+//   Every cell edge ends at cell corners (the panels put vertices on their outline at the corners only), so two
+//   touching cells share their whole edge; the cells' coordinates are the same doubles (0, the openings' x and
+//   x + width, y_s, y_l, length, H), so the fragment merges shared corners exactly.
+//   Joint pairs inside a panel: pier (cap, side) diagonal, (side, side) central, (key, side) short, (cap, key) tie;
+//   spandrel the same with the spandrel_ names. Between cells, through the blocks on the panel's outline:
+//     tall pier panel:         top and bottom edges are cap -> (cap, node), or (beam, cap) if y_l = H,
+//                              (base, cap) if y_s = 0; its left and right edges face openings or the wall ends.
+//     transposed pier panel:   top and bottom edges are side -> (node, side), (beam, side), (base, side).
+//     tall spandrel:           left and right edges are spandrel_side -> (node, spandrel_side); the upper
+//                              spandrel's top edge is spandrel_cap -> (beam, spandrel_cap), the lower one's bottom
+//                              edge (base, spandrel_cap); the edge on the opening is free.
+//     transposed spandrel:     left and right edges are spandrel_cap -> (node, spandrel_cap); top / bottom
+//                              (beam, spandrel_side), (base, spandrel_side).
+//     node:                    (beam, node) in the upper band, (base, node) in the lower; never node on node.
+//   The beam and base span x in [-overhang, length + overhang] as for the pier; the beam also meets the pier panels
+//   (y_l = H) and the base the pier panels when y_s = 0 (a door).
+//   PHYSICAL GROUPS: regions in this order (each only if it has blocks): "cap", "side", "key", "spandrel_cap",
+//   "spandrel_side", "spandrel_key", "node", "beam", "base"; curves "wall_bottom", "wall_top", "wall_left",
+//   "wall_right" (block edges on y = 0, y = H, x = 0, x = length), "beam_*" and "base_*" as above; points
+//   "toe_left" (0, 0), "toe_right" (length, 0). Each block its own body.
 #pragma once
 
 #include <array>
@@ -76,5 +115,51 @@ std::vector<std::vector<std::array<double, 2>>> macro_block_outlines(const Macro
 
 // The meshed pier (blocks, beam, base). Throws MeshError naming the problem (check()) or a Gmsh failure.
 Mesh generate_macro_pier(const MacroPierSpec& spec);
+
+// The six block outlines of one panel [x0, x1] x [y0, y1] (CCW), in the order of macro_block_outlines: tall layout
+// (transposed = false) or the transposed one (caps at the left and right ends). The corners are passed rather than
+// a length and height so that every outline vertex on the panel's edge is exactly x0, x1, y0 or y1 (shared with the
+// neighbouring cells); for x0 = y0 = 0 it computes the same doubles as the single pier. No checks.
+std::vector<std::vector<std::array<double, 2>>> panel_outlines(double x0, double y0, double x1, double y1,
+                                                               double tan_phi, double w, bool transposed);
+
+// Field names are the TOML keys under [geometry] (type = "macro_wall").
+struct MacroWallOpening {
+    double x = 0, y = 0;           // m, lower-left corner in wall coordinates
+    double width = 0, height = 0;  // m
+};
+
+struct MacroWallSpec {
+    double length = 0;             // m, whole wall
+    double height = 0;             // m, wall top (below the beam)
+    std::vector<MacroWallOpening> openings;  // one row: the same y and height for all
+    double texture_angle = 0;      // deg, phi in (0, 90)
+    double horizontal_joint = 0.05;  // m, w: below half of every panel's length (tall) or height (transposed)
+    double mesh_size = 0;          // m, in the blocks (required)
+    double beam_height = 0;        // m, 0 = no beam
+    double beam_overhang = 0;      // m
+    double base_height = 0;        // m, 0 = no foundation
+    double base_overhang = 0;      // m
+    double mesh_size_beam = 0;     // m, 0 = mesh_size
+    double mesh_size_base = 0;     // m, 0 = mesh_size
+};
+
+// One block of the wall: its outline (CCW), region name, and whether its panel uses the transposed layout.
+struct MacroWallBlock {
+    std::vector<std::array<double, 2>> outline;
+    std::string region;  // "cap", "side", "key", "spandrel_cap", "spandrel_side", "spandrel_key" or "node"
+    bool transposed = false;
+};
+
+// Problems of a wall spec, one line each naming the key; openings are numbered from 1 in input order
+// ("geometry.openings[2].y ..."). Empty = fine.
+std::vector<std::string> check(const MacroWallSpec& spec);
+
+// The wall's blocks: pier panels left to right, then spandrels (per opening, upper then lower), then nodes (per
+// pier, upper then lower). Throws MeshError if check() fails.
+std::vector<MacroWallBlock> macro_wall_blocks(const MacroWallSpec& spec);
+
+// The meshed wall (blocks, beam, base). Throws MeshError naming the problem (check()) or a Gmsh failure.
+Mesh generate_macro_wall(const MacroWallSpec& spec);
 
 }  // namespace fdem::mesh

@@ -188,3 +188,281 @@ TEST_CASE("macro pier: the shipped JRC Ispra LW cyclic case (0.10 m) passes fdem
     INFO(r.out << r.err);
     CHECK(r.code == 0);
 }
+
+// Recorded on commit 0e27abe (before the outline and Gmsh code was shared with type = "macro_wall"): the LW pier at
+// 0.1 m must keep its triangles, its node coordinates and its connectivity.
+TEST_CASE("macro pier: the LW pier mesh is the one recorded before the macro_wall refactor", "[regression][macro]") {
+    const Mesh m = generate_macro_pier(lw_pier());
+    REQUIRE(m.n_triangles() == 522);
+    REQUIRE(m.n_nodes() == 292);
+    double sx = 0, sy = 0, sr = 0;
+    for (int k = 0; k < m.n_nodes(); ++k) {
+        sx += m.xy[2 * k];
+        sy += m.xy[2 * k + 1];
+        sr += m.xy[2 * k] * m.xy[2 * k] + m.xy[2 * k + 1] * m.xy[2 * k + 1];
+    }
+    CHECK(sx == Approx(145.95608973691591).epsilon(1e-12));
+    CHECK(sy == Approx(181.84670932548138).epsilon(1e-12));
+    CHECK(sr == Approx(302.42518381679918).epsilon(1e-12));
+    const std::map<int, std::pair<double, double>> nodes = {{0, {0.76249999999999951, 1.2237190099803987}},
+                                                            {97, {0.18472268940857622, 0.62628993913910758}},
+                                                            {146, {0.24461689592367603, 0.95168156235272527}},
+                                                            {291, {-0.089897955821496067, 0.0}}};
+    for (const auto& [k, p] : nodes) {
+        CHECK(m.xy[2 * k] == Approx(p.first).margin(1e-12));
+        CHECK(m.xy[2 * k + 1] == Approx(p.second).margin(1e-12));
+    }
+    long long weighted = 0;  // connectivity fingerprint: sum of (position in tri mod 7 + 1) * node index
+    for (std::size_t i = 0; i < m.tri.size(); ++i) weighted += static_cast<long long>(i % 7 + 1) * m.tri[i];
+    CHECK(weighted == 863643);
+}
+
+// ---- type = "macro_wall" (mesh/macro.hpp "WALL WITH OPENINGS") ----
+
+namespace {
+
+// Two JRC-Ispra-like piers 1.0 m long either side of a 1.0 m wide door 1.35 m high in a 3.0 x 2.0 m wall: a
+// spandrel 1.0 x 0.65 m, tall at 28 deg ((1.0 - 0.05) tan 28 = 0.505 m < 0.65 m).
+MacroWallSpec door_wall(double door_height = 1.35) {
+    MacroWallSpec s;
+    s.length = 3.0;
+    s.height = 2.0;
+    s.openings = {{1.0, 0.0, 1.0, door_height}};
+    s.texture_angle = 28.0;
+    s.horizontal_joint = 0.05;
+    s.mesh_size = 0.1;
+    s.beam_height = 0.2;
+    s.base_height = 0.3;
+    s.base_overhang = 0.2;
+    return s;
+}
+
+TopologyOptions wall_rules() {
+    TopologyOptions opt;
+    const char* masonry[] = {"cap", "side", "key", "spandrel_cap", "spandrel_side", "spandrel_key", "node", "beam", "base"};
+    for (const char* a : masonry)
+        for (const char* b : masonry)
+            if (std::string(a) <= std::string(b))
+                opt.interfaces.push_back({a, b, std::string(a) == "cap" && std::string(b) == "key" ? InterfaceKind::tied
+                                                                                                 : InterfaceKind::bonded});
+    return opt;
+}
+
+std::map<std::string, int> bodies_per_region(const Mesh& m) {
+    std::map<int, std::set<int>> bodies;
+    for (int t = 0; t < m.n_triangles(); ++t) bodies[m.tri_region[t]].insert(m.tri_body[t]);
+    std::map<std::string, int> out;
+    for (const auto& [r, b] : bodies) out[m.regions[r]] = static_cast<int>(b.size());
+    return out;
+}
+
+// The y (or x) of every edge end between two bodies of the given region pair, as a set rounded to 1 nm.
+std::set<long long> joint_coordinate(const Topology& topo, const std::string& ra, const std::string& rb, int axis) {
+    std::set<long long> out;
+    const Mesh& m = topo.mesh;
+    for (int e = 0; e < topo.n_edges(); ++e) {
+        const int ta = topo.edge_tri[2 * e], tb = topo.edge_tri[2 * e + 1];
+        if (tb < 0 || m.tri_body[ta] == m.tri_body[tb]) continue;
+        const std::string a = m.regions[m.tri_region[ta]], b = m.regions[m.tri_region[tb]];
+        if (!((a == ra && b == rb) || (a == rb && b == ra))) continue;
+        for (int i = 0; i < 3; ++i) {
+            const int c = m.tri[3 * ta + i];
+            const int o = topo.node_origin[c];
+            if (o == topo.edge_nodes[2 * e] || o == topo.edge_nodes[2 * e + 1])
+                out.insert(std::llround(m.xy[2 * c + axis] * 1e9));
+        }
+    }
+    return out;
+}
+
+}  // namespace
+
+TEST_CASE("macro wall: a door wall has 2 pier panels, 1 spandrel, 2 nodes, tiling the wall less the door", "[unit][macro]") {
+    const MacroWallSpec s = door_wall();
+    REQUIRE(check(s).empty());
+    std::map<std::string, int> blocks;
+    for (const auto& b : macro_wall_blocks(s)) {
+        ++blocks[b.region];
+        CHECK_FALSE(b.transposed);  // the piers (1.0 x 1.35 m) and the spandrel (1.0 x 0.65 m) are tall at 28 deg
+    }
+    CHECK(blocks == std::map<std::string, int>{{"cap", 4}, {"side", 4}, {"key", 4}, {"spandrel_cap", 2},
+                                               {"spandrel_side", 2}, {"spandrel_key", 2}, {"node", 2}});
+    const Mesh m = generate_macro_wall(s);
+    REQUIRE(m.regions == std::vector<std::string>{"cap", "side", "key", "spandrel_cap", "spandrel_side",
+                                                  "spandrel_key", "node", "beam", "base"});
+    CHECK(bodies_per_region(m) == std::map<std::string, int>{{"cap", 4}, {"side", 4}, {"key", 4}, {"spandrel_cap", 2},
+                                                             {"spandrel_side", 2}, {"spandrel_key", 2}, {"node", 2},
+                                                             {"beam", 1}, {"base", 1}});
+    double area = 0;
+    for (int r = 0; r < 7; ++r) area += mesh_area(m, r);
+    const double expected = s.length * s.height - 1.0 * 1.35;
+    CHECK(std::abs(area - expected) <= 1e-9 * expected);
+    for (int t = 0; t < m.n_triangles(); ++t) CHECK(tri_area(m, t) > 0);
+    for (const char* g : {"wall_bottom", "wall_top", "wall_left", "wall_right", "beam_top", "beam_left", "beam_right",
+                          "base_bottom", "base_left", "base_right", "toe_left", "toe_right"})
+        REQUIRE(m.find_group(g) != nullptr);
+    for (int k : m.find_group("wall_top")->nodes) CHECK(m.xy[2 * k + 1] == Approx(2.0).margin(1e-12));
+    for (int k : m.find_group("wall_bottom")->nodes) {
+        CHECK(m.xy[2 * k + 1] == Approx(0.0).margin(1e-12));
+        CHECK((m.xy[2 * k] <= 1.0 + 1e-12 || m.xy[2 * k] >= 2.0 - 1e-12));  // not under the door
+    }
+    for (int k : m.find_group("wall_right")->nodes) CHECK(m.xy[2 * k] == Approx(3.0).margin(1e-12));
+    // The documented joint pairs and their lengths (tall panels): nothing else touches.
+    const Topology topo = build_topology(m, wall_rules());
+    CHECK(topo.nonconforming_nodes == 0);
+    const auto len = joint_lengths(topo);
+    std::set<std::pair<std::string, std::string>> pairs;
+    for (const auto& [p, l] : len) pairs.insert(p);
+    CHECK(pairs == std::set<std::pair<std::string, std::string>>{
+                       {"cap", "side"}, {"side", "side"}, {"key", "side"}, {"cap", "key"},
+                       {"spandrel_cap", "spandrel_side"}, {"spandrel_side", "spandrel_side"},
+                       {"spandrel_key", "spandrel_side"}, {"spandrel_cap", "spandrel_key"},
+                       {"cap", "node"}, {"node", "spandrel_side"}, {"beam", "spandrel_cap"}, {"beam", "node"},
+                       {"base", "cap"}});
+    CHECK(len.at({"cap", "node"}) == Approx(2.0).epsilon(1e-9));
+    CHECK(len.at({"node", "spandrel_side"}) == Approx(2 * 0.65).epsilon(1e-9));
+    CHECK(len.at({"beam", "spandrel_cap"}) == Approx(1.0).epsilon(1e-9));
+    CHECK(len.at({"beam", "node"}) == Approx(2.0).epsilon(1e-9));
+    CHECK(len.at({"base", "cap"}) == Approx(2.0).epsilon(1e-9));
+    // The tall spandrel's central joint is vertical, at the door's mid-length.
+    CHECK(joint_coordinate(topo, "spandrel_side", "spandrel_side", 0) == std::set<long long>{1500000000});
+}
+
+TEST_CASE("macro wall: a window with a sill gives 2 spandrels and 4 nodes", "[unit][macro]") {
+    MacroWallSpec s = door_wall();
+    // Lower spandrel 1.0 x 0.5 m: transposed (0.5 <= (1.0 - 0.05) tan 28 = 0.505 m); upper 1.0 x 0.6 m: tall;
+    // piers 1.0 x 0.9 m: tall.
+    s.openings = {{1.0, 0.5, 1.0, 0.9}};
+    const Mesh m = generate_macro_wall(s);
+    CHECK(bodies_per_region(m) == std::map<std::string, int>{{"cap", 4}, {"side", 4}, {"key", 4}, {"spandrel_cap", 4},
+                                                             {"spandrel_side", 4}, {"spandrel_key", 4}, {"node", 4},
+                                                             {"beam", 1}, {"base", 1}});
+    double area = 0;
+    for (int r = 0; r < 7; ++r) area += mesh_area(m, r);
+    const double expected = s.length * s.height - 1.0 * 0.9;
+    CHECK(std::abs(area - expected) <= 1e-9 * expected);
+    for (int t = 0; t < m.n_triangles(); ++t) CHECK(tri_area(m, t) > 0);
+    const Topology topo = build_topology(m, wall_rules());
+    CHECK(topo.nonconforming_nodes == 0);
+    const auto len = joint_lengths(topo);
+    CHECK(len.at({"base", "node"}) == Approx(2.0).epsilon(1e-9));
+    CHECK(len.at({"base", "spandrel_side"}) == Approx(1.0).epsilon(1e-9));  // transposed: "side" blocks at the bottom
+    CHECK(len.at({"beam", "spandrel_cap"}) == Approx(1.0).epsilon(1e-9));   // tall: cap at the top
+    CHECK(len.at({"cap", "node"}) == Approx(4.0).epsilon(1e-9));            // piers under and over nodes
+    CHECK(len.count({"base", "cap"}) == 0);
+    CHECK(len.count({"base", "spandrel_cap"}) == 0);
+}
+
+TEST_CASE("macro wall: a squat spandrel takes the transposed layout, its central joint horizontal", "[unit][macro]") {
+    const MacroWallSpec s = door_wall(1.6);  // spandrel 1.0 x 0.4 m: 0.4 <= (1.0 - 0.05) tan 28 = 0.505 m
+    int transposed = 0;
+    for (const auto& b : macro_wall_blocks(s)) {
+        CHECK(b.transposed == (b.region.rfind("spandrel_", 0) == 0));
+        transposed += b.transposed;
+    }
+    CHECK(transposed == 6);
+    const Mesh m = generate_macro_wall(s);
+    for (int t = 0; t < m.n_triangles(); ++t) CHECK(tri_area(m, t) > 0);
+    double area = 0;
+    for (int r = 0; r < 7; ++r) area += mesh_area(m, r);
+    CHECK(std::abs(area - (6.0 - 1.6)) <= 1e-9 * (6.0 - 1.6));
+    const Topology topo = build_topology(m, wall_rules());
+    CHECK(topo.nonconforming_nodes == 0);
+    // Central joint at mid-height of the spandrel, y = 1.6 + 0.2; length L - (H - w) / t.
+    CHECK(joint_coordinate(topo, "spandrel_side", "spandrel_side", 1) == std::set<long long>{1800000000});
+    const double t = std::tan(28.0 * kPi / 180);
+    const auto len = joint_lengths(topo);
+    CHECK(len.at({"spandrel_side", "spandrel_side"}) == Approx(1.0 - (0.4 - 0.05) / t).epsilon(1e-9));
+    // Diagonals keep dy/dx = tan 28: each runs (0.4 - 0.05) / 2 in y, so its length is that / sin(phi).
+    CHECK(len.at({"spandrel_cap", "spandrel_side"}) == Approx(4 * 0.5 * (0.4 - 0.05) / std::sin(28.0 * kPi / 180)).epsilon(1e-9));
+    // The caps are the end blocks, against the nodes; the "side" blocks against the beam.
+    CHECK(len.at({"node", "spandrel_cap"}) == Approx(2 * 0.4).epsilon(1e-9));
+    CHECK(len.at({"beam", "spandrel_side"}) == Approx(1.0).epsilon(1e-9));
+    CHECK(len.count({"node", "spandrel_side"}) == 0);
+}
+
+TEST_CASE("macro wall: bad openings give one-line problems naming the opening and the values", "[unit][macro]") {
+    auto problem = [](const MacroWallSpec& s) {
+        const auto p = check(s);
+        REQUIRE(p.size() == 1);
+        CHECK_THROWS_WITH(generate_macro_wall(s), Catch::Contains(p[0]));
+        return p[0];
+    };
+    using Catch::Contains;
+    MacroWallSpec s = door_wall();
+    s.length = 5.0;
+    s.openings = {{1.0, 0.0, 1.0, 1.35}, {3.0, 0.2, 1.0, 1.35}};  // not aligned: y differs
+    CHECK_THAT(problem(s), Contains("geometry.openings[2].y = 0.2 m") && Contains("one row of openings"));
+    s.openings = {{1.0, 0.0, 1.0, 1.35}, {3.0, 0.0, 1.0, 1.2}};  // not aligned: height differs
+    CHECK_THAT(problem(s), Contains("geometry.openings[2].height = 1.2 m") && Contains("one row of openings"));
+    s.openings = {{2.5, 0.0, 1.0, 1.35}, {1.0, 0.0, 2.0, 1.35}};  // overlapping (given out of x order)
+    CHECK_THAT(problem(s), Contains("geometry.openings[2] (x in [1, 3] m) and geometry.openings[1] (x in [2.5, 3.5] m)") &&
+                               Contains("overlap"));
+    s.openings = {{1.0, 0.0, 1.0, 1.35}, {2.0, 0.0, 1.0, 1.35}};  // touching: no pier between
+    CHECK_THAT(problem(s), Contains("overlap or touch"));
+    s = door_wall();
+    s.openings = {{0.0, 0.0, 1.0, 1.35}};  // at the left end
+    CHECK_THAT(problem(s), Contains("geometry.openings[1].x = 0 m") && Contains("left end"));
+    s.openings = {{2.0, 0.0, 1.0, 1.35}};  // reaching the right end
+    CHECK_THAT(problem(s), Contains("geometry.openings[1]: x + width = 3 m") && Contains("right end"));
+    s.openings = {{1.0, 0.8, 1.0, 1.35}};  // lintel 2.15 m above the 2.0 m wall
+    CHECK_THAT(problem(s), Contains("lintel y + height = 2.15 m") && Contains("geometry.height = 2 m"));
+    s.openings = {{1.0, -0.1, 1.0, 1.35}};
+    CHECK_THAT(problem(s), Contains("geometry.openings[1].y (the sill) must be >= 0"));
+    s.openings.clear();
+    CHECK_THAT(problem(s), Contains("geometry.openings") && Contains("at least one opening"));
+    s = door_wall();
+    s.openings = {{0.2, 0.0, 1.0, 1.35}};  // a 0.2 m pier: the 0.15 m joints do not fit (0.15 >= 0.1)
+    s.horizontal_joint = 0.15;
+    CHECK_THAT(problem(s), Contains("geometry.horizontal_joint = 0.15 m does not fit the pier panel 1"));
+}
+
+TEST_CASE("macro wall through the case reader: unknown keys are rejected, bad openings name file and key", "[unit][macro]") {
+    const std::string good = R"([case]
+name = "macro_wall"
+thickness = 0.25
+[geometry]
+type = "macro_wall"
+length = 3.0
+height = 2.0
+texture_angle = 28.0
+mesh_size = 0.1
+  [[geometry.openings]]
+  x = 1.0
+  y = 0.0
+  width = 1.0
+  height = 1.35
+[materials.brick]
+E = 1.491e9
+nu = 0.25
+density = 1800.0
+[regions]
+cap = "brick"
+side = "brick"
+key = "brick"
+spandrel_cap = "brick"
+spandrel_side = "brick"
+spandrel_key = "brick"
+node = "brick"
+[[stages]]
+duration = 0.001
+  [[stages.supports]]
+  group = "wall_bottom"
+  fix = "xy"
+)";
+    const auto dir = ::testing::tmp_dir("macro_wall_case");
+    auto r = ::testing::run_fdem("check \"" + ::testing::write_text(dir / "good.toml", good) + "\"", dir);
+    INFO(r.out << r.err);
+    CHECK(r.code == 0);
+    std::string bad = good;
+    bad.replace(bad.find("mesh_size = 0.1"), 15, "mesh_size = 0.1\ncourses = 3");
+    r = ::testing::run_fdem("check \"" + ::testing::write_text(dir / "unknown.toml", bad) + "\"", dir);
+    CHECK(r.code != 0);
+    CHECK(r.err.find("geometry.courses") != std::string::npos);
+    bad = good;
+    bad.replace(bad.find("  height = 1.35"), 15, "  height = 2.35");
+    r = ::testing::run_fdem("check \"" + ::testing::write_text(dir / "lintel.toml", bad) + "\"", dir);
+    CHECK(r.code != 0);
+    CHECK(r.err.find("lintel.toml:4") != std::string::npos);
+    CHECK(r.err.find("geometry.openings[1]: the lintel y + height = 2.35 m") != std::string::npos);
+}
