@@ -1,13 +1,15 @@
 #!/usr/bin/env python3
-"""Speed against error of the default wall, before and after the settings of RESULTS.md §29 (issue 25): two
-`fdem-tools study speed` folders of the same grid (mass scaling), measured against the same reference curve, drawn
-as two fronts (wall time against the curve's RMS difference, and against the peak's difference) and tabulated.
+"""Speed against error of the default wall, before and after the settings of RESULTS.md §29 (issue 25), and with
+per-node mass scaling (§33): two or three `fdem-tools study speed` folders of the same grid (mass scaling), measured
+against the same reference curve, drawn as fronts (time against the curve's RMS difference, and against the peak's
+difference) and tabulated.
 
-/usr/bin/python3 cases/lourenco2005/plot_front.py BEFORE_STUDY AFTER_STUDY [--out PREFIX]
+/usr/bin/python3 cases/lourenco2005/plot_front.py BEFORE_STUDY AFTER_STUDY [PER_NODE_STUDY] [--out PREFIX]
 
 Each STUDY is a folder written by `fdem-tools study speed ... --reference-run REF --error curve_rms` (its
 speed_study.csv, with the runs' steps and wall and CPU times). Writes PREFIX.csv and PREFIX.png (default study_front_k25_N100_quick) and prints a
-markdown table and, for every run before, the least time after that reaches its curve RMS and its peak error.
+markdown table and, for every run before (and every run after, given PER_NODE_STUDY), the least time of the next
+front that reaches its curve RMS and its peak error.
 """
 import argparse
 import csv
@@ -38,11 +40,13 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("before")
     ap.add_argument("after")
+    ap.add_argument("per_node", nargs="?", help="the study with [numerics] mass_scaling = \"per_node\" (RESULTS.md §33)")
     ap.add_argument("--out", default="study_front_k25_N100_quick")
     a = ap.parse_args()
     global TIME
     before, after = load(a.before, "before"), load(a.after, "after")
-    rows = before + after
+    per_node = load(a.per_node, "per node") if a.per_node else []
+    rows = before + after + per_node
     if any(r["cpu_time_s"] != r["cpu_time_s"] for r in rows):  # NaN: a summary without cpu_time_s
         TIME = "wall_time_s"
     with open(a.out + ".csv", "w", newline="") as f:
@@ -58,18 +62,22 @@ def main():
               f"{100 * r['K_e_error']:+.1f} % | {100 * r['ductility_error']:+.1f} % |")
     print()
     print(f"times: {TIME}")
-    print("| before: mass scaling | its curve RMS | least time after reaching it | ratio of times | ratio of steps |"
-          " its peak error | least time after reaching it | ratio of times |")
-    print("|---:|---:|---|---:|---:|---:|---|---:|")
-    for r in before:
-        q = least_time(after, "curve_rms", r["curve_rms"])
-        p = least_time(after, "peak_error", r["peak_error"])
-        qs = (f"{q[TIME]:.1f} s (mass scaling {q['mass_scale']:g})", f"{r[TIME] / q[TIME]:.1f}",
-              f"{r['steps'] / q['steps']:.1f}") if q else ("not reached", "-", "-")
-        ps = (f"{p[TIME]:.1f} s (mass scaling {p['mass_scale']:g})",
-              f"{r[TIME] / p[TIME]:.1f}") if p else ("not reached", "-")
-        print(f"| {r['mass_scale']:g} | {100 * r['curve_rms']:.2f} % | {qs[0]} | {qs[1]} | {qs[2]} | "
-              f"{100 * r['peak_error']:+.2f} % | {ps[0]} | {ps[1]} |")
+    for old_name, olds, new_name, news in (("before", before, "after", after), ("after", after, "per node", per_node)):
+        if not news:
+            continue
+        print()
+        print(f"| {old_name}: mass scaling | its curve RMS | least time {new_name} reaching it | ratio of times | ratio of steps |"
+              f" its peak error | least time {new_name} reaching it | ratio of times |")
+        print("|---:|---:|---|---:|---:|---:|---|---:|")
+        for r in olds:
+            q = least_time(news, "curve_rms", r["curve_rms"])
+            p = least_time(news, "peak_error", r["peak_error"])
+            qs = (f"{q[TIME]:.1f} s (mass scaling {q['mass_scale']:g})", f"{r[TIME] / q[TIME]:.1f}",
+                  f"{r['steps'] / q['steps']:.1f}") if q else ("not reached", "-", "-")
+            ps = (f"{p[TIME]:.1f} s (mass scaling {p['mass_scale']:g})",
+                  f"{r[TIME] / p[TIME]:.1f}") if p else ("not reached", "-")
+            print(f"| {r['mass_scale']:g} | {100 * r['curve_rms']:.2f} % | {qs[0]} | {qs[1]} | {qs[2]} | "
+                  f"{100 * r['peak_error']:+.2f} % | {ps[0]} | {ps[1]} |")
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -77,7 +85,10 @@ def main():
     for ax, key, name in ((axes[0], "curve_rms", "RMS curve difference, 0-10 mm (% of the reference peak)"),
                           (axes[1], "peak_error", "peak difference (% of the reference peak)")):
         for label, rs, style in (("before (intrinsic cracks, penalty 1e10 Pa, 0.005 s ramp)", before, "o--"),
-                                 ("after (extrinsic insertion, contact penalty 1e9 Pa, 0.1 s ramp)", after, "s-")):
+                                 ("after (extrinsic insertion, contact penalty 1e9 Pa, 0.1 s ramp)", after, "s-"),
+                                 ("per node (after, with mass_scaling = \"per_node\")", per_node, "^-")):
+            if not rs:
+                continue
             t = [r[TIME] for r in rs]
             e = [100 * abs(r[key]) for r in rs]
             ax.plot(t, e, style, label=label)
@@ -89,7 +100,7 @@ def main():
         ax.set_ylabel(name, fontsize=8)
         ax.grid(alpha=0.3, which="both")
     axes[0].legend(fontsize=7)
-    fig.suptitle("Default wall (k25_N100_quick), mass scaling marked; reference: mass scaling 10 at half the rate",
+    fig.suptitle("Default wall (k25_N100_quick), mass scaling marked; reference: uniform mass scaling 10 at half the rate",
                  fontsize=9)
     fig.tight_layout()
     fig.savefig(a.out + ".png", dpi=130)

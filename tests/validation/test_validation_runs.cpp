@@ -90,11 +90,12 @@ TEST_CASE("single stone in tension, 25 mm: peak force f_t A within 5 %", "[regre
 // A [K25]-style dry-stone wall (cases/README.md §A, seeds/004 set-up): issue 5's acceptance, the peak within 25 % of
 // the test (issue 27 §2: none worse than 25 %), and issue 27 §2's, within 8 % of the published FDEM prediction of
 // [K25] Table 3 (the same model). The engine's reference check takes the raw largest load; the family report's peaks
-// are averaged over 0.5 mm. Measured on 27 Nov (lourenco2005/RESULTS.md §30, averaged; the 100 kN wall's raw peak
-// 39.42 kN): 13.64 / 39.23 / 74.39 / 91.73 kN against the tests' 20.23 / 44.73 / 69.96 / 102.95 kN and the
-// published 17.10 / 47.75 / 86.82 / 106.17 kN: 30 kN misses both limits, the others the published one, so THESE TESTS
-// FAIL until the model ingredient RESULTS.md §30 looks for is found (kept failing on purpose: they state the
-// acceptance, they are not loosened). Family setting (mass scaling 10, 0.01 m/s to 10 mm): 1.5-8 minutes each.
+// are averaged over 0.5 mm. Measured on 27 Nov (lourenco2005/RESULTS.md §33, averaged; raw largest loads 13.83 /
+// 39.54 / 75.76 / 92.69 kN): 13.69 / 39.43 / 74.95 / 91.67 kN against the tests' 20.23 / 44.73 / 69.96 / 102.95 kN
+// and the published 17.10 / 47.75 / 86.82 / 106.17 kN: 30 kN misses both limits, the others the published one, so
+// THESE TESTS FAIL until the model ingredient RESULTS.md §30 looks for is found (kept failing on purpose: they state
+// the acceptance, they are not loosened). Family setting (per-node mass scaling 10, 0.01 m/s to 10 mm): about a
+// minute each on one thread.
 static void check_dry_stone_wall(const std::string& rel_case, const std::string& name, double published) {
     const std::string s = run_case(rel_case, name);
     const double err = reference_number(s, "relative_error");
