@@ -255,9 +255,9 @@ struct CaseSpec {
     // Inertial mass multiplier for quasi-static runs (density scaling, as UDEC/3DEC do): the time step grows by
     // sqrt(mass_scale); gravity keeps the physical mass. 1 = physical dynamics.
     double mass_scale = 1;
-    // mass_scaling = "per_node": after mass_scale, every node whose joint or contact springs would set a step below
-    // the triangles' raises its inertial mass (with its tied copies) just enough to be stable at the triangles' step
-    // (the Itasca codes' node-by-node density scaling). false = "uniform", the default.
+    // mass_scaling = "per_node": after mass_scale, every node whose joint or contact springs are not stable at 4/3 of
+    // the triangles' step raises its inertial mass (with its tied copies) just enough to be (the Itasca codes'
+    // node-by-node density scaling; integrator.cpp scale_node_masses). false = "uniform", the default.
     bool per_node_mass = false;
     std::optional<double> dt_override;  // s, a fixed time step (tests of the stability limit), bypasses the safety factor
     double history_interval = 0;   // s; 0 = every 100 steps
