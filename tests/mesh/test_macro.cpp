@@ -466,3 +466,56 @@ duration = 0.001
     CHECK(r.err.find("lintel.toml:4") != std::string::npos);
     CHECK(r.err.find("geometry.openings[1]: the lintel y + height = 2.35 m") != std::string::npos);
 }
+
+namespace {
+
+// A mesh's fingerprint for the recorded-mesh test below: counts, coordinate sums, connectivity, regions, bodies.
+struct MeshPrint {
+    int triangles = 0, nodes = 0;
+    double sx = 0, sy = 0, sr = 0;
+    long long weighted = 0, regions = 0, bodies = 0;
+};
+
+MeshPrint print_of(const Mesh& m) {
+    MeshPrint p;
+    p.triangles = m.n_triangles();
+    p.nodes = m.n_nodes();
+    for (int k = 0; k < m.n_nodes(); ++k) {
+        p.sx += m.xy[2 * k];
+        p.sy += m.xy[2 * k + 1];
+        p.sr += m.xy[2 * k] * m.xy[2 * k] + m.xy[2 * k + 1] * m.xy[2 * k + 1];
+    }
+    for (std::size_t i = 0; i < m.tri.size(); ++i) p.weighted += static_cast<long long>(i % 7 + 1) * m.tri[i];
+    for (int t = 0; t < m.n_triangles(); ++t) {
+        p.regions += static_cast<long long>(t % 5 + 1) * m.tri_region[t];
+        p.bodies += static_cast<long long>(t % 5 + 1) * m.tri_body[t];
+    }
+    return p;
+}
+
+}  // namespace
+
+// Recorded on commit fc933ff (before lintels): the door wall, the window wall and the squat-spandrel wall at 0.1 m
+// must keep their triangles, node coordinates, connectivity, regions and bodies when no lintel is given.
+TEST_CASE("macro wall: the meshes without a lintel are the ones recorded before lintels existed", "[regression][macro]") {
+    MacroWallSpec window = door_wall();
+    window.openings = {{1.0, 0.5, 1.0, 0.9}};
+    const MacroWallSpec specs[] = {door_wall(), window, door_wall(1.6)};
+    const MeshPrint recorded[] = {
+        {1766, 967, 1451.6357517664935, 924.1800533088275, 4549.3282802151343, 9964199, 19642, 65094},
+        {1864, 1010, 1515.4603975070927, 913.65145943266521, 4579.6999365163274, 11024626, 24242, 102747},
+        {1658, 914, 1370.0973907796094, 867.19113332286622, 4335.906876470669, 8793245, 16846, 56541}};
+    for (int i = 0; i < 3; ++i) {
+        INFO("wall " << i);
+        const MeshPrint p = print_of(generate_macro_wall(specs[i]));
+        const MeshPrint& r = recorded[i];
+        REQUIRE(p.triangles == r.triangles);
+        REQUIRE(p.nodes == r.nodes);
+        CHECK(p.sx == Approx(r.sx).epsilon(1e-12));
+        CHECK(p.sy == Approx(r.sy).epsilon(1e-12));
+        CHECK(p.sr == Approx(r.sr).epsilon(1e-12));
+        CHECK(p.weighted == r.weighted);
+        CHECK(p.regions == r.regions);
+        CHECK(p.bodies == r.bodies);
+    }
+}
