@@ -61,8 +61,9 @@
 //                                    here deformable, the case gives it the masonry);
 //     opening column x middle band   empty.
 //   Every cell edge ends at cell corners (the panels put vertices on their outline at the corners only), so two
-//   touching cells share their whole edge; the cells' coordinates are the same doubles (0, the openings' x and
-//   x + width, y_s, y_l, length, H), so the fragment merges shared corners exactly.
+//   touching cells share their whole edge (not so with a lintel: LINTELS below); the cells' coordinates are the
+//   same doubles (0, the openings' x and x + width, y_s, y_l, length, H), so the fragment merges shared corners
+//   exactly.
 //   Joint pairs inside a panel: pier (cap, side) diagonal, (side, side) central, (key, side) short, (cap, key) tie;
 //   spandrel the same with the spandrel_ names. Between cells, through the blocks on the panel's outline:
 //     tall pier panel:         top and bottom edges are cap -> (cap, node), or (beam, cap) if y_l = H,
