@@ -565,6 +565,8 @@ void read_macro_wall(Ctx& ctx, Reader& r, mesh::MacroWallSpec& m) {
     m.base_overhang = r.number("base_overhang", false, "a base overhang of 0 or in [1e-6, 1e4] m", nonneg).value_or(0);
     m.mesh_size_beam = r.number("mesh_size_beam", false, "a mesh size > 0 in m", positive).value_or(0);
     m.mesh_size_base = r.number("mesh_size_base", false, "a mesh size > 0 in m", positive).value_or(0);
+    m.lintel_height = r.number("lintel_height", false, "a lintel depth of 0 or in [1e-6, 1e4] m", nonneg).value_or(0);
+    m.lintel_bearing = r.number("lintel_bearing", false, "a lintel bearing of 0 or in [1e-6, 1e4] m", nonneg).value_or(0);
     for (const toml::table* t : r.tables("openings", true, "[[geometry.openings]] blocks { x, y, width, height }")) {
         Reader o(ctx, *t, r.key_path("openings." + std::to_string(m.openings.size() + 1)));
         mesh::MacroWallOpening op;

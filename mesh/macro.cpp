@@ -257,7 +257,7 @@ namespace {
 // A rectangular cell of the wall's partition.
 struct Cell {
     double x0, y0, x1, y1;  // m
-    int kind;               // 0 pier panel, 1 spandrel panel, 2 node
+    int kind;               // 0 pier panel, 1 spandrel panel, 2 node, 3 lintel
     std::string name;       // for messages: "pier panel 1", "spandrel above opening 2", ...
 };
 
@@ -271,11 +271,15 @@ std::vector<std::size_t> by_x(const MacroWallSpec& s) {
 }
 
 // The partition: pier panels left to right, then spandrels (per opening: above, below), then nodes (per pier:
-// above, below). Assumes the openings passed check(). Every coordinate is one of the spec's doubles (0, x,
-// x + width, y, y + height, length, height), so touching cells share exact corners.
+// above, below), then with a lintel the lintels (per opening) and the lintel band's nodes (per pier). Assumes the
+// openings passed check(). Every coordinate is one of the spec's doubles (0, x, x + width, y, y + height, length,
+// height) or one computed once from them (x - lintel_bearing, x + width + lintel_bearing, y + height +
+// lintel_height), so touching cells share exact corners.
 std::vector<Cell> wall_cells(const MacroWallSpec& s) {
     const auto order = by_x(s);
     const double ys = s.openings.front().y, yl = ys + s.openings.front().height, H = s.height;
+    const bool lintel = s.lintel_height > 0;
+    const double yu = lintel ? yl + s.lintel_height : yl;  // the upper band's bottom
     std::vector<double> px0{0.0}, px1;  // pier columns
     for (std::size_t i : order) {
         px1.push_back(s.openings[i].x);
@@ -287,12 +291,26 @@ std::vector<Cell> wall_cells(const MacroWallSpec& s) {
         cells.push_back({px0[p], ys, px1[p], yl, 0, "pier panel " + std::to_string(p + 1)});
     for (std::size_t k = 0; k < order.size(); ++k) {
         const std::string o = " opening " + std::to_string(order[k] + 1);
-        if (yl < H) cells.push_back({px1[k], yl, px0[k + 1], H, 1, "spandrel above" + o});
+        if (yu < H) cells.push_back({px1[k], yu, px0[k + 1], H, 1, "spandrel above" + o});
         if (ys > 0) cells.push_back({px1[k], 0.0, px0[k + 1], ys, 1, "spandrel below" + o});
     }
     for (std::size_t p = 0; p < px0.size(); ++p) {
-        if (yl < H) cells.push_back({px0[p], yl, px1[p], H, 2, "node above pier " + std::to_string(p + 1)});
+        if (yu < H) cells.push_back({px0[p], yu, px1[p], H, 2, "node above pier " + std::to_string(p + 1)});
         if (ys > 0) cells.push_back({px0[p], 0.0, px1[p], ys, 2, "node below pier " + std::to_string(p + 1)});
+    }
+    if (!lintel) return cells;
+    // The lintel band [yl, yu]: a lintel over each opening reaching lintel_bearing into the piers on both sides,
+    // the rest of each pier's width a node. The bearing ends are computed once each and used by both neighbours.
+    const double b = s.lintel_bearing;
+    std::vector<double> lx0, lx1;  // lintel k spans [lx0[k], lx1[k]]
+    for (std::size_t k = 0; k < order.size(); ++k) {
+        lx0.push_back(px1[k] - b);
+        lx1.push_back(px0[k + 1] + b);
+        cells.push_back({lx0[k], yl, lx1[k], yu, 3, "lintel over opening " + std::to_string(order[k] + 1)});
+    }
+    for (std::size_t p = 0; p < px0.size(); ++p) {
+        const double x0 = p > 0 ? lx1[p - 1] : px0[p], x1 = p + 1 < px0.size() ? lx0[p] : px1[p];
+        cells.push_back({x0, yl, x1, yu, 2, "node beside the lintels over pier " + std::to_string(p + 1)});
     }
     return cells;
 }
@@ -313,6 +331,11 @@ std::vector<std::string> check(const MacroWallSpec& s) {
     spec_check::beam_and_sizes(len, s);
     len.nonnegative(s.base_height, "base_height");
     len.nonnegative(s.base_overhang, "base_overhang");
+    len.nonnegative(s.lintel_height, "lintel_height");
+    len.nonnegative(s.lintel_bearing, "lintel_bearing");
+    if (s.lintel_bearing > 0 && !(s.lintel_height > 0))
+        bad.push_back("geometry.lintel_bearing = " + num(s.lintel_bearing) + " m needs a lintel: geometry.lintel_height "
+                      "must be > 0 with it, got " + num(s.lintel_height) + " m");
     if (!(s.texture_angle > 0 && s.texture_angle < 90))
         bad.push_back("geometry.texture_angle must be in (0, 90) deg, got " + num(s.texture_angle));
     if (!(s.horizontal_joint > 0))
@@ -365,10 +388,33 @@ std::vector<std::string> check(const MacroWallSpec& s) {
                           " m) overlap or touch: macro_wall needs a pier of positive length between two openings");
     }
     if (!bad.empty()) return bad;
+    // The lintel band must fit under the wall top, and the bearings must leave node material on every pier.
+    if (s.lintel_height > 0) {
+        const double yl = first.y + first.height;
+        if (!(yl + s.lintel_height <= s.height))
+            bad.push_back("geometry.lintel_height = " + num(s.lintel_height) + " m puts the lintels' top (y + height + "
+                          "lintel_height = " + num(yl + s.lintel_height) + " m) above the wall's geometry.height = " +
+                          num(s.height) + " m");
+        const double b = s.lintel_bearing;
+        const std::size_t n = order.size() + 1;  // piers
+        for (std::size_t p = 0; p < n; ++p) {
+            const double x0 = p == 0 ? 0.0 : s.openings[order[p - 1]].x + s.openings[order[p - 1]].width;
+            const double x1 = p + 1 < n ? s.openings[order[p]].x : s.length;
+            const int bearings = (p > 0) + (p + 1 < n);
+            // The node's ends as wall_cells computes them (x + width + bearing, x - bearing).
+            const double n0 = p > 0 ? x0 + b : x0, n1 = p + 1 < n ? x1 - b : x1;
+            if (!(n0 < n1))
+                bad.push_back("geometry.lintel_bearing = " + num(b) + " m leaves no node between the lintels on pier " +
+                              std::to_string(p + 1) + " (x in " + range(x0, x1) + " m): its " +
+                              (bearings == 1 ? "bearing" : std::to_string(bearings) + " bearings") + " (" +
+                              num(bearings * b) + " m) must be shorter than its length " + num(x1 - x0) + " m");
+        }
+        if (!bad.empty()) return bad;
+    }
     // Every panel's keys must fit: w below half the panel's length (tall) or height (transposed).
     const double t = std::tan(s.texture_angle * kPi / 180.0), w = s.horizontal_joint;
     for (const Cell& c : wall_cells(s)) {
-        if (c.kind == 2) continue;
+        if (c.kind >= 2) continue;  // nodes and lintels are plain blocks
         const bool tall = is_tall(c, t, w);
         const double side = tall ? c.x1 - c.x0 : c.y1 - c.y0;
         if (!(w < 0.5 * side))
@@ -388,8 +434,9 @@ std::vector<MacroWallBlock> macro_wall_blocks(const MacroWallSpec& s) {
                                                     {"spandrel_cap", "spandrel_side", "spandrel_key"}};
     std::vector<MacroWallBlock> out;
     for (const Cell& c : wall_cells(s)) {
-        if (c.kind == 2) {
-            out.push_back({{{c.x0, c.y0}, {c.x1, c.y0}, {c.x1, c.y1}, {c.x0, c.y1}}, "node", false});
+        if (c.kind >= 2) {
+            out.push_back({{{c.x0, c.y0}, {c.x1, c.y0}, {c.x1, c.y1}, {c.x0, c.y1}}, c.kind == 2 ? "node" : "lintel",
+                           false});
             continue;
         }
         const bool transposed = !is_tall(c, t, w);
@@ -402,7 +449,7 @@ std::vector<MacroWallBlock> macro_wall_blocks(const MacroWallSpec& s) {
 Mesh generate_macro_wall(const MacroWallSpec& s) {
     const auto blocks = macro_wall_blocks(s);  // throws the check() problems
     BlockSet b = frame_of(s);
-    b.region_names = {"cap", "side", "key", "spandrel_cap", "spandrel_side", "spandrel_key", "node"};
+    b.region_names = {"cap", "side", "key", "spandrel_cap", "spandrel_side", "spandrel_key", "node", "lintel"};
     b.edge_prefix = "wall";
     b.what = "the macro-block wall";
     for (const auto& blk : blocks) {

@@ -61,8 +61,9 @@
 //                                    here deformable, the case gives it the masonry);
 //     opening column x middle band   empty.
 //   Every cell edge ends at cell corners (the panels put vertices on their outline at the corners only), so two
-//   touching cells share their whole edge; the cells' coordinates are the same doubles (0, the openings' x and
-//   x + width, y_s, y_l, length, H), so the fragment merges shared corners exactly.
+//   touching cells share their whole edge (not so with a lintel: LINTELS below); the cells' coordinates are the
+//   same doubles (0, the openings' x and x + width, y_s, y_l, length, H), so the fragment merges shared corners
+//   exactly.
 //   Joint pairs inside a panel: pier (cap, side) diagonal, (side, side) central, (key, side) short, (cap, key) tie;
 //   spandrel the same with the spandrel_ names. Between cells, through the blocks on the panel's outline:
 //     tall pier panel:         top and bottom edges are cap -> (cap, node), or (beam, cap) if y_l = H,
@@ -73,11 +74,28 @@
 //                              edge (base, spandrel_cap); the edge on the opening is free.
 //     transposed spandrel:     left and right edges are spandrel_cap -> (node, spandrel_cap); top / bottom
 //                              (beam, spandrel_side), (base, spandrel_side).
-//     node:                    (beam, node) in the upper band, (base, node) in the lower; never node on node.
+//     node:                    (beam, node) in the upper band, (base, node) in the lower; never node on node
+//                              (except under a lintel band, below).
 //   The beam and base span x in [-overhang, length + overhang] as for the pier; the beam also meets the pier panels
 //   (y_l = H) and the base the pier panels when y_s = 0 (a door).
+//   LINTELS (lintel_height h_l > 0, lintel_bearing b >= 0): the band [y_l, y_l + h_l] above the openings becomes a
+//   lintel band and the upper band starts at y_u = y_l + h_l (none if y_u = H). Over each opening [x, x + width] a
+//   plain elastic block, region "lintel", spans x in [x - b, x + width + b] (it bears b on each pier); the rest of
+//   the band over each pier is a node block (region "node", as the nodes above): x from the pier's left end (or
+//   the left lintel's x + width + b) to its right end (or the right lintel's x - b). The bearings must leave node
+//   material: for each pier, the bearings entering it (one for an end pier, two for an interior one) sum to less
+//   than its length; y_u <= H; the shorter upper spandrel takes its own layout (tall or transposed) and must pass
+//   the per-panel checks. The bearing ends x - b, x + width + b and y_u are computed once and shared by both
+//   neighbours; the T-junctions (a pier panel's top edge meeting a node and a lintel's bearing end, a lintel's top
+//   edge meeting a spandrel and the nodes above) are split by the fragment, as the beam and base overhangs are.
+//   Pairs that then occur: under the spandrel (lintel, spandrel_cap) if it is tall, (lintel, spandrel_side) if
+//   transposed; (lintel, node) at the bearing ends and on the bearings' top; (cap, lintel) (tall pier) or
+//   (lintel, side) (transposed pier) where a pier panel's top meets a bearing, the rest of that top meeting the
+//   band's node as before, (cap, node) or (node, side); (node, node) between a band node and the node above it
+//   (the only node on node: tie it to keep the equivalent-frame node one block); (beam, lintel) and (beam, node)
+//   for the band if y_u = H. Without a lintel none of these occur and the mesh is the one before lintels existed.
 //   PHYSICAL GROUPS: regions in this order (each only if it has blocks): "cap", "side", "key", "spandrel_cap",
-//   "spandrel_side", "spandrel_key", "node", "beam", "base"; curves "wall_bottom", "wall_top", "wall_left",
+//   "spandrel_side", "spandrel_key", "node", "lintel", "beam", "base"; curves "wall_bottom", "wall_top", "wall_left",
 //   "wall_right" (block edges on y = 0, y = H, x = 0, x = length), "beam_*" and "base_*" as above; points
 //   "toe_left" (0, 0), "toe_right" (length, 0). Each block its own body.
 #pragma once
@@ -142,12 +160,14 @@ struct MacroWallSpec {
     double base_overhang = 0;      // m
     double mesh_size_beam = 0;     // m, 0 = mesh_size
     double mesh_size_base = 0;     // m, 0 = mesh_size
+    double lintel_height = 0;      // m, depth of the lintel band over the openings; 0 = no lintel
+    double lintel_bearing = 0;     // m, how far each lintel reaches into the piers on each side (needs a lintel)
 };
 
 // One block of the wall: its outline (CCW), region name, and whether its panel uses the transposed layout.
 struct MacroWallBlock {
     std::vector<std::array<double, 2>> outline;
-    std::string region;  // "cap", "side", "key", "spandrel_cap", "spandrel_side", "spandrel_key" or "node"
+    std::string region;  // "cap", "side", "key", "spandrel_cap", "spandrel_side", "spandrel_key", "node" or "lintel"
     bool transposed = false;
 };
 
@@ -156,7 +176,8 @@ struct MacroWallBlock {
 std::vector<std::string> check(const MacroWallSpec& spec);
 
 // The wall's blocks: pier panels left to right, then spandrels (per opening, upper then lower), then nodes (per
-// pier, upper then lower). Throws MeshError if check() fails.
+// pier, upper then lower), then with a lintel the lintels (per opening) and the lintel band's nodes (per pier), all
+// left to right. Throws MeshError if check() fails.
 std::vector<MacroWallBlock> macro_wall_blocks(const MacroWallSpec& spec);
 
 // The meshed wall (blocks, beam, base). Throws MeshError naming the problem (check()) or a Gmsh failure.

@@ -466,3 +466,275 @@ duration = 0.001
     CHECK(r.err.find("lintel.toml:4") != std::string::npos);
     CHECK(r.err.find("geometry.openings[1]: the lintel y + height = 2.35 m") != std::string::npos);
 }
+
+namespace {
+
+// A mesh's fingerprint for the recorded-mesh test below: counts, coordinate sums, connectivity, regions, bodies.
+struct MeshPrint {
+    int triangles = 0, nodes = 0;
+    double sx = 0, sy = 0, sr = 0;
+    long long weighted = 0, regions = 0, bodies = 0;
+};
+
+MeshPrint print_of(const Mesh& m) {
+    MeshPrint p;
+    p.triangles = m.n_triangles();
+    p.nodes = m.n_nodes();
+    for (int k = 0; k < m.n_nodes(); ++k) {
+        p.sx += m.xy[2 * k];
+        p.sy += m.xy[2 * k + 1];
+        p.sr += m.xy[2 * k] * m.xy[2 * k] + m.xy[2 * k + 1] * m.xy[2 * k + 1];
+    }
+    for (std::size_t i = 0; i < m.tri.size(); ++i) p.weighted += static_cast<long long>(i % 7 + 1) * m.tri[i];
+    for (int t = 0; t < m.n_triangles(); ++t) {
+        p.regions += static_cast<long long>(t % 5 + 1) * m.tri_region[t];
+        p.bodies += static_cast<long long>(t % 5 + 1) * m.tri_body[t];
+    }
+    return p;
+}
+
+}  // namespace
+
+// Recorded on commit fc933ff (before lintels): the door wall, the window wall and the squat-spandrel wall at 0.1 m
+// must keep their triangles, node coordinates, connectivity, regions and bodies when no lintel is given.
+TEST_CASE("macro wall: the meshes without a lintel are the ones recorded before lintels existed", "[regression][macro]") {
+    MacroWallSpec window = door_wall();
+    window.openings = {{1.0, 0.5, 1.0, 0.9}};
+    const MacroWallSpec specs[] = {door_wall(), window, door_wall(1.6)};
+    const MeshPrint recorded[] = {
+        {1766, 967, 1451.6357517664935, 924.1800533088275, 4549.3282802151343, 9964199, 19642, 65094},
+        {1864, 1010, 1515.4603975070927, 913.65145943266521, 4579.6999365163274, 11024626, 24242, 102747},
+        {1658, 914, 1370.0973907796094, 867.19113332286622, 4335.906876470669, 8793245, 16846, 56541}};
+    for (int i = 0; i < 3; ++i) {
+        INFO("wall " << i);
+        const MeshPrint p = print_of(generate_macro_wall(specs[i]));
+        const MeshPrint& r = recorded[i];
+        REQUIRE(p.triangles == r.triangles);
+        REQUIRE(p.nodes == r.nodes);
+        CHECK(p.sx == Approx(r.sx).epsilon(1e-12));
+        CHECK(p.sy == Approx(r.sy).epsilon(1e-12));
+        CHECK(p.sr == Approx(r.sr).epsilon(1e-12));
+        CHECK(p.weighted == r.weighted);
+        CHECK(p.regions == r.regions);
+        CHECK(p.bodies == r.bodies);
+    }
+}
+
+// ---- lintels (mesh/macro.hpp "LINTELS") ----
+
+namespace {
+
+// The door wall with a lintel 0.15 m deep bearing 0.2 m on each pier: lintel [0.8, 2.2] x [1.35, 1.5], band nodes
+// [0, 0.8] and [2.2, 3.0] x [1.35, 1.5], spandrel 1.0 x 0.5 m from y = 1.5, transposed at 28 deg (0.5 <= (1.0 -
+// 0.05) tan 28 = 0.505 m), nodes [0, 1] and [2, 3] x [1.5, 2.0] above.
+MacroWallSpec lintel_wall() {
+    MacroWallSpec s = door_wall();
+    s.lintel_height = 0.15;
+    s.lintel_bearing = 0.2;
+    return s;
+}
+
+// A bonded rule for every pair of the mesh's regions (cap-key tied).
+TopologyOptions lintel_rules(const Mesh& m) {
+    TopologyOptions opt;
+    for (const std::string& a : m.regions)
+        for (const std::string& b : m.regions)
+            if (a <= b) opt.interfaces.push_back({a, b, a == "cap" && b == "key" ? InterfaceKind::tied : InterfaceKind::bonded});
+    return opt;
+}
+
+double outline_area(const std::vector<std::array<double, 2>>& p) {
+    double a = 0;
+    for (std::size_t i = 0; i < p.size(); ++i) {
+        const auto& u = p[i];
+        const auto& v = p[(i + 1) % p.size()];
+        a += u[0] * v[1] - v[0] * u[1];
+    }
+    return 0.5 * a;
+}
+
+}  // namespace
+
+TEST_CASE("macro wall lintel: the door wall's lintel band, the shorter spandrel and the documented pairs", "[unit][macro]") {
+    const MacroWallSpec s = lintel_wall();
+    REQUIRE(check(s).empty());
+    std::map<std::string, int> blocks;
+    double block_area = 0;
+    for (const auto& b : macro_wall_blocks(s)) {
+        ++blocks[b.region];
+        block_area += outline_area(b.outline);
+        CHECK(b.transposed == (b.region.rfind("spandrel_", 0) == 0));  // the 0.5 m spandrel is squat now
+        if (b.region == "lintel") CHECK(outline_area(b.outline) == Approx((1.0 + 2 * 0.2) * 0.15).epsilon(1e-12));
+        if (b.region.rfind("spandrel_", 0) == 0)
+            for (const auto& v : b.outline) {
+                CHECK(v[1] >= 1.35 + 0.15);
+                CHECK(v[1] <= 2.0);
+            }
+    }
+    CHECK(blocks == std::map<std::string, int>{{"cap", 4}, {"side", 4}, {"key", 4}, {"spandrel_cap", 2},
+                                               {"spandrel_side", 2}, {"spandrel_key", 2}, {"node", 4}, {"lintel", 1}});
+    const double expected = s.length * s.height - 1.0 * 1.35;
+    CHECK(std::abs(block_area - expected) <= 1e-9 * expected);
+
+    const Mesh m = generate_macro_wall(s);
+    REQUIRE(m.regions == std::vector<std::string>{"cap", "side", "key", "spandrel_cap", "spandrel_side",
+                                                  "spandrel_key", "node", "lintel", "beam", "base"});
+    CHECK(bodies_per_region(m) == std::map<std::string, int>{{"cap", 4}, {"side", 4}, {"key", 4}, {"spandrel_cap", 2},
+                                                             {"spandrel_side", 2}, {"spandrel_key", 2}, {"node", 4},
+                                                             {"lintel", 1}, {"beam", 1}, {"base", 1}});
+    double area = 0;
+    for (int r = 0; r < 8; ++r) area += mesh_area(m, r);
+    CHECK(std::abs(area - expected) <= 1e-9 * expected);
+    CHECK(mesh_area(m, 7) == Approx(1.4 * 0.15).epsilon(1e-9));
+    for (int t = 0; t < m.n_triangles(); ++t) CHECK(tri_area(m, t) > 0);
+    // The spandrel's triangles lie in [1.5, 2.0]: the spandrel panel starts on the lintel.
+    for (int t = 0; t < m.n_triangles(); ++t)
+        if (m.regions[m.tri_region[t]].rfind("spandrel_", 0) == 0)
+            for (int i = 0; i < 3; ++i) {
+                const double y = m.xy[2 * m.tri[3 * t + i] + 1];
+                CHECK((y >= 1.5 - 1e-12 && y <= 2.0 + 1e-12));
+            }
+    // The touching pairs are the documented ones (macro.hpp "LINTELS", transposed spandrel, tall piers).
+    const Topology topo = build_topology(m, lintel_rules(m));
+    CHECK(topo.nonconforming_nodes == 0);  // the T-junctions at the bearing ends are conforming
+    const auto len = joint_lengths(topo);
+    std::set<std::pair<std::string, std::string>> pairs;
+    for (const auto& [p, l] : len) pairs.insert(p);
+    CHECK(pairs == std::set<std::pair<std::string, std::string>>{
+                       {"cap", "side"}, {"side", "side"}, {"key", "side"}, {"cap", "key"},
+                       {"spandrel_cap", "spandrel_side"}, {"spandrel_side", "spandrel_side"},
+                       {"spandrel_key", "spandrel_side"}, {"spandrel_cap", "spandrel_key"},
+                       {"cap", "node"}, {"cap", "lintel"}, {"lintel", "node"}, {"lintel", "spandrel_side"},
+                       {"node", "node"}, {"node", "spandrel_cap"}, {"beam", "spandrel_side"}, {"beam", "node"},
+                       {"base", "cap"}});
+    CHECK(len.at({"cap", "lintel"}) == Approx(2 * 0.2).epsilon(1e-9));            // the two bearings
+    CHECK(len.at({"cap", "node"}) == Approx(2 * 0.8).epsilon(1e-9));              // the piers' tops beside them
+    CHECK(len.at({"lintel", "node"}) == Approx(2 * 0.15 + 2 * 0.2).epsilon(1e-9));  // bearing ends and tops
+    CHECK(len.at({"lintel", "spandrel_side"}) == Approx(1.0).epsilon(1e-9));
+    CHECK(len.at({"node", "node"}) == Approx(2 * 0.8).epsilon(1e-9));             // band node under the node above
+    CHECK(len.at({"node", "spandrel_cap"}) == Approx(2 * 0.5).epsilon(1e-9));
+    CHECK(len.at({"beam", "spandrel_side"}) == Approx(1.0).epsilon(1e-9));
+    CHECK(len.at({"beam", "node"}) == Approx(2.0).epsilon(1e-9));
+    // The bearings are the piers' tops in x in [0.8, 1.0] and [2.0, 2.2], ends included.
+    const auto bearing_x = joint_coordinate(topo, "cap", "lintel", 0);
+    for (long long x : {800000000LL, 1000000000LL, 2000000000LL, 2200000000LL}) CHECK(bearing_x.count(x) == 1);
+    for (long long x : bearing_x) CHECK(((x >= 800000000 && x <= 1000000000) || (x >= 2000000000 && x <= 2200000000)));
+}
+
+TEST_CASE("macro wall lintel: a lintel up to the wall top leaves no upper band and meets the beam", "[unit][macro]") {
+    MacroWallSpec s = lintel_wall();
+    s.lintel_height = 2.0 - 1.35;  // y_l + lintel_height = 2.0 = height
+    REQUIRE(check(s).empty());
+    const Mesh m = generate_macro_wall(s);
+    CHECK(bodies_per_region(m) == std::map<std::string, int>{{"cap", 4}, {"side", 4}, {"key", 4}, {"node", 2},
+                                                             {"lintel", 1}, {"beam", 1}, {"base", 1}});
+    double area = 0;
+    for (int r = 0; r < static_cast<int>(m.regions.size()); ++r)
+        if (m.regions[r] != "beam" && m.regions[r] != "base") area += mesh_area(m, r);
+    CHECK(std::abs(area - (6.0 - 1.35)) <= 1e-9 * (6.0 - 1.35));
+    const Topology topo = build_topology(m, lintel_rules(m));
+    CHECK(topo.nonconforming_nodes == 0);
+    const auto len = joint_lengths(topo);
+    CHECK(len.at({"beam", "lintel"}) == Approx(1.4).epsilon(1e-9));
+    CHECK(len.at({"beam", "node"}) == Approx(1.6).epsilon(1e-9));
+    CHECK(len.at({"lintel", "node"}) == Approx(2 * (2.0 - 1.35)).epsilon(1e-9));
+    CHECK(len.count({"node", "node"}) == 0);
+}
+
+TEST_CASE("macro wall lintel: bad lintel keys give one-line problems naming the key and the values", "[unit][macro]") {
+    auto problem = [](const MacroWallSpec& s) {
+        const auto p = check(s);
+        REQUIRE(p.size() == 1);
+        CHECK_THROWS_WITH(generate_macro_wall(s), Catch::Contains(p[0]));
+        return p[0];
+    };
+    using Catch::Contains;
+    MacroWallSpec s = lintel_wall();
+    s.openings = {{0.5, 0.0, 1.0, 1.35}};  // end piers 0.5 and 1.5 m: a 0.6 m bearing leaves nothing of pier 1
+    s.lintel_bearing = 0.6;
+    CHECK_THAT(problem(s), Contains("geometry.lintel_bearing = 0.6 m leaves no node between the lintels on pier 1 "
+                                    "(x in [0, 0.5] m): its bearing (0.6 m) must be shorter than its length 0.5 m"));
+    s = lintel_wall();
+    s.length = 5.0;
+    s.openings = {{1.0, 0.0, 1.0, 1.35}, {2.8, 0.0, 1.0, 1.35}};  // interior pier 0.8 m: two 0.45 m bearings
+    s.lintel_bearing = 0.45;
+    CHECK_THAT(problem(s), Contains("geometry.lintel_bearing = 0.45 m leaves no node between the lintels on pier 2 "
+                                    "(x in [2, 2.8] m): its 2 bearings (0.9 m) must be shorter than its length 0.8 m"));
+    s.lintel_bearing = 0.39;  // 0.78 m < 0.8 m: fine
+    CHECK(check(s).empty());
+    s = lintel_wall();
+    s.lintel_height = 0.7;  // 1.35 + 0.7 = 2.05 m > 2.0 m
+    CHECK_THAT(problem(s), Contains("geometry.lintel_height = 0.7 m puts the lintels' top (y + height + "
+                                    "lintel_height = 2.05 m) above the wall's geometry.height = 2 m"));
+    s = lintel_wall();
+    s.lintel_height = 0;
+    CHECK_THAT(problem(s), Contains("geometry.lintel_bearing = 0.2 m needs a lintel: geometry.lintel_height must be "
+                                    "> 0 with it, got 0 m"));
+    s = lintel_wall();
+    s.lintel_height = -0.1;
+    s.lintel_bearing = 0;
+    CHECK_THAT(problem(s), Contains("geometry.lintel_height must be >= 0 (m), got -0.1"));
+    s = lintel_wall();
+    s.lintel_bearing = -0.1;
+    CHECK_THAT(problem(s), Contains("geometry.lintel_bearing must be >= 0 (m), got -0.1"));
+    s = lintel_wall();
+    s.lintel_height = 0.6;  // the spandrel above is 0.05 m high (transposed): its 0.05 m joints do not fit
+    CHECK_THAT(problem(s), Contains("geometry.horizontal_joint = 0.05 m does not fit the spandrel above opening 1") &&
+                               Contains("y in [1.95, 2] m, transposed layout"));
+}
+
+TEST_CASE("macro wall lintel through the case reader: the keys are read, a bearing without a lintel names the key", "[unit][macro]") {
+    const std::string good = R"([case]
+name = "macro_wall_lintel"
+thickness = 0.25
+[geometry]
+type = "macro_wall"
+length = 3.0
+height = 2.0
+texture_angle = 28.0
+mesh_size = 0.1
+lintel_height = 0.15
+lintel_bearing = 0.2
+  [[geometry.openings]]
+  x = 1.0
+  y = 0.0
+  width = 1.0
+  height = 1.35
+[materials.brick]
+E = 1.491e9
+nu = 0.25
+density = 1800.0
+[materials.rc]
+E = 3.0e10
+nu = 0.2
+density = 2400.0
+[regions]
+cap = "brick"
+side = "brick"
+key = "brick"
+spandrel_cap = "brick"
+spandrel_side = "brick"
+spandrel_key = "brick"
+node = "brick"
+lintel = "rc"
+[[stages]]
+duration = 0.001
+  [[stages.supports]]
+  group = "wall_bottom"
+  fix = "xy"
+)";
+    const auto dir = ::testing::tmp_dir("macro_wall_lintel_case");
+    auto r = ::testing::run_fdem("check \"" + ::testing::write_text(dir / "good.toml", good) + "\"", dir);
+    INFO(r.out << r.err);
+    CHECK(r.code == 0);
+    std::string bad = good;
+    bad.replace(bad.find("lintel = \"rc\""), 13, "");  // the lintel region needs a material: it was read
+    r = ::testing::run_fdem("check \"" + ::testing::write_text(dir / "no_material.toml", bad) + "\"", dir);
+    CHECK(r.code != 0);
+    CHECK(r.err.find("lintel") != std::string::npos);
+    bad = good;
+    bad.replace(bad.find("lintel_height = 0.15"), 20, "lintel_height = 0.0");
+    r = ::testing::run_fdem("check \"" + ::testing::write_text(dir / "bearing.toml", bad) + "\"", dir);
+    CHECK(r.code != 0);
+    CHECK(r.err.find("geometry.lintel_bearing = 0.2 m needs a lintel") != std::string::npos);
+}
