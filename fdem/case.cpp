@@ -452,6 +452,23 @@ void check_triangle_count(Ctx& ctx, Reader& r, int line, double expected) {
                   "; expected a coarser geometry.mesh_size (or larger units), or raise geometry.max_triangles");
 }
 
+// [[geometry.openings]] blocks { x, y, width, height } of the wall and the macro-block wall (mesh::WallOpening,
+// mesh::MacroWallOpening), in file order.
+template <class Opening>
+void read_openings(Ctx& ctx, Reader& r, std::vector<Opening>& out, bool required) {
+    auto positive = [](double v) { return v >= kMinLength && v <= kMaxLength; };
+    for (const toml::table* t : r.tables("openings", required, "[[geometry.openings]] blocks { x, y, width, height }")) {
+        Reader o(ctx, *t, r.key_path("openings." + std::to_string(out.size() + 1)));
+        Opening op;
+        op.x = o.number("x", true, "the opening's left edge in m").value_or(0);
+        op.y = o.number("y", true, "the opening's bottom edge (sill) in m").value_or(0);
+        op.width = o.number("width", true, "a width > 0 in m", positive).value_or(0);
+        op.height = o.number("height", true, "a height > 0 in m", positive).value_or(0);
+        o.finish();
+        out.push_back(op);
+    }
+}
+
 // [geometry] type = "wall": keys named after mesh::WallSpec's fields; the generator's own check() runs later,
 // with the mesh, and its messages are reported against the [geometry] table.
 void read_wall(Ctx& ctx, Reader& r, mesh::WallSpec& w) {
@@ -493,16 +510,7 @@ void read_wall(Ctx& ctx, Reader& r, mesh::WallSpec& w) {
     w.mesh_size = r.number("mesh_size", true, "a mesh size > 0 in m", positive).value_or(1);
     w.mesh_size_beam = r.number("mesh_size_beam", false, "a mesh size > 0 in m", positive).value_or(0);
     w.mesh_size_base = r.number("mesh_size_base", false, "a mesh size > 0 in m", positive).value_or(0);
-    for (const toml::table* t : r.tables("openings", false, "[[geometry.openings]] blocks { x, y, width, height }")) {
-        Reader o(ctx, *t, r.key_path("openings." + std::to_string(w.openings.size() + 1)));
-        mesh::WallOpening op;
-        op.x = o.number("x", true, "the opening's left edge in m").value_or(0);
-        op.y = o.number("y", true, "the opening's bottom edge in m").value_or(0);
-        op.width = o.number("width", true, "a width > 0 in m", positive).value_or(0);
-        op.height = o.number("height", true, "a height > 0 in m", positive).value_or(0);
-        o.finish();
-        w.openings.push_back(op);
-    }
+    read_openings(ctx, r, w.openings, false);
     for (const toml::table* t : r.tables("refine", false, "[[geometry.refine]] blocks { x, y, width, height, size }")) {
         Reader o(ctx, *t, r.key_path("refine." + std::to_string(w.refine.size() + 1)));
         mesh::WallRefinement rf;
@@ -516,16 +524,17 @@ void read_wall(Ctx& ctx, Reader& r, mesh::WallSpec& w) {
     }
 }
 
-// [geometry] type = "macro": the macro-block pier (M-DEM); keys named after mesh::MacroPierSpec's fields. The
-// generator's check() (diagonals that would cross) runs later, with the mesh, reported against [geometry].
-void read_macro(Reader& r, mesh::MacroPierSpec& m) {
+// The [geometry] keys of the macro-block pier and wall (mesh::MacroPierSpec, mesh::MacroWallSpec); `what` names the
+// length and height ("pier", "wall").
+template <class Spec>
+void read_macro_common(Reader& r, Spec& m, const std::string& what) {
     auto nonneg = [](double v) { return v == 0 || (v >= kMinLength && v <= kMaxLength); };
     auto positive = [](double v) { return v >= kMinLength && v <= kMaxLength; };
-    m.length = r.number("length", true, "a pier length > 0 in m", positive).value_or(1);
-    m.height = r.number("height", true, "a pier height > 0 in m", positive).value_or(1);
+    m.length = r.number("length", true, "a " + what + " length > 0 in m", positive).value_or(1);
+    m.height = r.number("height", true, "a " + what + " height > 0 in m", positive).value_or(1);
     m.texture_angle = r.number("texture_angle", true, "a texture angle in (0, 90) deg",
                                [](double v) { return v > 0 && v < 90; }).value_or(45);
-    m.horizontal_joint = r.number("horizontal_joint", false, "a horizontal joint length > 0 in m (below length/2)",
+    m.horizontal_joint = r.number("horizontal_joint", false, "a horizontal joint length > 0 in m (below half the panel)",
                                   positive).value_or(0.05);
     m.mesh_size = r.number("mesh_size", true, "a mesh size > 0 in m", positive).value_or(1);
     m.beam_height = r.number("beam_height", false, "a beam depth of 0 or in [1e-6, 1e4] m", nonneg).value_or(0);
@@ -535,6 +544,10 @@ void read_macro(Reader& r, mesh::MacroPierSpec& m) {
     m.mesh_size_beam = r.number("mesh_size_beam", false, "a mesh size > 0 in m", positive).value_or(0);
     m.mesh_size_base = r.number("mesh_size_base", false, "a mesh size > 0 in m", positive).value_or(0);
 }
+
+// [geometry] type = "macro": the macro-block pier (M-DEM); keys named after mesh::MacroPierSpec's fields. The
+// generator's check() (diagonals that would cross) runs later, with the mesh, reported against [geometry].
+void read_macro(Reader& r, mesh::MacroPierSpec& m) { read_macro_common(r, m, "pier"); }
 
 // Expected triangle count of a macro-block pier (equilateral triangles of edge h, as wall_triangle_estimate).
 double macro_triangle_estimate(const mesh::MacroPierSpec& m) {
@@ -551,32 +564,11 @@ double macro_triangle_estimate(const mesh::MacroPierSpec& m) {
 // mesh::MacroWallSpec's fields, the openings as in read_wall. The generator's check() (one row, piers of positive
 // length, the keys fitting every panel) runs later, with the mesh, reported against [geometry].
 void read_macro_wall(Ctx& ctx, Reader& r, mesh::MacroWallSpec& m) {
+    read_macro_common(r, m, "wall");
     auto nonneg = [](double v) { return v == 0 || (v >= kMinLength && v <= kMaxLength); };
-    auto positive = [](double v) { return v >= kMinLength && v <= kMaxLength; };
-    m.length = r.number("length", true, "a wall length > 0 in m", positive).value_or(1);
-    m.height = r.number("height", true, "a wall height > 0 in m", positive).value_or(1);
-    m.texture_angle = r.number("texture_angle", true, "a texture angle in (0, 90) deg",
-                               [](double v) { return v > 0 && v < 90; }).value_or(45);
-    m.horizontal_joint = r.number("horizontal_joint", false, "a horizontal joint length > 0 in m", positive).value_or(0.05);
-    m.mesh_size = r.number("mesh_size", true, "a mesh size > 0 in m", positive).value_or(1);
-    m.beam_height = r.number("beam_height", false, "a beam depth of 0 or in [1e-6, 1e4] m", nonneg).value_or(0);
-    m.beam_overhang = r.number("beam_overhang", false, "a beam overhang of 0 or in [1e-6, 1e4] m", nonneg).value_or(0);
-    m.base_height = r.number("base_height", false, "a base depth of 0 or in [1e-6, 1e4] m", nonneg).value_or(0);
-    m.base_overhang = r.number("base_overhang", false, "a base overhang of 0 or in [1e-6, 1e4] m", nonneg).value_or(0);
-    m.mesh_size_beam = r.number("mesh_size_beam", false, "a mesh size > 0 in m", positive).value_or(0);
-    m.mesh_size_base = r.number("mesh_size_base", false, "a mesh size > 0 in m", positive).value_or(0);
     m.lintel_height = r.number("lintel_height", false, "a lintel depth of 0 or in [1e-6, 1e4] m", nonneg).value_or(0);
     m.lintel_bearing = r.number("lintel_bearing", false, "a lintel bearing of 0 or in [1e-6, 1e4] m", nonneg).value_or(0);
-    for (const toml::table* t : r.tables("openings", true, "[[geometry.openings]] blocks { x, y, width, height }")) {
-        Reader o(ctx, *t, r.key_path("openings." + std::to_string(m.openings.size() + 1)));
-        mesh::MacroWallOpening op;
-        op.x = o.number("x", true, "the opening's left edge in m").value_or(0);
-        op.y = o.number("y", true, "the opening's bottom edge (sill) in m").value_or(0);
-        op.width = o.number("width", true, "a width > 0 in m", positive).value_or(0);
-        op.height = o.number("height", true, "a height > 0 in m", positive).value_or(0);
-        o.finish();
-        m.openings.push_back(op);
-    }
+    read_openings(ctx, r, m.openings, true);
 }
 
 // Expected triangle count of a macro-block wall: the masonry area less the openings, beam and base.

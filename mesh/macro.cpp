@@ -32,11 +32,9 @@ constexpr double kPi = 3.14159265358979323846;
 
 using spec_check::num;
 
-}  // namespace
-
-std::vector<std::string> check(const MacroPierSpec& s) {
-    std::vector<std::string> bad;
-    const spec_check::Lengths len{bad};
+// The keys the pier and the wall share: sizes, beam and base, and the texture angle.
+template <class Spec>
+void common_checks(const spec_check::Lengths& len, const Spec& s) {
     len.positive(s.length, "length");
     len.positive(s.height, "height");
     len.positive(s.mesh_size, "mesh_size");
@@ -44,7 +42,15 @@ std::vector<std::string> check(const MacroPierSpec& s) {
     len.nonnegative(s.base_height, "base_height");
     len.nonnegative(s.base_overhang, "base_overhang");
     if (!(s.texture_angle > 0 && s.texture_angle < 90))
-        bad.push_back("geometry.texture_angle must be in (0, 90) deg, got " + num(s.texture_angle));
+        len.bad.push_back("geometry.texture_angle must be in (0, 90) deg, got " + num(s.texture_angle));
+}
+
+}  // namespace
+
+std::vector<std::string> check(const MacroPierSpec& s) {
+    std::vector<std::string> bad;
+    const spec_check::Lengths len{bad};
+    common_checks(len, s);
     if (!(s.horizontal_joint > 0 && s.horizontal_joint < 0.5 * s.length))
         bad.push_back("geometry.horizontal_joint must be in (0, length/2) = (0, " + num(0.5 * s.length) + ") m, got " +
                       num(s.horizontal_joint));
@@ -325,19 +331,12 @@ std::string range(double a, double b) { return "[" + num(a) + ", " + num(b) + "]
 std::vector<std::string> check(const MacroWallSpec& s) {
     std::vector<std::string> bad;
     const spec_check::Lengths len{bad};
-    len.positive(s.length, "length");
-    len.positive(s.height, "height");
-    len.positive(s.mesh_size, "mesh_size");
-    spec_check::beam_and_sizes(len, s);
-    len.nonnegative(s.base_height, "base_height");
-    len.nonnegative(s.base_overhang, "base_overhang");
+    common_checks(len, s);
     len.nonnegative(s.lintel_height, "lintel_height");
     len.nonnegative(s.lintel_bearing, "lintel_bearing");
     if (s.lintel_bearing > 0 && !(s.lintel_height > 0))
         bad.push_back("geometry.lintel_bearing = " + num(s.lintel_bearing) + " m needs a lintel: geometry.lintel_height "
                       "must be > 0 with it, got " + num(s.lintel_height) + " m");
-    if (!(s.texture_angle > 0 && s.texture_angle < 90))
-        bad.push_back("geometry.texture_angle must be in (0, 90) deg, got " + num(s.texture_angle));
     if (!(s.horizontal_joint > 0))
         bad.push_back("geometry.horizontal_joint must be > 0 (m), got " + num(s.horizontal_joint));
     if (s.openings.empty()) {
