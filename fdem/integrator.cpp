@@ -55,9 +55,11 @@ double Simulation::contact_xi_max() const {
 // Per-node mass scaling ([numerics] mass_scaling = "per_node"). Uniform density scaling (mass_scale) lengthens every
 // period alike, so the stiffest springs in the model, the contact and joint penalties on the nodes along the joints,
 // keep setting the step while the wall's own sway, which sets how fast it can be loaded quasi-statically, grows with
-// the whole mass. Here the step is the triangles' limit at mass_scale, and only the nodes whose springs would need
-// a smaller one are made heavier, each just enough (m = k dt^2 / 4 with the bounds of stable_dt), as the Itasca codes
-// scale each gridpoint's mass for its own stiffness. A tied group (extrinsic insertion) is raised as one: its copies
+// the whole mass. Here the step is the triangles' limit at mass_scale, and only the nodes whose springs are not
+// stable at `margin` (below) times it are made heavier, each just enough (m = k dt^2 / 4 with the bounds of
+// stable_dt), as the Itasca codes scale each gridpoint's mass for its own stiffness. The result is only as safe as
+// those bounds: the contact one is not conservative for a stiffness law on both-sides-free contacts (a stack on
+// k_n = 5e10 Pa/m joints, contact-limited under uniform scaling, is unstable at safety 0.8, stable at 0.76). A tied group (extrinsic insertion) is raised as one: its copies
 // keep their shares. Done once, at set-up, on the reference configuration: the masses stay constant in the run (the
 // energy books and the restart stay exact), and cracks inserted later may still shrink the step
 // (reduce_dt_after_insertion). Gravity keeps the physical mass.
