@@ -56,7 +56,7 @@ K25 = dict(mesh=0.025, penalty=1.0e10, contact_penalty=1.0e9, rate=0.01, until=0
            contact_damping=0.3, mass_scale=10, mass_scaling="per_node", drive_ramp=0.1,
            # precompression: ramps and bound long enough for the mass-scaled wall (vertical period ~0.1 s) to come to rest
            pre_ramp=0.05, pre_max=0.4, snapshots=0.05)
-# QUICK (the default ./run.sh, about 2-4 minutes on 2 threads): the family setting with mass scaling 100 instead of 10
+# QUICK (the default ./run.sh; until 27 Nov, 2-4 minutes on 2 threads): the family setting with mass scaling 100 instead of 10
 # (time step x 3.16). On the 100 kN wall with the filtered local damping of RESULTS.md §8 and the loading of SETUP_NODE:
 # 45.58 kN raw against 45.13 kN raw at mass scaling 10 (+1.0 %), 116,405 steps, 123-137 s on 2 threads (RESULTS.md
 # §17; before §8: 47.23 against 46.20 kN, RESULTS.md §7.4); with SETUP_PAPER 40.01 kN, 118,692 steps (RESULTS.md §28).
