@@ -417,9 +417,14 @@ TEST_CASE("macro wall: bad openings give one-line problems naming the opening an
     CHECK_THAT(problem(s), Contains("geometry.horizontal_joint = 0.15 m does not fit the pier panel 1"));
 }
 
-TEST_CASE("macro wall through the case reader: unknown keys are rejected, bad openings name file and key", "[unit][macro]") {
-    const std::string good = R"([case]
-name = "macro_wall"
+// The case text of the door wall (3.0 x 2.0 m, a 1.0 x 1.35 m door at x = 1.0) for the reader tests; with a lintel
+// 0.15 m high with 0.2 m bearings, of an RC material.
+static std::string door_wall_case(bool lintel) {
+    const std::string geometry_extra = lintel ? "lintel_height = 0.15\nlintel_bearing = 0.2\n" : "";
+    const std::string material_extra = lintel ? "[materials.rc]\nE = 3.0e10\nnu = 0.2\ndensity = 2400.0\n" : "";
+    const std::string region_extra = lintel ? "lintel = \"rc\"\n" : "";
+    return std::string(R"([case]
+name = ")") + (lintel ? "macro_wall_lintel" : "macro_wall") + R"("
 thickness = 0.25
 [geometry]
 type = "macro_wall"
@@ -427,7 +432,7 @@ length = 3.0
 height = 2.0
 texture_angle = 28.0
 mesh_size = 0.1
-  [[geometry.openings]]
+)" + geometry_extra + R"(  [[geometry.openings]]
   x = 1.0
   y = 0.0
   width = 1.0
@@ -436,7 +441,7 @@ mesh_size = 0.1
 E = 1.491e9
 nu = 0.25
 density = 1800.0
-[regions]
+)" + material_extra + R"([regions]
 cap = "brick"
 side = "brick"
 key = "brick"
@@ -444,12 +449,16 @@ spandrel_cap = "brick"
 spandrel_side = "brick"
 spandrel_key = "brick"
 node = "brick"
-[[stages]]
+)" + region_extra + R"([[stages]]
 duration = 0.001
   [[stages.supports]]
   group = "wall_bottom"
   fix = "xy"
 )";
+}
+
+TEST_CASE("macro wall through the case reader: unknown keys are rejected, bad openings name file and key", "[unit][macro]") {
+    const std::string good = door_wall_case(false);
     const auto dir = ::testing::tmp_dir("macro_wall_case");
     auto r = ::testing::run_fdem("check \"" + ::testing::write_text(dir / "good.toml", good) + "\"", dir);
     INFO(r.out << r.err);
@@ -684,45 +693,7 @@ TEST_CASE("macro wall lintel: bad lintel keys give one-line problems naming the 
 }
 
 TEST_CASE("macro wall lintel through the case reader: the keys are read, a bearing without a lintel names the key", "[unit][macro]") {
-    const std::string good = R"([case]
-name = "macro_wall_lintel"
-thickness = 0.25
-[geometry]
-type = "macro_wall"
-length = 3.0
-height = 2.0
-texture_angle = 28.0
-mesh_size = 0.1
-lintel_height = 0.15
-lintel_bearing = 0.2
-  [[geometry.openings]]
-  x = 1.0
-  y = 0.0
-  width = 1.0
-  height = 1.35
-[materials.brick]
-E = 1.491e9
-nu = 0.25
-density = 1800.0
-[materials.rc]
-E = 3.0e10
-nu = 0.2
-density = 2400.0
-[regions]
-cap = "brick"
-side = "brick"
-key = "brick"
-spandrel_cap = "brick"
-spandrel_side = "brick"
-spandrel_key = "brick"
-node = "brick"
-lintel = "rc"
-[[stages]]
-duration = 0.001
-  [[stages.supports]]
-  group = "wall_bottom"
-  fix = "xy"
-)";
+    const std::string good = door_wall_case(true);
     const auto dir = ::testing::tmp_dir("macro_wall_lintel_case");
     auto r = ::testing::run_fdem("check \"" + ::testing::write_text(dir / "good.toml", good) + "\"", dir);
     INFO(r.out << r.err);
