@@ -80,9 +80,10 @@ public:
     void set_vertex_copies(std::vector<int> vertex);
     void release_vertex_of(int node);
 
-    // README.md 'Physics': min over triangles that can ever touch (all triangles, since any may become capable) of
-    // 2 sqrt(m / k), m the lightest node mass of the triangle (kg), k = (stiffest normal or tangential slope of
-    // the laws its material can meet, Pa/m) * t * (longest edge). x: positions (m) for the element sizes.
+    // README.md 'Physics': min over nodes of 2 sqrt(m / k), m the node's mass (kg), k its Gershgorin row sum: over
+    // the edges at the node that are or may become faces (all but the edges inside a continuum; any triangle may
+    // become capable), (stiffest normal or tangential slope of the laws the triangle's material can meet, Pa/m) *
+    // t * (edge length). x: positions (m) for the element sizes.
     double stable_dt(const double* x, const double* node_mass) const;
     // The same bound solved for the mass (per-node mass scaling, [numerics] mass_scaling = "per_node"): every node
     // of a triangle that can touch needs m >= k dt^2 / 4 for its springs to be stable at step dt; need[node] (kg) is
@@ -131,8 +132,10 @@ public:
     void load_state(StateReader& r);
 
 private:
-    // k of stable_dt per triangle (N/m): the stiffest slope its material can meet times t times its longest edge.
-    std::vector<double> triangle_stiffness(const double* x) const;
+    // k of stable_dt per node (N/m): over the edges at the node that are or may become faces, the stiffest slope
+    // the triangle's material can meet times t times the edge's length.
+    std::vector<double> node_stiffness(const double* x) const;
+    void update_faces();
     void detect(const double* x);
     int law_of(int ta, int tb) const;
 
@@ -148,6 +151,12 @@ private:
 
     std::vector<char> capable_;
     std::vector<std::vector<int>> excluded_;  // per triangle, partners joined by an intact cohesive element
+    // Faces (TriangleGeometry::faces): per triangle, bit e set when edge e can carry contact load. continuum_faces_:
+    // the edges no other triangle shares by both nodes (set at construction); faces_: those, less the edges an
+    // excluded partner of the same body (intact cohesive element inside a unit) shares by both vertices. Derived,
+    // recomputed when faces_dirty_.
+    std::vector<unsigned char> continuum_faces_, faces_;
+    bool faces_dirty_ = true;
     std::vector<int> vertex_;                 // per node: the mesh vertex it copies (empty: no vertex rule)
     std::vector<char> released_;              // per vertex: a cohesive element at it broke
     bool dirty_ = true;

@@ -369,6 +369,7 @@ void triangle_geometry(const double* x, TriangleGeometry& t) {
     // smallest_altitude(x) = area2 / sqrt(longest edge^2) = min_k h_k exactly: the same rounded squares, and sqrt
     // and the division by it are monotone.
     t.inv_h_min = 1.0 / std::min(t.h[0], std::min(t.h[1], t.h[2]));
+    t.faces = 7;
 }
 
 bool pair_contact(const double* xa, const double* xb, const double* va, const double* vb, const PairParams& params,
@@ -393,8 +394,11 @@ bool pair_contact(const TriangleGeometry& A, const TriangleGeometry& B, const do
         vertex_coordinates(A.g, xb, b_in_a);
         apart = separated(b_in_a);
     }
-    if (apart) {
+    if (apart || (A.faces | B.faces) == 0) {
         for (int s = 0; s < 6; ++s) r.dissipation += release_slot(hist + kHistPerEdge * s);
+        // Triangles with no face (inside their bodies) that overlap still hold energy: the loads of their edges
+        // went to the faces of their neighbours, whose pairs carry them.
+        if (!apart && want_energy) r.energy_normal = pair_energy(A.x, B.x, params);
         return false;
     }
     PairParams p = params;
@@ -409,22 +413,21 @@ bool pair_contact(const TriangleGeometry& A, const TriangleGeometry& B, const do
     double I[6], len;
     for (int e = 0; e < 3; ++e) {
         const int e1 = (e + 1) % 3;
-        if (edge_integrals(a_in_b + 3 * e, a_in_b + 3 * e1, xa + 2 * e, xa + 2 * e1, wb, I, &len)) {
+        if (((A.faces >> e) & 1) && edge_integrals(a_in_b + 3 * e, a_in_b + 3 * e1, xa + 2 * e, xa + 2 * e1, wb, I, &len)) {
             load_edge(xa, va, r.fa, vb, r.fb, e, len, I, p, hist + kHistPerEdge * e, r);
             ++r.active_edges;
         } else {
             r.dissipation += release_slot(hist + kHistPerEdge * e);
         }
-        if (edge_integrals(b_in_a + 3 * e, b_in_a + 3 * e1, xb + 2 * e, xb + 2 * e1, wa, I, &len)) {
+        if (((B.faces >> e) & 1) && edge_integrals(b_in_a + 3 * e, b_in_a + 3 * e1, xb + 2 * e, xb + 2 * e1, wa, I, &len)) {
             load_edge(xb, vb, r.fb, va, r.fa, e, len, I, p, hist + kHistPerEdge * (3 + e), r);
             ++r.active_edges;
         } else {
             r.dissipation += release_slot(hist + kHistPerEdge * (3 + e));
         }
     }
-    if (r.active_edges == 0) return false;
     if (want_energy) r.energy_normal = pair_energy(xa, xb, p);
-    return true;
+    return r.active_edges > 0;
 }
 
 }  // namespace fdem::contact

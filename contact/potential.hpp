@@ -79,6 +79,10 @@ struct TriangleGeometry {
     double g[9];       // area coordinates as affine functions: L_k(P) = g[3k] + g[3k+1] P.x + g[3k+2] P.y
     double h[3];       // altitude from each vertex onto the opposite edge (m): the distance-potential weights
     double inv_h_min;  // 1 / smallest altitude (1/m)
+    // Bit e set: edge e (nodes e, e+1) is a face that can carry contact load. triangle_geometry sets all three; an
+    // edge inside a continuum or an intact joint is cleared by the caller (ContactSystem: its loads from the two
+    // triangles that share it cancel, and it is not a face that friction can act on).
+    int faces = 7;
 };
 void triangle_geometry(const double* x, TriangleGeometry& out);
 
@@ -86,9 +90,11 @@ void triangle_geometry(const double* x, TriangleGeometry& out);
 // books as dissipated: a stretched tangential spring that loses its contact lets its energy go.
 double release_slot(double* h);
 
-// The force, friction and energies of the pair (A, B). hist[kHistPerPair] is read and updated. Returns true when the
-// triangles interact (some edge carries load); false leaves fa = fb = 0 and resets hist to 0. Either way
-// out.dissipation includes the energy of friction springs that let go (release_slot).
+// The force, friction and energies of the pair (A, B). hist[kHistPerPair] is read and updated. Only the edges in
+// TriangleGeometry::faces are loaded. Returns true when the triangles interact (some edge carries load); false
+// leaves fa = fb = 0 and resets hist to 0. Either way out.dissipation includes the energy of friction springs that
+// let go (release_slot), and with want_energy out.energy_normal is the overlap's energy (pair_energy), also when no
+// face carries the load (it is carried by the faces of neighbouring pairs).
 bool pair_contact(const double* xa, const double* xb, const double* va, const double* vb, const PairParams& p,
                   bool want_energy, double* hist, PairResult& out);
 // The same from precomputed triangle geometry.

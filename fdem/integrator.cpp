@@ -58,8 +58,9 @@ double Simulation::contact_xi_max() const {
 // the whole mass. Here the step is the triangles' limit at mass_scale, and only the nodes whose springs are not
 // stable at `margin` (below) times it are made heavier, each just enough (m = k dt^2 / 4 with the bounds of
 // stable_dt), as the Itasca codes scale each gridpoint's mass for its own stiffness. The result is only as safe as
-// those bounds: the contact one is not conservative for a stiffness law on both-sides-free contacts (a stack on
-// k_n = 5e10 Pa/m joints, contact-limited under uniform scaling, is unstable at safety 0.8, stable at 0.76). A tied group (extrinsic insertion) is raised as one: its copies
+// those bounds: both are Gershgorin row sums per node (counting the other side's nodes; the contact one counted a
+// single face and no other side until 27 Nov, and a stack on stiff dry joints went unstable at the default safety
+// under it). A tied group (extrinsic insertion) is raised as one: its copies
 // keep their shares. Done once, at set-up, on the reference configuration: the masses stay constant in the run (the
 // energy books and the restart stay exact), and cracks inserted later may still shrink the step
 // (reduce_dt_after_insertion). Gravity keeps the physical mass.
@@ -70,9 +71,7 @@ void Simulation::scale_node_masses() {
     // the highest frequency of the two together is at most sqrt(omega_t^2 + omega_s^2) (Weyl's inequality), so with
     // the step safety * dt_t the sum stays stable when safety^2 (1 + 1 / margin^2) <= 1 (margin 4/3 at the default safety
     // 0.8). Made exactly stable at dt_t (margin 1), the default wall at mass scaling 30 blew up in its precompression.
-    const double s2 = spec_.safety * spec_.safety;
-    const double margin = s2 < 0.9 ? std::max(1.0, 1.0 / std::sqrt(1.0 / s2 - 1.0)) : 3.0;
-    const double dt = margin * triangle_step_limit(spec_, model_).dt;
+    const double dt = per_node_margin(spec_.safety) * triangle_step_limit(spec_, model_).dt;
     std::vector<double> need(nn, 0.0);
     inter_.required_mass(model_, contact_xi_max(), dt, ties_ ? tie_rep_.data() : nullptr, need.data());
     double before = 0, after = 0;

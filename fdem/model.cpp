@@ -209,6 +209,11 @@ double triangle_omega2(const double* p, const int* n, const Material& m, Plane p
     return 3.0 * lmax / (m.density * mass_scale);
 }
 
+double per_node_margin(double safety) {
+    const double s2 = safety * safety;
+    return s2 < 0.9 ? std::max(1.0, 1.0 / std::sqrt(1.0 / s2 - 1.0)) : 3.0;
+}
+
 StepLimit triangle_step_limit(const CaseSpec& spec, const Model& model) {
     StepLimit lim;
     lim.dt = 1e300;

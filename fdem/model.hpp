@@ -68,6 +68,11 @@ struct StepLimit {
 };
 StepLimit triangle_step_limit(const CaseSpec& spec, const Model& model);
 
+// Per-node mass scaling: the factor over the triangles' limit at which the joint and contact springs are made
+// stable, so that both together stay stable at the step safety * dt_t: safety^2 (1 + 1 / margin^2) <= 1, at least 1
+// (4/3 at the default safety 0.8; 3 from safety^2 >= 0.9 on).
+double per_node_margin(double safety);
+
 // omega_e^2 (1/s^2) of triangle n (node indices into the coordinates p) of material m at the given mass scaling.
 double triangle_omega2(const double* p, const int* n, const Material& m, Plane plane, double mass_scale);
 

@@ -176,7 +176,8 @@ void Simulation::run() {
             "); gravity uses the physical mass");
     if (spec_.per_node_mass)
         log("per-node mass scaling: " + std::to_string(mass_raised_nodes_) + " of " + std::to_string(model_.n_nodes()) +
-            " nodes made heavier for their springs to be stable at 4/3 of the triangles' step; total inertial mass x " +
+            " nodes made heavier for their springs to be stable at " + sci(per_node_margin(spec_.safety), 3) +
+            " x the triangles' step; total inertial mass x " +
             sci(mass_raised_ratio_));
     if (!spec_.dt_override && spec_.safety > 1)
         log("warning: numerics.safety = " + sci(spec_.safety) + " > 1: the time step exceeds the stability limit");

@@ -872,3 +872,95 @@ TEST_CASE("Contact dashpots: normal c = beta k_n t L, no pull beyond the elastic
         CHECK(total(r.fa, 0) == Approx(total(r0.fa, 0)).epsilon(1e-6));
     }
 }
+
+TEST_CASE("Edges inside a body carry no contact load: a meshed block pressed into a meshed base gets the forces of "
+          "all its triangles' edges, whose interior loads cancel",
+          "[unit]") {
+    // Two blocks of structured triangles (nodes shared inside each block), the upper one rotated by 0.02 rad and
+    // pressed 0.3 mm into the lower one, so that edges inside each block poke into the other block's triangles.
+    // ContactSystem loads only the faces (TriangleGeometry::faces); the reference sums pair_contact over every
+    // overlapping pair with all three edges of each triangle loaded. Without friction the two agree to rounding:
+    // an interior edge's loads from its two triangles cancel. With friction, all sliding (10 m/s over a step of
+    // 1 ms), the faces carry mu times their normal load and nothing more: the upper block's friction is mu times
+    // its normal force (its bottom faces tilted 0.02 rad; the side faces' corners carry little). Loaded, the
+    // interior edges' friction adds instead of cancelling (both copies oppose the slip).
+    std::vector<double> xy;
+    std::vector<int> tri, body;
+    const int n = 6;
+    for (int b = 0; b < 2; ++b) {
+        const int off = static_cast<int>(xy.size() / 2);
+        const double c = std::cos(0.02 * b), s = std::sin(0.02 * b);
+        for (int j = 0; j <= n; ++j)
+            for (int i = 0; i <= n; ++i) {
+                const double u = 0.3 * i / n - 0.15, w = 0.1 * j / n;
+                xy.push_back(0.013 * b + c * u - s * w);
+                xy.push_back(b * (0.1 - 3e-4) + s * u + c * w);
+            }
+        for (int j = 0; j < n; ++j)
+            for (int i = 0; i < n; ++i) {
+                const int a = off + j * (n + 1) + i, d = a + n + 2;
+                if ((i + j) % 2 == 0) tri.insert(tri.end(), {a, a + 1, d, a, d, d - 1});
+                else tri.insert(tri.end(), {a, a + 1, d - 1, a + 1, d, d - 1});
+                body.push_back(b);
+                body.push_back(b);
+            }
+    }
+    const int nt = static_cast<int>(tri.size() / 3), nn = static_cast<int>(xy.size() / 2);
+    for (double mu : {0.0, 0.6}) {
+        ContactLaws laws(1);
+        laws.set_default(ContactLaw::penalty(1e9, mu, 1e9));
+        ContactSystem cs(tri.data(), nt, nn, 0.1, std::vector<int>(nt, 0), body, laws, ContactOptions{0.002, true});
+        for (int t = 0; t < nt; ++t) cs.set_capable(t, true);
+        std::vector<double> v(2 * nn, 0.0), f(2 * nn, 0.0);
+        const double dt = 1e-3;
+        for (int k = 0; k < nn; ++k)
+            if (k >= (n + 1) * (n + 1)) v[2 * k] = 10.0;  // the upper block slides
+        cs.step(xy.data(), v.data(), dt, f.data());
+        // reference: every pair of the two blocks, every edge
+        std::vector<double> fr(2 * nn, 0.0);
+        PairParams prm;
+        prm.thickness = 0.1;
+        prm.c = 1e9;
+        prm.p_t = 1e9;
+        prm.mu = mu;
+        prm.dt = dt;
+        int loaded = 0;
+        for (int a = 0; a < nt; ++a)
+            for (int b = a + 1; b < nt; ++b) {
+                if (body[a] == body[b]) continue;
+                double xa[6], xb[6], va[6], vb[6];
+                for (int k = 0; k < 3; ++k)
+                    for (int c = 0; c < 2; ++c) {
+                        xa[2 * k + c] = xy[2 * tri[3 * a + k] + c], xb[2 * k + c] = xy[2 * tri[3 * b + k] + c];
+                        va[2 * k + c] = v[2 * tri[3 * a + k] + c], vb[2 * k + c] = v[2 * tri[3 * b + k] + c];
+                    }
+                double hist[kHistPerPair] = {};
+                PairResult r;
+                if (!pair_contact(xa, xb, va, vb, prm, false, hist, r)) continue;
+                ++loaded;
+                for (int k = 0; k < 3; ++k)
+                    for (int c = 0; c < 2; ++c) {
+                        fr[2 * tri[3 * a + k] + c] += r.fa[2 * k + c];
+                        fr[2 * tri[3 * b + k] + c] += r.fb[2 * k + c];
+                    }
+            }
+        REQUIRE(loaded > 8);
+        double fmax = 0.0, fx_up = 0.0, fy_up = 0.0, fx_ref = 0.0, fy_ref = 0.0;
+        for (int k = 0; k < nn; ++k) {
+            fmax = std::max(fmax, std::max(std::fabs(fr[2 * k]), std::fabs(fr[2 * k + 1])));
+            if (k >= (n + 1) * (n + 1)) fx_up += f[2 * k], fy_up += f[2 * k + 1], fx_ref += fr[2 * k], fy_ref += fr[2 * k + 1];
+        }
+        INFO("mu " << mu << ": upper block force (" << fx_up << ", " << fy_up << ") N, all edges (" << fx_ref << ", "
+                   << fy_ref << ") N");
+        REQUIRE(fy_up > 100.0);
+        if (mu == 0.0) {
+            for (int k = 0; k < nn; ++k)
+                for (int c = 0; c < 2; ++c) CHECK(f[2 * k + c] == Approx(fr[2 * k + c]).margin(1e-9 * fmax));
+        } else {
+            std::printf("[faces] mu %.1f, sliding: upper block (%.6g, %.6g) N, friction / normal %.4f; all edges "
+                        "(%.6g, %.6g) N, %.4f\n", mu, fx_up, fy_up, -fx_up / fy_up, fx_ref, fy_ref, -fx_ref / fy_ref);
+            CHECK(-fx_up / fy_up == Approx(mu).epsilon(0.02));
+            CHECK(-fx_ref / fy_ref > 1.05 * mu);  // what loading the interior edges did (0.68 for 0.6)
+        }
+    }
+}
