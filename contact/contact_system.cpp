@@ -367,7 +367,7 @@ void ContactSystem::detect(const double* x) {
     pair_f_.resize(12 * static_cast<size_t>(np));
     pair_e_.resize(4 * static_cast<size_t>(np));
     pair_on_.resize(np);
-    box_.resize(4 * static_cast<size_t>(n_tri_));
+    box_.resize(8 * static_cast<size_t>(n_tri_));
     geom_.resize(n_tri_);
     dirty_ = false;
     travel_ = 0.0;
@@ -423,21 +423,37 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f)
         for (int i = 0; i < n_items; ++i) {
             double T[6];
             gather(x, tri_ + 3 * items_[i], T);
-            double* bx = &box_[4 * static_cast<size_t>(items_[i])];
+            double* bx = &box_[8 * static_cast<size_t>(items_[i])];
             bx[0] = std::min(T[0], std::min(T[2], T[4]));
             bx[1] = std::max(T[0], std::max(T[2], T[4]));
             bx[2] = std::min(T[1], std::min(T[3], T[5]));
             bx[3] = std::max(T[1], std::max(T[3], T[5]));
+            // the box of the face edges' end points (empty, +inf..-inf, without faces)
+            const unsigned faces = faces_[items_[i]];
+            bx[4] = bx[6] = std::numeric_limits<double>::infinity();
+            bx[5] = bx[7] = -std::numeric_limits<double>::infinity();
+            for (int k = 0; k < 3; ++k)
+                if (faces & (1u << k | 1u << (k + 2) % 3)) {  // vertex k ends edge k and edge k - 1
+                    bx[4] = std::min(bx[4], T[2 * k]), bx[5] = std::max(bx[5], T[2 * k]);
+                    bx[6] = std::min(bx[6], T[2 * k + 1]), bx[7] = std::max(bx[7], T[2 * k + 1]);
+                }
             triangle_geometry(T, geom_[items_[i]]);
-            geom_[items_[i]].faces = faces_[items_[i]];
+            geom_[items_[i]].faces = static_cast<int>(faces);
         }
 #pragma omp for schedule(dynamic, 512)
         for (int p = 0; p < np; ++p) {
             const int a = pair_a_[p], b = pair_b_[p];
             pair_on_[p] = 0;
-            const double* ba = &box_[4 * static_cast<size_t>(a)];
-            const double* bb = &box_[4 * static_cast<size_t>(b)];
-            if (ba[1] <= bb[0] || bb[1] <= ba[0] || ba[3] <= bb[2] || bb[3] <= ba[2]) {  // disjoint boxes
+            const double* ba = &box_[8 * static_cast<size_t>(a)];
+            const double* bb = &box_[8 * static_cast<size_t>(b)];
+            // Boxes touching along a side count as apart: the triangles overlap in no area, every edge integral is 0.
+            auto disjoint = [](const double* P, const double* Q) {
+                return P[1] <= Q[0] || Q[1] <= P[0] || P[3] <= Q[2] || Q[3] <= P[2];
+            };
+            // No load unless some face of one can enter the other: A's faces' box meets B's box or the reverse.
+            // Disjoint triangle boxes also mean no overlap energy; only that is wanted of other faceless overlaps.
+            const bool boxes_apart = disjoint(ba, bb);
+            if (boxes_apart || (!want_energy && disjoint(ba + 4, bb) && disjoint(bb + 4, ba))) {
                 if (!pair_hist_on_[p]) continue;  // nothing to forget (the common case: apart since detection)
                 pair_hist_on_[p] = 0;
                 const double released = forget(&hist_[kHistPerPair * static_cast<size_t>(p)]);
@@ -449,9 +465,6 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f)
                 }
                 continue;
             }
-            // Two triangles without a face (inside their bodies) carry nothing (their edges' loads go to the faces
-            // of neighbouring pairs) and hold no history; only their overlap's energy is wanted, on report steps.
-            if ((geom_[a].faces | geom_[b].faces) == 0 && !want_energy) continue;
             double va[6], vb[6];
             gather(v, tri_ + 3 * a, va);
             gather(v, tri_ + 3 * b, vb);
@@ -589,7 +602,7 @@ void ContactSystem::load_state(StateReader& r) {
     pair_f_.assign(12 * np, 0.0);
     pair_e_.assign(4 * np, 0.0);
     pair_on_.assign(np, 0);
-    box_.assign(4 * static_cast<std::size_t>(n_tri_), 0.0);
+    box_.assign(8 * static_cast<std::size_t>(n_tri_), 0.0);
     geom_.resize(static_cast<std::size_t>(n_tri_));
     faces_dirty_ = true;
 }

@@ -179,7 +179,8 @@ private:
     std::vector<double> pair_f_;   // 12 per pair
     std::vector<double> pair_e_;   // 4 per pair: normal energy, tangential energy, friction dissipation, dashpot work
     std::vector<char> pair_on_;
-    std::vector<double> box_;      // 4 per triangle: xmin, xmax, ymin, ymax (m), capable ones, this step
+    std::vector<double> box_;      // 8 per triangle, capable ones, this step: xmin, xmax, ymin, ymax (m) of the
+                                   // triangle, then of its faces' end points (empty without faces)
     std::vector<TriangleGeometry> geom_;  // per triangle, capable ones, this step: what the pair kernel needs
 
     double energy_normal_ = 0.0, energy_tangential_ = 0.0, dissipation_ = 0.0, damping_ = 0.0;

@@ -387,17 +387,22 @@ bool pair_contact(const TriangleGeometry& A, const TriangleGeometry& B, const do
     r.active_edges = 0;
     const double* xa = A.x;
     const double* xb = B.x;
+    // Area coordinates of each triangle's vertices in the other, for the edges that are faces (a triangle without
+    // faces needs none), and the separating-axis test on them.
     double a_in_b[9], b_in_a[9];
-    vertex_coordinates(B.g, xa, a_in_b);
-    bool apart = separated(a_in_b);
-    if (!apart) {
+    bool apart = false;
+    if (A.faces) {
+        vertex_coordinates(B.g, xa, a_in_b);
+        apart = separated(a_in_b);
+    }
+    if (!apart && B.faces) {
         vertex_coordinates(A.g, xb, b_in_a);
         apart = separated(b_in_a);
     }
     if (apart || (A.faces | B.faces) == 0) {
         for (int s = 0; s < 6; ++s) r.dissipation += release_slot(hist + kHistPerEdge * s);
         // Triangles with no face (inside their bodies) that overlap still hold energy: the loads of their edges
-        // went to the faces of their neighbours, whose pairs carry them.
+        // went to the faces of their neighbours, whose pairs carry them. (pair_energy is 0 when they are apart.)
         if (!apart && want_energy) r.energy_normal = pair_energy(A.x, B.x, params);
         return false;
     }

@@ -246,6 +246,12 @@ void Interactions::list_dormant() {
     if (joints_)
         for (int e = 0; e < joints_->size(); ++e)
             if (joints_->dormant(e)) dormant_.push_back(e);
+    dormant_edge_.resize(dormant_.size());
+    for (std::size_t i = 0; i < dormant_.size(); ++i) {
+        const auto& el = joints_->element(dormant_[i]);
+        const auto& law = joints_->law(dormant_[i]);
+        dormant_edge_[i] = {el.tri_a, el.tri_b, el.n[0], el.n[1], law.tensile_strength, law.cohesion, law.tan_friction};
+    }
     due_.assign(dormant_.size(), 0);
     due_traction_.assign(2 * dormant_.size(), 0.0);
     dormant_listed_ = true;
@@ -258,7 +264,7 @@ int Interactions::insert_cracks(const double* x, const double* tri_sigma) {
     int found = 0;
 #pragma omp parallel for schedule(static) reduction(+ : found) if (ne >= 2048)
     for (int i = 0; i < ne; ++i) {
-        const auto& el = joints_->element(dormant_[i]);
+        const DormantEdge& el = dormant_edge_[i];
         // Mean stress of the two sides (one side on a free boundary: its own).
         double sg[3] = {0, 0, 0};
         int sides = 0;
@@ -270,16 +276,19 @@ int Interactions::insert_cracks(const double* x, const double* tri_sigma) {
         for (double& q : sg) q /= sides;
         // Frame of the element (cohesive_system.cpp): t along edge A's a0 -> a1, n = (t_y, -t_x) into side B, here
         // not normalised: both tractions are quadratic in (t, n), so one division by |t|^2 does it.
-        const double tx = x[2 * el.n[1]] - x[2 * el.n[0]], ty = x[2 * el.n[1] + 1] - x[2 * el.n[0] + 1];
+        const double tx = x[2 * el.n1] - x[2 * el.n0], ty = x[2 * el.n1 + 1] - x[2 * el.n0 + 1];
         const double nx = ty, ny = -tx;
         const double inv_len2 = 1.0 / (tx * tx + ty * ty);
         // Traction on the plane of normal n: T = sigma n; sigma_n = n.T, tau = t.T.
         const double Tx = sg[0] * nx + sg[2] * ny, Ty = sg[2] * nx + sg[1] * ny;
         const double sn = (Tx * nx + Ty * ny) * inv_len2, tau = (Tx * tx + Ty * ty) * inv_len2;
-        const bool due = joints_->reaches_strength(dormant_[i], sn, tau);
+        // CohesiveSystem::reaches_strength on the copied constants
+        const bool due = sn >= el.tensile_strength || std::abs(tau) >= fracture::shear_strength(sn, el.cohesion, el.tan_friction);
         due_[i] = due;
-        due_traction_[2 * static_cast<std::size_t>(i)] = sn;
-        due_traction_[2 * static_cast<std::size_t>(i) + 1] = tau;
+        if (due) {
+            due_traction_[2 * static_cast<std::size_t>(i)] = sn;
+            due_traction_[2 * static_cast<std::size_t>(i) + 1] = tau;
+        }
         found += due;
     }
     if (found == 0) return 0;
@@ -376,7 +385,7 @@ double Interactions::friction_dissipation() const {
 // field to save_state and load_state if it changes during a run, then update the size.
 void Interactions::save_state(StateWriter& w) const {
 #if defined(__x86_64__) && defined(__GLIBCXX__)
-    static_assert(sizeof(Interactions) == 328, "Interactions changed: update save_state/load_state and this size");
+    static_assert(sizeof(Interactions) == 352, "Interactions changed: update save_state/load_state and this size");
 #endif
     w.section("interactions");
     w.str(cracks_csv_);

@@ -101,6 +101,13 @@ private:
     std::unique_ptr<fracture::CohesiveSystem> joints_;
     std::string cracks_csv_;
     std::vector<int> dormant_;         // dormant elements, ascending (listed on the first check and after insertions)
+    // What the insertion check reads of each entry of dormant_, side by side (the elements' and laws' records are
+    // large and the check runs every step over all of them): its triangles and edge nodes, f_t, c, tan(phi).
+    struct DormantEdge {
+        int tri_a, tri_b, n0, n1;
+        double tensile_strength, cohesion, tan_friction;  // Pa, Pa, -
+    };
+    std::vector<DormantEdge> dormant_edge_;
     bool dormant_listed_ = false;
     std::vector<std::uint8_t> due_;    // per entry of dormant_: reached the strength this step
     std::vector<double> due_traction_; // sigma, tau per entry of dormant_ (Pa)
