@@ -367,7 +367,6 @@ void ContactSystem::detect(const double* x) {
     pair_f_.resize(12 * static_cast<size_t>(np));
     pair_e_.resize(4 * static_cast<size_t>(np));
     pair_on_.resize(np);
-    build_scatter();
     box_.resize(8 * static_cast<size_t>(n_tri_));
     geom_.resize(n_tri_);
     dirty_ = false;
@@ -375,38 +374,6 @@ void ContactSystem::detect(const double* x) {
     ++stats_.detections;
     stats_.candidate_pairs = np;
     stats_.time_detection += omp_get_wtime() - t0;
-}
-
-void ContactSystem::build_scatter() {
-    // Per node, the slots of pair_f_ that load it, in ascending pair order (counting sort by node).
-    const int np = static_cast<int>(pair_a_.size());
-    std::vector<int>& count = csr_fill_;
-    count.assign(n_nodes_ + 1, 0);
-    for (int p = 0; p < np; ++p)
-        for (int k = 0; k < 3; ++k) {
-            ++count[tri_[3 * pair_a_[p] + k] + 1];
-            ++count[tri_[3 * pair_b_[p] + k] + 1];
-        }
-    scatter_node_.clear();
-    scatter_start_.clear();
-    scatter_start_.push_back(0);
-    std::vector<int>& at = csr_start_;  // per node: its next free slot in scatter_slot_
-    at.assign(n_nodes_, 0);
-    int total = 0;
-    for (int node = 0; node < n_nodes_; ++node) {
-        const int c = count[node + 1];
-        if (c == 0) continue;
-        at[node] = total;
-        total += c;
-        scatter_node_.push_back(node);
-        scatter_start_.push_back(total);
-    }
-    scatter_slot_.resize(total);
-    for (int p = 0; p < np; ++p)
-        for (int k = 0; k < 3; ++k) {
-            scatter_slot_[at[tri_[3 * pair_a_[p] + k]]++] = 12 * p + 2 * k;
-            scatter_slot_[at[tri_[3 * pair_b_[p] + k]]++] = 12 * p + 6 + 2 * k;
-        }
 }
 
 void ContactSystem::step(const double* x, const double* v, double dt, double* f) {
@@ -529,24 +496,8 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f)
             }
         }
     }  // omp parallel
-    // Scatter in pair order per node, nodes in parallel: every node adds its pairs' forces in ascending pair order
-    // (a node is in at most one triangle of a pair), as a serial loop over the pairs would, so the bits are the
-    // same for any thread count. Then the sums, serially in pair order.
+    // Serial scatter and sums in pair order: the same bits for any thread count.
     const double t1 = omp_get_wtime();
-    const int n_scatter = static_cast<int>(scatter_node_.size());
-#pragma omp parallel for schedule(static) if (n_scatter > kParallelMin)
-    for (int i = 0; i < n_scatter; ++i) {
-        const int node = scatter_node_[i];
-        double fx = f[2 * node], fy = f[2 * node + 1];
-        for (int j = scatter_start_[i]; j < scatter_start_[i + 1]; ++j) {
-            const int q = scatter_slot_[j];  // 12 p + 2 k (A's node k) or 12 p + 6 + 2 k (B's)
-            if (pair_on_[q / 12] != 1) continue;
-            fx += pair_f_[q];
-            fy += pair_f_[q + 1];
-        }
-        f[2 * node] = fx;
-        f[2 * node + 1] = fy;
-    }
     double en = 0.0, et = 0.0, ed = 0.0, ec = 0.0;
     int active = 0;
     for (int p = 0; p < np; ++p) {
@@ -557,6 +508,15 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f)
             continue;
         }
         ++active;
+        const int* ta = tri_ + 3 * pair_a_[p];
+        const int* tb = tri_ + 3 * pair_b_[p];
+        const double* pf = &pair_f_[12 * static_cast<size_t>(p)];
+        for (int k = 0; k < 3; ++k) {
+            f[2 * ta[k]] += pf[2 * k];
+            f[2 * ta[k] + 1] += pf[2 * k + 1];
+            f[2 * tb[k]] += pf[6 + 2 * k];
+            f[2 * tb[k] + 1] += pf[6 + 2 * k + 1];
+        }
         const double* pe = &pair_e_[4 * static_cast<size_t>(p)];
         en += pe[0];
         et += pe[1];
@@ -596,7 +556,7 @@ double ContactSystem::normal_energy_at(const double* x) const {
 // add the field to save_state and load_state if it carries from one step to the next, then update the size.
 void ContactSystem::save_state(StateWriter& w) const {
 #if defined(__x86_64__) && defined(__GLIBCXX__)
-    static_assert(sizeof(ContactSystem) == 1328, "ContactSystem changed: update save_state/load_state and this size");
+    static_assert(sizeof(ContactSystem) == 1256, "ContactSystem changed: update save_state/load_state and this size");
 #endif
     w.section("contact");
     w.pod(static_cast<std::int32_t>(kHistPerPair));
@@ -642,7 +602,6 @@ void ContactSystem::load_state(StateReader& r) {
     pair_f_.assign(12 * np, 0.0);
     pair_e_.assign(4 * np, 0.0);
     pair_on_.assign(np, 0);
-    build_scatter();
     box_.assign(8 * static_cast<std::size_t>(n_tri_), 0.0);
     geom_.resize(static_cast<std::size_t>(n_tri_));
     faces_dirty_ = true;

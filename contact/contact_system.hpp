@@ -136,7 +136,6 @@ private:
     // the triangle's material can meet times t times the edge's length.
     std::vector<double> node_stiffness(const double* x) const;
     void update_faces();
-    void build_scatter();
     void detect(const double* x);
     int law_of(int ta, int tb) const;
 
@@ -178,9 +177,6 @@ private:
     CandidatePairs cand_;
     NbsWorkspace ws_;
     std::vector<double> pair_f_;   // 12 per pair
-    // Scatter lists (build_scatter, with the pair list): the nodes of the pairs, ascending; per node i its slots
-    // scatter_slot_[scatter_start_[i] .. scatter_start_[i + 1]) into pair_f_, in ascending pair order.
-    std::vector<int> scatter_node_, scatter_start_, scatter_slot_;
     std::vector<double> pair_e_;   // 4 per pair: normal energy, tangential energy, friction dissipation, dashpot work
     std::vector<char> pair_on_;
     std::vector<double> box_;      // 8 per triangle, capable ones, this step: xmin, xmax, ymin, ymax (m) of the
