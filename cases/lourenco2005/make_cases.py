@@ -52,8 +52,12 @@ LOAD_HEIGHT = 1.0   # m, the actuator node: the beam's left end at the top of th
 # mass scaling 10, the nodes whose contact springs would need a smaller one made heavier; on the 100 kN wall 24,920
 # steps instead of 64,532 for the same curve within 0.3 % of the peak (peak +0.73 / +0.41 %, K_e -2.0 / -2.1 % against
 # the converged curve).
+# Since 27 Nov (RESULTS.md §34): safety 0.7. The contact springs' bound became a per-node Gershgorin row sum (it had
+# counted one face and no other side), which asks 1.7 times the added mass at the default safety 0.8, where the
+# springs are made stable at 4/3 of the triangles' step; at 0.7 they are made stable at the triangles' step itself
+# (per_node_margin), about the added mass of before at 0.875 of the step.
 K25 = dict(mesh=0.025, penalty=1.0e10, contact_penalty=1.0e9, rate=0.01, until=0.010, damping=0.05, ld_filter=0.1,
-           contact_damping=0.3, mass_scale=10, mass_scaling="per_node", drive_ramp=0.1,
+           contact_damping=0.3, mass_scale=10, mass_scaling="per_node", safety=0.7, drive_ramp=0.1,
            # precompression: ramps and bound long enough for the mass-scaled wall (vertical period ~0.1 s) to come to rest
            pre_ramp=0.05, pre_max=0.4, snapshots=0.05)
 # QUICK (the default ./run.sh; until 27 Nov, 2-4 minutes on 2 threads): the family setting with mass scaling 100 instead of 10
@@ -62,7 +66,8 @@ K25 = dict(mesh=0.025, penalty=1.0e10, contact_penalty=1.0e9, rate=0.01, until=0
 # §17; before §8: 47.23 against 46.20 kN, RESULTS.md §7.4); with SETUP_PAPER 40.01 kN, 118,692 steps (RESULTS.md §28).
 # Since 27 Nov (RESULTS.md §33): mass scaling 15 per node ([numerics] mass_scaling = "per_node": the triangles' step,
 # the nodes whose joint penalty would need a smaller one made heavier) instead of 100 uniform: 20,812 steps against
-# 21,779, peak +0.81 % and K_e -2.0 % against the converged curve instead of +2.3 % and -7.1 %.
+# 21,779, peak +0.81 % and K_e -2.0 % against the converged curve instead of +2.3 % and -7.1 %. Since RESULTS.md §34
+# at safety 0.7 (as the family): 23,482 steps.
 K25_QUICK = dict(K25, mass_scale=15)
 # 3DEC family: local damping 0.8 in the shear stage, as 3DEC's default (Itasca's local damping 0.8), signed by the
 # velocity minus its moving mean over 0.1 s, and contact dashpots at 0.3 of critical: without the filter the damping
@@ -331,17 +336,17 @@ def k25_case(r, quick=False):
         settings_text = f"""# QUICK SETTING, for the default ./run.sh (under a minute on 2 threads): the family's settings (k25_N{r['N_kN']}.toml:
 #   contact dashpots {s['contact_damping']}, shear-stage local damping {s['damping']}, {s['rate']} m/s to {s['until'] * 1000:g} mm after a
 #   {s['drive_ramp']} s ramp) with per-node mass scaling ([numerics] mass_scale = {s['mass_scale']}, mass_scaling = "per_node"; gravity keeps
-#   the physical mass): every inertial mass x {s['mass_scale']}, the time step the triangles' limit at that, and the nodes whose
-#   contact springs (the joint penalty) would need a smaller step made heavier until they do not (total inertial mass
-#   x 2.4 over x {s['mass_scale']}): 20,812 steps. Against this wall's converged curve (uniform mass scaling 10 at half the
-#   rate, RESULTS.md §29, §33): peak +0.81 %, K_e -2.0 %, P_y -0.4 %, whole curve 0-10 mm RMS 1.2 % of the peak;
-#   uniform mass scaling 100, the setting before, took 21,779 steps for +2.3 %, -7.1 % and 2.3 %. The family report
-#   is the validation; this is its fast preview."""
+#   the physical mass): every inertial mass x {s['mass_scale']}, the time step {s['safety']} of the triangles' limit at that, and the
+#   nodes whose contact springs (the joint penalty) would need a smaller step made heavier until they do not (total
+#   inertial mass x 2.4 over x {s['mass_scale']}): 23,482 steps. Against this wall's converged curve (uniform mass scaling 10 at
+#   half the rate, RESULTS.md §29, §33, recomputed in §34): peak +0.73 %, K_e -3.2 %, P_y +0.2 %, ductility -3.8 %, whole
+#   curve 0-10 mm RMS 1.3 % of the peak; uniform mass scaling 100, the setting before §33, took 21,779 steps for
+#   +2.3 %, -7.1 % and 2.3 %. The family report is the validation; this is its fast preview."""
     else:
         settings_text = f"""# Mass scaling: per node ([numerics] mass_scale = {s['mass_scale']}, mass_scaling = "per_node"; gravity keeps the physical
-#   mass): every inertial mass x {s['mass_scale']}, the time step the triangles' limit at that (~4.5e-5 s instead of
+#   mass): every inertial mass x {s['mass_scale']}, the time step {s['safety']} of the triangles' limit at that (~4e-5 s instead of
 #   ~5.4e-6 s unscaled), and the nodes whose contact springs would need a smaller step made heavier until they do not
-#   (RESULTS.md §33; uniform x 10, the setting before, needed 2.6 times the steps for the same curve). Shear stage: contact dashpots at {s['contact_damping']} of critical (stage key
+#   (RESULTS.md §33, §34; uniform x 10, the setting before, needed 2.2-2.6 times the steps for the same curve). Shear stage: contact dashpots at {s['contact_damping']} of critical (stage key
 #   contact_damping): without them the contacts chatter at the step's frequency and the blocks' vibrations make the
 #   joints creep, so the load kept falling as the rate was halved (RESULTS.md §5). And local damping {s['damping']}: the
 #   load at the top of the wall excites a 25 Hz vertical oscillation of wall and beam that grows from 4-7 mm on and
@@ -392,6 +397,9 @@ mass_scale = {s['mass_scale']}          # inertial mass multiplier, see the head
 """
     if s.get("mass_scaling"):
         numerics += f"""mass_scaling = "{s['mass_scaling']}"   # see the header
+"""
+    if s.get("safety"):
+        numerics += f"""safety = {s['safety']}            # fraction of the stable step, see the header
 """
     W = W_WALL + W_BEAM
     text += COMMON_TAIL.format(**setup_text(SETUP_PAPER, s), interfaces=interfaces, numerics=numerics, exp_N=float(r["experiment_kN"]) * 1e3,
