@@ -82,6 +82,31 @@ PairParams stiffness_pair(double kn, double ks, double t, double mu, double dt) 
     return p;
 }
 
+
+// Two blocks of n x n structured cells, 0.3 x 0.1 m, triangles counter-clockwise with nodes shared inside each block
+// (body 0 below, body 1 above); the upper one rotated by 0.02 rad, shifted 13 mm and pressed 0.3 mm into the lower.
+// Nodes of the upper block come after (n + 1)^2.
+void pressed_blocks(int n, std::vector<double>& xy, std::vector<int>& tri, std::vector<int>& body) {
+    for (int b = 0; b < 2; ++b) {
+        const int off = static_cast<int>(xy.size() / 2);
+        const double c = std::cos(0.02 * b), s = std::sin(0.02 * b);
+        for (int j = 0; j <= n; ++j)
+            for (int i = 0; i <= n; ++i) {
+                const double u = 0.3 * i / n - 0.15, w = 0.1 * j / n;
+                xy.push_back(0.013 * b + c * u - s * w);
+                xy.push_back(b * (0.1 - 3e-4) + s * u + c * w);
+            }
+        for (int j = 0; j < n; ++j)
+            for (int i = 0; i < n; ++i) {
+                const int a = off + j * (n + 1) + i, d = a + n + 2;
+                if ((i + j) % 2 == 0) tri.insert(tri.end(), {a, a + 1, d, a, d, d - 1});
+                else tri.insert(tri.end(), {a, a + 1, d - 1, a + 1, d, d - 1});
+                body.push_back(b);
+                body.push_back(b);
+            }
+    }
+}
+
 }  // namespace
 
 TEST_CASE("NBS finds exactly the brute-force pairs on 10,000 random circles", "[unit]") {
@@ -887,24 +912,7 @@ TEST_CASE("Edges inside a body carry no contact load: a meshed block pressed int
     std::vector<double> xy;
     std::vector<int> tri, body;
     const int n = 6;
-    for (int b = 0; b < 2; ++b) {
-        const int off = static_cast<int>(xy.size() / 2);
-        const double c = std::cos(0.02 * b), s = std::sin(0.02 * b);
-        for (int j = 0; j <= n; ++j)
-            for (int i = 0; i <= n; ++i) {
-                const double u = 0.3 * i / n - 0.15, w = 0.1 * j / n;
-                xy.push_back(0.013 * b + c * u - s * w);
-                xy.push_back(b * (0.1 - 3e-4) + s * u + c * w);
-            }
-        for (int j = 0; j < n; ++j)
-            for (int i = 0; i < n; ++i) {
-                const int a = off + j * (n + 1) + i, d = a + n + 2;
-                if ((i + j) % 2 == 0) tri.insert(tri.end(), {a, a + 1, d, a, d, d - 1});
-                else tri.insert(tri.end(), {a, a + 1, d - 1, a + 1, d, d - 1});
-                body.push_back(b);
-                body.push_back(b);
-            }
-    }
+    pressed_blocks(n, xy, tri, body);
     const int nt = static_cast<int>(tri.size() / 3), nn = static_cast<int>(xy.size() / 2);
     for (double mu : {0.0, 0.6}) {
         ContactLaws laws(1);
@@ -963,4 +971,88 @@ TEST_CASE("Edges inside a body carry no contact load: a meshed block pressed int
             CHECK(-fx_ref / fy_ref > 1.05 * mu);  // what loading the interior edges did (0.68 for 0.6)
         }
     }
+}
+
+TEST_CASE("Edges joined by intact cohesive elements inside a unit are not faces: a split block slides with the forces "
+          "of the same block with shared nodes, and faces again where an element broke",
+          "[unit]") {
+    // The upper block of the test above with every triangle on its own three nodes (copies of the mesh vertices,
+    // set_vertex_copies) and each interior edge excluded as an intact cohesive element joining its two triangles
+    // (exclude_pair), as the engine sets up a crackable unit. Sliding with friction it gets the forces of the
+    // shared-node block, summed over the copies of each vertex, to 1e-12 of the largest: the same faces load. Then the
+    // element of one interior edge that pokes into the lower block is broken (not excluded, its vertices released):
+    // its two sides are faces again and the block's friction grows.
+    std::vector<double> xy;
+    std::vector<int> tri, body;
+    const int n = 6;
+    pressed_blocks(n, xy, tri, body);
+    const int nt = static_cast<int>(tri.size() / 3), nn = static_cast<int>(xy.size() / 2);
+    const int n_low = (n + 1) * (n + 1);
+    // split copy: the upper block's triangles on fresh nodes
+    std::vector<double> xs(xy.begin(), xy.begin() + 2 * n_low);
+    std::vector<int> ts, vertex(n_low);
+    for (int k = 0; k < n_low; ++k) vertex[k] = k;
+    for (int t = 0; t < nt; ++t)
+        for (int k = 0; k < 3; ++k) {
+            const int node = tri[3 * t + k];
+            if (body[t] == 0) {
+                ts.push_back(node);
+                continue;
+            }
+            ts.push_back(static_cast<int>(xs.size() / 2));
+            xs.push_back(xy[2 * node]);
+            xs.push_back(xy[2 * node + 1]);
+            vertex.push_back(node);
+        }
+    const int ns = static_cast<int>(xs.size() / 2);
+    ContactLaws laws(1);
+    laws.set_default(ContactLaw::penalty(1e9, 0.6, 1e9));
+    // The upper block's force (N) and its nodal forces f; split: the copies, intact elements on every interior edge of
+    // the upper block except the one between triangles broken_a and broken_b (-1: none).
+    auto upper_force = [&](const std::vector<int>& T, const std::vector<double>& X, int nodes, bool split, int broken_a,
+                           int broken_b, std::vector<double>& f) {
+        ContactSystem cs(T.data(), nt, nodes, 0.1, std::vector<int>(nt, 0), body, laws, ContactOptions{0.002, true});
+        for (int t = 0; t < nt; ++t) cs.set_capable(t, true);
+        if (split) {
+            cs.set_vertex_copies(vertex);
+            for (int a = 0; a < nt; ++a)
+                for (int b = a + 1; b < nt; ++b) {
+                    if (body[a] != 1 || body[b] != 1) continue;
+                    int shared = 0;
+                    for (int i = 0; i < 3; ++i)
+                        for (int j = 0; j < 3; ++j) shared += vertex[T[3 * a + i]] == vertex[T[3 * b + j]];
+                    if (shared != 2) continue;
+                    if (a == broken_a && b == broken_b) {
+                        for (int i = 0; i < 3; ++i) cs.release_vertex_of(T[3 * a + i]), cs.release_vertex_of(T[3 * b + i]);
+                        continue;
+                    }
+                    cs.exclude_pair(a, b);
+                }
+        }
+        std::vector<double> v(2 * nodes, 0.0);
+        for (int k = n_low; k < nodes; ++k) v[2 * k] = 10.0;  // the upper block slides, all contacts slip
+        f.assign(2 * nodes, 0.0);
+        cs.step(X.data(), v.data(), 1e-3, f.data());
+        double F[2] = {0, 0};
+        for (int k = n_low; k < nodes; ++k) F[0] += f[2 * k], F[1] += f[2 * k + 1];
+        return std::make_pair(F[0], F[1]);
+    };
+    std::vector<double> f_shared, f_split, f_broken;
+    const auto shared = upper_force(tri, xy, nn, false, -1, -1, f_shared);
+    const auto split = upper_force(ts, xs, ns, true, -1, -1, f_split);
+    std::vector<double> per_vertex(2 * nn, 0.0);
+    for (int k = 0; k < ns; ++k)
+        for (int c = 0; c < 2; ++c) per_vertex[2 * vertex[k] + c] += f_split[2 * k + c];
+    double fmax = 0.0;
+    for (double q : f_shared) fmax = std::max(fmax, std::fabs(q));
+    REQUIRE(shared.second > 100.0);
+    for (int k = 0; k < nn; ++k)
+        for (int c = 0; c < 2; ++c) CHECK(per_vertex[2 * k + c] == Approx(f_shared[2 * k + c]).margin(1e-12 * fmax));
+    // The first cell of the upper block's bottom row: its two triangles (2 n^2 and 2 n^2 + 1) share its diagonal,
+    // whose lower end is a vertex of the bottom face, inside the lower block.
+    const int ta = 2 * n * n, tb = 2 * n * n + 1;
+    const auto broken = upper_force(ts, xs, ns, true, ta, tb, f_broken);
+    std::printf("[faces, split] upper block: shared nodes (%.6g, %.6g) N, split (%.6g, %.6g) N, one element broken "
+                "(%.6g, %.6g) N\n", shared.first, shared.second, split.first, split.second, broken.first, broken.second);
+    CHECK(-broken.first > -split.first * (1 + 1e-6));
 }
