@@ -1,10 +1,11 @@
 #!/usr/bin/env python3
-"""Speed against error of the default wall, before and after the settings of RESULTS.md §29 (issue 25), and with
-per-node mass scaling (§33): two or three `fdem-tools study speed` folders of the same grid (mass scaling), measured
+"""Speed against error of the default wall, before and after the settings of RESULTS.md §29 (issue 25), with
+per-node mass scaling (§33), and with contact on faces only and the per-node bound at safety 0.7 (§34): two to four
+`fdem-tools study speed` folders of the same grid (mass scaling), measured
 against the same reference curve, drawn as fronts (time against the curve's RMS difference, and against the peak's
 difference) and tabulated.
 
-/usr/bin/python3 cases/lourenco2005/plot_front.py BEFORE_STUDY AFTER_STUDY [PER_NODE_STUDY] [--out PREFIX]
+/usr/bin/python3 cases/lourenco2005/plot_front.py BEFORE_STUDY AFTER_STUDY [PER_NODE_STUDY [FACES_STUDY]] [--out PREFIX]
 
 Each STUDY is a folder written by `fdem-tools study speed ... --reference-run REF --error curve_rms` (its
 speed_study.csv, with the runs' steps and wall and CPU times). Writes PREFIX.csv and PREFIX.png (default study_front_k25_N100_quick) and prints a
@@ -41,12 +42,14 @@ def main():
     ap.add_argument("before")
     ap.add_argument("after")
     ap.add_argument("per_node", nargs="?", help="the study with [numerics] mass_scaling = \"per_node\" (RESULTS.md §33)")
+    ap.add_argument("faces", nargs="?", help="the study of RESULTS.md §34 (faces only, Gershgorin bound, safety 0.7)")
     ap.add_argument("--out", default="study_front_k25_N100_quick")
     a = ap.parse_args()
     global TIME
     before, after = load(a.before, "before"), load(a.after, "after")
     per_node = load(a.per_node, "per node") if a.per_node else []
-    rows = before + after + per_node
+    faces = load(a.faces, "faces") if a.faces else []
+    rows = before + after + per_node + faces
     if any(r["cpu_time_s"] != r["cpu_time_s"] for r in rows):  # NaN: a summary without cpu_time_s
         TIME = "wall_time_s"
     with open(a.out + ".csv", "w", newline="") as f:
@@ -62,7 +65,8 @@ def main():
               f"{100 * r['K_e_error']:+.1f} % | {100 * r['ductility_error']:+.1f} % |")
     print()
     print(f"times: {TIME}")
-    for old_name, olds, new_name, news in (("before", before, "after", after), ("after", after, "per node", per_node)):
+    for old_name, olds, new_name, news in (("before", before, "after", after), ("after", after, "per node", per_node),
+                                           ("per node", per_node, "faces", faces)):
         if not news:
             continue
         print()
@@ -81,12 +85,13 @@ def main():
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4.5))
+    fig, axes = plt.subplots(1, 2, figsize=(11, 5.2))
     for ax, key, name in ((axes[0], "curve_rms", "RMS curve difference, 0-10 mm (% of the reference peak)"),
                           (axes[1], "peak_error", "peak difference (% of the reference peak)")):
         for label, rs, style in (("before (intrinsic cracks, penalty 1e10 Pa, 0.005 s ramp)", before, "o--"),
                                  ("after (extrinsic insertion, contact penalty 1e9 Pa, 0.1 s ramp)", after, "s-"),
-                                 ("per node (after, with mass_scaling = \"per_node\")", per_node, "^-")):
+                                 ("per node (after, with mass_scaling = \"per_node\")", per_node, "^-"),
+                                 ("faces (per node, contact on faces only, Gershgorin bound, safety 0.7; against R', its build's converged curve)", faces, "D-")):
             if not rs:
                 continue
             t = [r[TIME] for r in rs]
@@ -99,10 +104,12 @@ def main():
         ax.set_xlabel(("CPU" if TIME == "cpu_time_s" else "wall") + " time, 1 thread (s)")
         ax.set_ylabel(name, fontsize=8)
         ax.grid(alpha=0.3, which="both")
-    axes[0].legend(fontsize=7)
-    fig.suptitle("Default wall (k25_N100_quick), mass scaling marked; reference: uniform mass scaling 10 at half the rate",
+    handles, labels = axes[0].get_legend_handles_labels()
+    fig.legend(handles, labels, fontsize=7, loc="lower center", ncol=2)
+    fig.suptitle("Default wall (k25_N100_quick), mass scaling marked; reference: uniform mass scaling 10 at half the rate "
+                 "(R of §29; R' of §34 for the faces front)",
                  fontsize=9)
-    fig.tight_layout()
+    fig.tight_layout(rect=(0, 0.1, 1, 1))
     fig.savefig(a.out + ".png", dpi=130)
     print(f"wrote {a.out}.csv, {a.out}.png")
 
