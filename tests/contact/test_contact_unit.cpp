@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
+#include <functional>
 #include <omp.h>
 #include <random>
 #include <set>
@@ -105,6 +106,29 @@ void pressed_blocks(int n, std::vector<double>& xy, std::vector<int>& tri, std::
                 body.push_back(b);
             }
     }
+}
+
+
+// One step of the blocks of pressed_blocks under a penalty law (1e9 Pa normal and tangential, friction mu), every
+// triangle capable, the upper block's nodes (from n_low on) sliding at 10 m/s over a step of 1 ms, so that every
+// contact slips. setup may add vertex copies and excluded pairs. Returns the upper block's force (N); f: the nodal
+// contact forces (N).
+std::pair<double, double> slide_upper_block(const std::vector<int>& tri, const std::vector<double>& xy,
+                                            const std::vector<int>& body, int n_low, double mu,
+                                            const std::function<void(ContactSystem&)>& setup, std::vector<double>& f) {
+    const int nt = static_cast<int>(tri.size() / 3), nodes = static_cast<int>(xy.size() / 2);
+    ContactLaws laws(1);
+    laws.set_default(ContactLaw::penalty(1e9, mu, 1e9));
+    ContactSystem cs(tri.data(), nt, nodes, 0.1, std::vector<int>(nt, 0), body, laws, ContactOptions{0.002, true});
+    for (int t = 0; t < nt; ++t) cs.set_capable(t, true);
+    if (setup) setup(cs);
+    std::vector<double> v(2 * nodes, 0.0);
+    for (int k = n_low; k < nodes; ++k) v[2 * k] = 10.0;
+    f.assign(2 * nodes, 0.0);
+    cs.step(xy.data(), v.data(), 1e-3, f.data());
+    double F[2] = {0, 0};
+    for (int k = n_low; k < nodes; ++k) F[0] += f[2 * k], F[1] += f[2 * k + 1];
+    return {F[0], F[1]};
 }
 
 }  // namespace
@@ -915,15 +939,12 @@ TEST_CASE("Edges inside a body carry no contact load: a meshed block pressed int
     pressed_blocks(n, xy, tri, body);
     const int nt = static_cast<int>(tri.size() / 3), nn = static_cast<int>(xy.size() / 2);
     for (double mu : {0.0, 0.6}) {
-        ContactLaws laws(1);
-        laws.set_default(ContactLaw::penalty(1e9, mu, 1e9));
-        ContactSystem cs(tri.data(), nt, nn, 0.1, std::vector<int>(nt, 0), body, laws, ContactOptions{0.002, true});
-        for (int t = 0; t < nt; ++t) cs.set_capable(t, true);
-        std::vector<double> v(2 * nn, 0.0), f(2 * nn, 0.0);
+        const int n_low = (n + 1) * (n + 1);
+        std::vector<double> f;
+        const auto up = slide_upper_block(tri, xy, body, n_low, mu, nullptr, f);
         const double dt = 1e-3;
-        for (int k = 0; k < nn; ++k)
-            if (k >= (n + 1) * (n + 1)) v[2 * k] = 10.0;  // the upper block slides
-        cs.step(xy.data(), v.data(), dt, f.data());
+        std::vector<double> v(2 * nn, 0.0);
+        for (int k = n_low; k < nn; ++k) v[2 * k] = 10.0;  // as slide_upper_block moves them
         // reference: every pair of the two blocks, every edge
         std::vector<double> fr(2 * nn, 0.0);
         PairParams prm;
@@ -953,10 +974,11 @@ TEST_CASE("Edges inside a body carry no contact load: a meshed block pressed int
                     }
             }
         REQUIRE(loaded > 8);
-        double fmax = 0.0, fx_up = 0.0, fy_up = 0.0, fx_ref = 0.0, fy_ref = 0.0;
+        double fmax = 0.0, fx_ref = 0.0, fy_ref = 0.0;
+        const double fx_up = up.first, fy_up = up.second;
         for (int k = 0; k < nn; ++k) {
             fmax = std::max(fmax, std::max(std::fabs(fr[2 * k]), std::fabs(fr[2 * k + 1])));
-            if (k >= (n + 1) * (n + 1)) fx_up += f[2 * k], fy_up += f[2 * k + 1], fx_ref += fr[2 * k], fy_ref += fr[2 * k + 1];
+            if (k >= n_low) fx_ref += fr[2 * k], fy_ref += fr[2 * k + 1];
         }
         INFO("mu " << mu << ": upper block force (" << fx_up << ", " << fy_up << ") N, all edges (" << fx_ref << ", "
                    << fy_ref << ") N");
@@ -1005,41 +1027,29 @@ TEST_CASE("Edges joined by intact cohesive elements inside a unit are not faces:
             vertex.push_back(node);
         }
     const int ns = static_cast<int>(xs.size() / 2);
-    ContactLaws laws(1);
-    laws.set_default(ContactLaw::penalty(1e9, 0.6, 1e9));
-    // The upper block's force (N) and its nodal forces f; split: the copies, intact elements on every interior edge of
-    // the upper block except the one between triangles broken_a and broken_b (-1: none).
-    auto upper_force = [&](const std::vector<int>& T, const std::vector<double>& X, int nodes, bool split, int broken_a,
-                           int broken_b, std::vector<double>& f) {
-        ContactSystem cs(T.data(), nt, nodes, 0.1, std::vector<int>(nt, 0), body, laws, ContactOptions{0.002, true});
-        for (int t = 0; t < nt; ++t) cs.set_capable(t, true);
-        if (split) {
+    // Intact elements on every interior edge of the upper block except the one between triangles broken_a and
+    // broken_b (-1: none), whose vertices are released.
+    auto split_setup = [&](int broken_a, int broken_b) {
+        return [&, broken_a, broken_b](ContactSystem& cs) {
             cs.set_vertex_copies(vertex);
             for (int a = 0; a < nt; ++a)
                 for (int b = a + 1; b < nt; ++b) {
                     if (body[a] != 1 || body[b] != 1) continue;
                     int shared = 0;
                     for (int i = 0; i < 3; ++i)
-                        for (int j = 0; j < 3; ++j) shared += vertex[T[3 * a + i]] == vertex[T[3 * b + j]];
+                        for (int j = 0; j < 3; ++j) shared += vertex[ts[3 * a + i]] == vertex[ts[3 * b + j]];
                     if (shared != 2) continue;
                     if (a == broken_a && b == broken_b) {
-                        for (int i = 0; i < 3; ++i) cs.release_vertex_of(T[3 * a + i]), cs.release_vertex_of(T[3 * b + i]);
+                        for (int i = 0; i < 3; ++i) cs.release_vertex_of(ts[3 * a + i]), cs.release_vertex_of(ts[3 * b + i]);
                         continue;
                     }
                     cs.exclude_pair(a, b);
                 }
-        }
-        std::vector<double> v(2 * nodes, 0.0);
-        for (int k = n_low; k < nodes; ++k) v[2 * k] = 10.0;  // the upper block slides, all contacts slip
-        f.assign(2 * nodes, 0.0);
-        cs.step(X.data(), v.data(), 1e-3, f.data());
-        double F[2] = {0, 0};
-        for (int k = n_low; k < nodes; ++k) F[0] += f[2 * k], F[1] += f[2 * k + 1];
-        return std::make_pair(F[0], F[1]);
+        };
     };
     std::vector<double> f_shared, f_split, f_broken;
-    const auto shared = upper_force(tri, xy, nn, false, -1, -1, f_shared);
-    const auto split = upper_force(ts, xs, ns, true, -1, -1, f_split);
+    const auto shared = slide_upper_block(tri, xy, body, n_low, 0.6, nullptr, f_shared);
+    const auto split = slide_upper_block(ts, xs, body, n_low, 0.6, split_setup(-1, -1), f_split);
     std::vector<double> per_vertex(2 * nn, 0.0);
     for (int k = 0; k < ns; ++k)
         for (int c = 0; c < 2; ++c) per_vertex[2 * vertex[k] + c] += f_split[2 * k + c];
@@ -1051,7 +1061,7 @@ TEST_CASE("Edges joined by intact cohesive elements inside a unit are not faces:
     // The first cell of the upper block's bottom row: its two triangles (2 n^2 and 2 n^2 + 1) share its diagonal,
     // whose lower end is a vertex of the bottom face, inside the lower block.
     const int ta = 2 * n * n, tb = 2 * n * n + 1;
-    const auto broken = upper_force(ts, xs, ns, true, ta, tb, f_broken);
+    const auto broken = slide_upper_block(ts, xs, body, n_low, 0.6, split_setup(ta, tb), f_broken);
     std::printf("[faces, split] upper block: shared nodes (%.6g, %.6g) N, split (%.6g, %.6g) N, one element broken "
                 "(%.6g, %.6g) N\n", shared.first, shared.second, split.first, split.second, broken.first, broken.second);
     CHECK(-broken.first > -split.first * (1 + 1e-6));
