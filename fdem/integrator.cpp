@@ -4,7 +4,8 @@
 // One step (central differences with local damping, README "Physics"; [M04] ch. 4, [C79]), with x^n, v^{n-1/2} known:
 //   1. loads, gravity and prescribed velocities at time t^n (ramps, protocols, tilting);
 //   2. triangle forces f_int(x^n, v^{n-1/2}) in parallel, one 6-double record per triangle;
-//   3. node loop in parallel: gather the triangle records in CSR order, add applied loads and gravity,
+//   3. node loop in parallel, one unit (a node, or a group of tied copies moving as one node) at a time: gather the
+//      triangle records in CSR order, add applied loads and gravity,
 //      local damping f_d = -alpha |f| sign(v) on free DOFs ([C79]) and mass-proportional (Rayleigh alpha) damping -a m vbar
 //      (Belytschko, Liu & Moran 2000; vbar = (v^{n-1/2} + v^{n+1/2}) / 2, implicit in v, never limits the step), then
 //      v^{n+1/2} = ((1 - a dt / 2) v^{n-1/2} + dt (f + f_d) / m) / (1 + a dt / 2), or the prescribed value
@@ -129,7 +130,8 @@ void Simulation::build_ties() {
     const int nn = model_.n_nodes();
     tie_of_.clear(), tie_start_.clear(), tie_node_.clear();
     if (!ties_) {
-        tie_F_.clear(), tie_w_.clear(), tie_inv_mass_.clear(), eff_mass_.clear(), tie_rep_.clear();
+        tie_w_.clear(), eff_mass_.clear(), tie_rep_.clear();
+        unit_start_.clear(), unit_node_.clear(), unit_mass_.clear(), unit_inv_mass_.clear();
         return;
     }
     std::vector<int> parent(nn);
@@ -166,9 +168,7 @@ void Simulation::build_ties() {
         tie_of_[k] = g;
         tie_node_[fill[g]++] = k;
     }
-    tie_F_.assign(4 * static_cast<std::size_t>(nn), 0.0);
     tie_w_.assign(nn, 1.0);
-    tie_inv_mass_.assign(nn, 0.0);
     eff_mass_ = model_.mass;
     tie_rep_.resize(nn);
     for (int k = 0; k < nn; ++k) tie_rep_[k] = k;
@@ -178,10 +178,24 @@ void Simulation::build_ties() {
         for (int j = tie_start_[g]; j < tie_start_[g + 1]; ++j) {
             const int k = tie_node_[j];
             tie_w_[k] = model_.mass[k] / M;
-            tie_inv_mass_[k] = 1.0 / M;
             eff_mass_[k] = M;
             tie_rep_[k] = tie_node_[tie_start_[g]];
         }
+    }
+    // The node loop's units, in order of their first node: a lone node, or a group with its members.
+    unit_start_.assign(1, 0), unit_node_.clear(), unit_mass_.clear(), unit_inv_mass_.clear();
+    unit_node_.reserve(nn);
+    for (int k = 0; k < nn; ++k) {
+        const int g = tie_of_[k];
+        if (g >= 0 && tie_node_[tie_start_[g]] != k) continue;  // a copy after its group's first
+        if (g < 0) {
+            unit_node_.push_back(k);
+        } else {
+            for (int j = tie_start_[g]; j < tie_start_[g + 1]; ++j) unit_node_.push_back(tie_node_[j]);
+        }
+        unit_start_.push_back(static_cast<int>(unit_node_.size()));
+        unit_mass_.push_back(g >= 0 ? eff_mass_[k] : model_.mass[k]);
+        unit_inv_mass_.push_back(g >= 0 ? 1.0 / eff_mass_[k] : model_.inv_mass[k]);
     }
     if (stage_ >= 0) check_ties();
 }
@@ -332,36 +346,20 @@ void Simulation::step() {
             if (dof_owner_[2 * k + c] == static_cast<int>(id)) dof_vel_[2 * k + c] = vnew;
     }
 
-    // Tied copies (extrinsic insertion): each group's internal and external force sums, so that every member
-    // takes the same acceleration F / M (the node loop below) and books its mass share m / M of the work.
-    if (ties_) {
-        const int ng = static_cast<int>(tie_start_.size()) - 1;
-        const double* fm = f_mod_.data();
-        const double gx = applied_gravity_[0], gy = applied_gravity_[1];
-#pragma omp parallel for schedule(static) if (ng > 2048)
-        for (int g = 0; g < ng; ++g) {
-            double S[4] = {0, 0, 0, 0};
-            for (int j = tie_start_[g]; j < tie_start_[g + 1]; ++j) {
-                const int k = tie_node_[j];
-                S[0] += fm[2 * k], S[1] += fm[2 * k + 1];
-                for (int i = model_.inc_ptr[k]; i < model_.inc_ptr[k + 1]; ++i) {
-                    const double* r = tf + 2 * static_cast<std::size_t>(model_.inc_idx[i]);
-                    S[0] += r[0], S[1] += r[1];
-                }
-                S[2] += f_ext_[2 * k] + model_.grav_mass[k] * gx;
-                S[3] += f_ext_[2 * k + 1] + model_.grav_mass[k] * gy;
-            }
-            for (int j = tie_start_[g]; j < tie_start_[g + 1]; ++j)
-                for (int c = 0; c < 4; ++c) tie_F_[4 * static_cast<std::size_t>(tie_node_[j]) + c] = S[c];
-        }
-    }
-    const int* tie_of = ties_ ? tie_of_.data() : nullptr;
-    const double* tieF = ties_ ? tie_F_.data() : nullptr;
-    const double* tie_w = ties_ ? tie_w_.data() : nullptr;
-    const double* tie_im = ties_ ? tie_inv_mass_.data() : nullptr;
-
-    // 3. Node loop.
-    const int nnb = (nn + kBlock - 1) / kBlock;
+    // 3. Node loop, one unit at a time: a node, or a group of tied copies (extrinsic insertion), which moves as one
+    // node of the group's mass M: the resultant F of its members' forces gives every member the same velocity
+    // (v^{n+1/2} from F / M, the bits a lone node of mass M takes), and the group's books (work, damping, kinetic
+    // energy, unbalanced force) are those of that node. The unbalanced-force scale takes every member's own forces.
+    // A prescribed DOF (a support takes every copy, check_ties) has each member's reaction of its mass share
+    // w = m / M of F.
+    const bool tied = ties_;
+    const int nu = tied ? static_cast<int>(unit_start_.size()) - 1 : nn;
+    const int* u_start = tied ? unit_start_.data() : nullptr;
+    const int* u_node = tied ? unit_node_.data() : nullptr;
+    const double* u_mass = tied ? unit_mass_.data() : nullptr;
+    const double* u_inv = tied ? unit_inv_mass_.data() : nullptr;
+    const double* tie_w = tied ? tie_w_.data() : nullptr;
+    const int nnb = (nu + kBlock - 1) / kBlock;
     const double alpha = alpha_;
     const double beta_mass = beta_mass_;
     const double gx = applied_gravity_[0], gy = applied_gravity_[1];
@@ -381,60 +379,70 @@ void Simulation::step() {
     for (int b = 0; b < nnb; ++b) {
         double dW = 0, dD = 0, unb = 0, scale = 0, K = 0, cW = 0, cD = 0, dM = 0, cM = 0;
         int bad = -1;
-        const int k1 = std::min(nn, (b + 1) * kBlock);
-        for (int k = b * kBlock; k < k1; ++k) {
-            double fi0 = fmod[2 * k], fi1 = fmod[2 * k + 1];
-            fmod[2 * k] = 0, fmod[2 * k + 1] = 0;
-            for (int j = inc_ptr[k]; j < inc_ptr[k + 1]; ++j) {
-                const double* r = tf + 2 * static_cast<std::size_t>(inc_idx[j]);
-                fi0 += r[0], fi1 += r[1];
+        const int u1 = std::min(nu, (b + 1) * kBlock);
+        for (int u = b * kBlock; u < u1; ++u) {
+            const int j0 = tied ? u_start[u] : u, j1 = tied ? u_start[u + 1] : u + 1;
+            // the resultant: internal (joints, contact, triangles) and external (loads, gravity) sums
+            double S[4] = {0, 0, 0, 0};
+            for (int j = j0; j < j1; ++j) {
+                const int k = tied ? u_node[j] : j;
+                double fi0 = fmod[2 * k], fi1 = fmod[2 * k + 1];
+                fmod[2 * k] = 0, fmod[2 * k + 1] = 0;
+                for (int i = inc_ptr[k]; i < inc_ptr[k + 1]; ++i) {
+                    const double* r = tf + 2 * static_cast<std::size_t>(inc_idx[i]);
+                    fi0 += r[0], fi1 += r[1];
+                }
+                const double fe0 = fext[2 * k] + gmass[k] * gx, fe1 = fext[2 * k + 1] + gmass[k] * gy;
+                scale += std::abs(fi0) + std::abs(fe0);
+                scale += std::abs(fi1) + std::abs(fe1);
+                S[0] += fi0, S[1] += fi1, S[2] += fe0, S[3] += fe1;
             }
-            double fe[2] = {fext[2 * k] + gmass[k] * gx, fext[2 * k + 1] + gmass[k] * gy};
-            double fin[2] = {fi0, fi1};
-            // A tied copy: the scale takes its own forces; its motion the group's resultant over the group's mass,
-            // the same bits for every member; its books the share w = m / M of the group's forces.
-            const double sc[2] = {std::abs(fin[0]) + std::abs(fe[0]), std::abs(fin[1]) + std::abs(fe[1])};
-            double w = 1.0, im = inv_mass[k];
-            if (tie_of && tie_of[k] >= 0) {
-                const double* S = tieF + 4 * static_cast<std::size_t>(k);
-                fin[0] = S[0], fin[1] = S[1], fe[0] = S[2], fe[1] = S[3];
-                w = tie_w[k], im = tie_im[k];
-            }
+            const int k0 = tied ? u_node[j0] : j0;
+            const double M = tied ? u_mass[u] : mass[k0];
+            const double im = tied ? u_inv[u] : inv_mass[k0];
             for (int c = 0; c < 2; ++c) {
-                const int d = 2 * k + c;
-                const double f = fin[c] + fe[c];
-                const double vold = vw[d];
+                const int d0 = 2 * k0 + c;
+                const double f = S[c] + S[2 + c], fe = S[2 + c];
+                const double vold = vw[d0];
                 double vnew;
-                if (kind[d] == 0) {
+                if (kind[d0] == 0) {
                     // [C79] local damping: -alpha |f| sign(v), or sign(v - vref) with the filter.
-                    const double vrel = vref ? vold - vref[d] : vold;
+                    const double vrel = vref ? vold - vref[d0] : vold;
                     const double fd = vrel > 0 ? -alpha * std::abs(f) : vrel < 0 ? alpha * std::abs(f) : 0.0;
-                    vnew = ((1 - hm) * vold + dtv * (f + fd) * im) / (1 + hm);
+                    // (without mass damping the same bits without the division: (1 - 0) v = v, x / 1 = x)
+                    vnew = hm > 0 ? ((1 - hm) * vold + dtv * (f + fd) * im) / (1 + hm) : vold + dtv * (f + fd) * im;
                     const double vbar = 0.5 * (vold + vnew);
-                    dW += w * dt * fe[c] * vbar;
-                    dD -= w * dt * fd * vbar;
-                    cW += w * 0.5 * dt * fe[c] * vnew;
-                    cD -= w * 0.5 * dt * fd * vnew;
+                    dW += dt * fe * vbar;
+                    dD -= dt * fd * vbar;
+                    cW += 0.5 * dt * fe * vnew;
+                    cD -= 0.5 * dt * fd * vnew;
                     if (hm > 0) {  // -a m vbar: work dt (-a m vbar) vbar, and its share up to t^n
-                        const double fm = -beta_mass * mass[k] * vbar;
+                        const double fm = -beta_mass * M * vbar;
                         dM -= dt * fm * vbar;
                         cM -= 0.5 * dt * fm * vnew;
                     }
-                    unb += w * std::abs(f);
-                    scale += sc[c];
+                    unb += std::abs(f);
                 } else {
-                    vnew = kind[d] == 1 ? 0.0 : vpres[d];
-                    const double R = mass[k] * (vnew - vold) / dtv - w * f;
-                    reac[d] = R;
-                    dW += dt * (w * fe[c] + R) * 0.5 * (vold + vnew);
-                    cW += 0.5 * dt * (w * fe[c] + R) * vnew;
-                    scale += sc[c];
+                    vnew = kind[d0] == 1 ? 0.0 : vpres[d0];
+                    for (int j = j0; j < j1; ++j) {
+                        const int k = tied ? u_node[j] : j;
+                        const double w = tied ? tie_w[k] : 1.0;
+                        const double R = mass[k] * (vnew - vold) / dtv - w * f;
+                        reac[2 * k + c] = R;
+                        dW += dt * (w * fe + R) * 0.5 * (vold + vnew);
+                        cW += 0.5 * dt * (w * fe + R) * vnew;
+                    }
                 }
-                K += 0.5 * mass[k] * vold * vnew;
-                if (vref) vref[d] += wf * (vnew - vref[d]);
-                if (!std::isfinite(vnew) && bad < 0) bad = k;
-                vw[d] = vnew;
-                xw[d] += dt * vnew;
+                K += 0.5 * M * vold * vnew;
+                if (!std::isfinite(vnew) && bad < 0) bad = k0;
+                const double xn = xw[d0] + dt * vnew;  // the members' positions are the same bits
+                const double vr = vref ? vref[d0] + wf * (vnew - vref[d0]) : 0.0;
+                for (int j = j0; j < j1; ++j) {
+                    const int d = 2 * (tied ? u_node[j] : j) + c;
+                    vw[d] = vnew;
+                    xw[d] = xn;
+                    if (vref) vref[d] = vr;
+                }
             }
         }
         block_a_[b] = dW, block_b_[b] = dD, block_c_[b] = unb, block_d_[b] = scale;

@@ -220,9 +220,9 @@ private:
     bool ties_ = false;
     std::vector<int> tie_of_;                // per node: its group, -1 when untied
     std::vector<int> tie_start_, tie_node_;  // CSR: members of group g are tie_node_[tie_start_[g] .. tie_start_[g+1])
-    std::vector<double> tie_F_;              // N, per node: its group's internal (x, y) and external (x, y) force sums
     std::vector<double> tie_w_;              // -, per node: its mass over its group's mass
-    std::vector<double> tie_inv_mass_;       // 1/kg, per node: 1 / (its group's mass)
+    std::vector<int> unit_start_, unit_node_;  // CSR: the node loop's units (a lone node or a group), by first node
+    std::vector<double> unit_mass_, unit_inv_mass_;  // kg, 1/kg: per unit
     std::vector<double> tri_sigma_;          // Pa, per triangle: Cauchy stress xx, yy, xy of the step (ties only)
     std::vector<double> eff_mass_;           // kg, per node: its group's mass (tied) or its own (empty: no ties)
     std::vector<int> tie_rep_;               // per node: its group's first node, or itself (empty: no ties)
