@@ -131,7 +131,7 @@ void Simulation::build_ties() {
     tie_of_.clear(), tie_start_.clear(), tie_node_.clear();
     if (!ties_) {
         tie_w_.clear(), eff_mass_.clear(), tie_rep_.clear();
-        unit_start_.clear(), unit_node_.clear(), unit_mass_.clear(), unit_inv_mass_.clear();
+        unit_start_.clear(), unit_node_.clear(), unit_mass_.clear(), unit_inv_mass_.clear(), unit_block_.clear();
         return;
     }
     std::vector<int> parent(nn);
@@ -197,6 +197,12 @@ void Simulation::build_ties() {
         unit_mass_.push_back(g >= 0 ? eff_mass_[k] : model_.mass[k]);
         unit_inv_mass_.push_back(g >= 0 ? 1.0 / eff_mass_[k] : model_.inv_mass[k]);
     }
+    // Blocks of whole units with at least kBlock members each (the last may have fewer): the same work per block
+    // whatever the mix of groups and lone nodes, and no more blocks than ceil(nn / kBlock).
+    const int nu = static_cast<int>(unit_start_.size()) - 1;
+    unit_block_.assign(1, 0);
+    for (int u = 0; u < nu; ++u)
+        if (unit_start_[u + 1] - unit_start_[unit_block_.back()] >= kBlock || u + 1 == nu) unit_block_.push_back(u + 1);
     if (stage_ >= 0) check_ties();
 }
 
@@ -359,7 +365,9 @@ void Simulation::step() {
     const double* u_mass = tied ? unit_mass_.data() : nullptr;
     const double* u_inv = tied ? unit_inv_mass_.data() : nullptr;
     const double* tie_w = tied ? tie_w_.data() : nullptr;
-    const int nnb = (nu + kBlock - 1) / kBlock;
+    // blocks of units: kBlock nodes (tied: whole units of at least kBlock members, unit_block_)
+    const int nnb = tied ? static_cast<int>(unit_block_.size()) - 1 : (nn + kBlock - 1) / kBlock;
+    const int* u_block = tied ? unit_block_.data() : nullptr;
     const double alpha = alpha_;
     const double beta_mass = beta_mass_;
     const double gx = applied_gravity_[0], gy = applied_gravity_[1];
@@ -379,8 +387,8 @@ void Simulation::step() {
     for (int b = 0; b < nnb; ++b) {
         double dW = 0, dD = 0, unb = 0, scale = 0, K = 0, cW = 0, cD = 0, dM = 0, cM = 0;
         int bad = -1;
-        const int u1 = std::min(nu, (b + 1) * kBlock);
-        for (int u = b * kBlock; u < u1; ++u) {
+        const int u0 = tied ? u_block[b] : b * kBlock, u1 = tied ? u_block[b + 1] : std::min(nu, (b + 1) * kBlock);
+        for (int u = u0; u < u1; ++u) {
             const int j0 = tied ? u_start[u] : u, j1 = tied ? u_start[u + 1] : u + 1;
             // the resultant: internal (joints, contact, triangles) and external (loads, gravity) sums
             double S[4] = {0, 0, 0, 0};

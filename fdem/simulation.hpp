@@ -222,6 +222,7 @@ private:
     std::vector<int> tie_start_, tie_node_;  // CSR: members of group g are tie_node_[tie_start_[g] .. tie_start_[g+1])
     std::vector<double> tie_w_;              // -, per node: its mass over its group's mass
     std::vector<int> unit_start_, unit_node_;  // CSR: the node loop's units (a lone node or a group), by first node
+    std::vector<int> unit_block_;              // the node loop's blocks: first unit of each, then the end
     std::vector<double> unit_mass_, unit_inv_mass_;  // kg, 1/kg: per unit
     std::vector<double> tri_sigma_;          // Pa, per triangle: Cauchy stress xx, yy, xy of the step (ties only)
     std::vector<double> eff_mass_;           // kg, per node: its group's mass (tied) or its own (empty: no ties)
