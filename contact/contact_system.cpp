@@ -471,8 +471,8 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f)
             PairResult r;
             // pair_contact leaves the history all zero when it returns false (every slot released).
             const bool on = pair_contact(geom_[a], geom_[b], va, vb, law_prm_[pair_law_[p]], want_energy,
-                                         &hist_[kHistPerPair * static_cast<size_t>(p)], r);
-            pair_hist_on_[p] = on ? 1 : 0;
+                                         &hist_[kHistPerPair * static_cast<size_t>(p)], r, pair_hist_on_[p]);
+            pair_hist_on_[p] = static_cast<char>(r.held);
             if (on) {
                 pair_on_[p] = 1;
                 double* pf = &pair_f_[12 * static_cast<size_t>(p)];
@@ -588,7 +588,13 @@ void ContactSystem::load_state(StateReader& r) {
     if (pair_b_.size() != np || pair_law_.size() != np || hist_.size() != kHistPerPair * np)
         throw StateError("contact: inconsistent pair arrays");
     pair_hist_on_.resize(np);
-    for (std::size_t p = 0; p < np; ++p) pair_hist_on_[p] = any_history(&hist_[kHistPerPair * p]) ? 1 : 0;
+    for (std::size_t p = 0; p < np; ++p) {
+        char held = 0;
+        for (int sl = 0; sl < 6; ++sl)
+            for (int i = 0; i < kHistPerEdge; ++i)
+                if (hist_[kHistPerPair * p + kHistPerEdge * sl + i] != 0.0) held |= static_cast<char>(1 << sl);
+        pair_hist_on_[p] = held;
+    }
     for (std::size_t p = 0; p < np; ++p)
         if (pair_a_[p] < 0 || pair_a_[p] >= n_tri_ || pair_b_[p] < 0 || pair_b_[p] >= n_tri_ || pair_law_[p] < 0 ||
             pair_law_[p] >= static_cast<int>(laws_.size()))

@@ -6,8 +6,8 @@
 //   State passed in each step (owned by the engine): x[2 n_nodes] positions (m), v[2 n_nodes] velocities (m/s),
 //   f[2 n_nodes] forces (N) to which contact forces are ADDED; node k at (2k, 2k+1).
 //   Pairs (structure of arrays, index p): pair_a[p] < pair_b[p] triangle indices, pair_law[p] index into the
-//   resolved law table, hist[kHistPerPair p] friction state (slots as in potential.hpp), pair_hist_on[p] 1 when
-//   hist may hold something (0: all zero, nothing to forget). Per law: law_prm[l], the pair kernel's parameters
+//   resolved law table, hist[kHistPerPair p] friction state (slots as in potential.hpp), pair_hist_on[p] bit s
+//   set when slot s of hist may hold something (0: all zero, nothing to forget or read). Per law: law_prm[l], the pair kernel's parameters
 //   resolved once per step (they depend on the law, dt and the dashpot only). Per-pair scratch
 //   (forces 12 p, energies) is written by one thread per pair in parallel and then added serially in pair order,
 //   so the result has the same bits for any thread count.
@@ -166,7 +166,7 @@ private:
     std::vector<int> pair_a_, pair_b_, pair_law_;
     std::vector<double> hist_;  // kHistPerPair per pair
     // scratch
-    std::vector<char> pair_hist_on_;  // per pair: 1 when hist_ may be nonzero (derived from hist_, not saved)
+    std::vector<char> pair_hist_on_;  // per pair: bit s set when slot s of hist_ may be nonzero (derived, not saved)
     std::vector<PairParams> law_prm_;  // per resolved law: PairParams for this step's dt and dashpot
     std::vector<int> items_;
     std::vector<double> cx_, cy_, cr_;  // per capable triangle at the last detection: bounding circles (m)

@@ -381,10 +381,16 @@ bool pair_contact(const double* xa, const double* xb, const double* va, const do
 }
 
 bool pair_contact(const TriangleGeometry& A, const TriangleGeometry& B, const double* va, const double* vb,
-                  const PairParams& params, bool want_energy, double* hist, PairResult& r) {
+                  const PairParams& params, bool want_energy, double* hist, PairResult& r, unsigned held) {
     for (int i = 0; i < 6; ++i) r.fa[i] = r.fb[i] = 0.0;
     r.energy_normal = r.energy_tangential = r.dissipation = r.damping = 0.0;
     r.active_edges = 0;
+    r.held = 0;
+    // A slot that may hold state and is not loaded now lets its spring go; the others are all zero already and
+    // are left untouched (a pair's six slots are 288 bytes, most of them idle: not read, not dirtied).
+    auto release = [&](int s) {
+        if ((held >> s) & 1u) r.dissipation += release_slot(hist + kHistPerEdge * s);
+    };
     const double* xa = A.x;
     const double* xb = B.x;
     // Area coordinates of each triangle's vertices in the other, for the edges that are faces (a triangle without
@@ -400,7 +406,7 @@ bool pair_contact(const TriangleGeometry& A, const TriangleGeometry& B, const do
         apart = separated(b_in_a);
     }
     if (apart || (A.faces | B.faces) == 0) {
-        for (int s = 0; s < 6; ++s) r.dissipation += release_slot(hist + kHistPerEdge * s);
+        for (int s = 0; s < 6; ++s) release(s);
         // Triangles with no face (inside their bodies) that overlap still hold energy: the loads of their edges
         // went to the faces of their neighbours, whose pairs carry them. (pair_energy is 0 when they are apart.)
         if (!apart && want_energy) r.energy_normal = pair_energy(A.x, B.x, params);
@@ -421,14 +427,16 @@ bool pair_contact(const TriangleGeometry& A, const TriangleGeometry& B, const do
         if (((A.faces >> e) & 1) && edge_integrals(a_in_b + 3 * e, a_in_b + 3 * e1, xa + 2 * e, xa + 2 * e1, wb, I, &len)) {
             load_edge(xa, va, r.fa, vb, r.fb, e, len, I, p, hist + kHistPerEdge * e, r);
             ++r.active_edges;
+            r.held |= 1u << e;
         } else {
-            r.dissipation += release_slot(hist + kHistPerEdge * e);
+            release(e);
         }
         if (((B.faces >> e) & 1) && edge_integrals(b_in_a + 3 * e, b_in_a + 3 * e1, xb + 2 * e, xb + 2 * e1, wa, I, &len)) {
             load_edge(xb, vb, r.fb, va, r.fa, e, len, I, p, hist + kHistPerEdge * (3 + e), r);
             ++r.active_edges;
+            r.held |= 1u << (3 + e);
         } else {
-            r.dissipation += release_slot(hist + kHistPerEdge * (3 + e));
+            release(3 + e);
         }
     }
     if (want_energy) r.energy_normal = pair_energy(xa, xb, p);

@@ -64,6 +64,7 @@ struct PairResult {
     double dissipation = 0.0;        // friction work dissipated in this step (J)
     double damping = 0.0;            // work of the dashpots in this step (J, >= 0)
     int active_edges = 0;            // edges carrying a normal force
+    unsigned held = 0;               // bit s: friction slot s may hold state after the call (the loaded edges)
 };
 
 // Smallest altitude of a triangle (m): twice its area over its longest edge.
@@ -97,9 +98,10 @@ double release_slot(double* h);
 // face carries the load (it is carried by the faces of neighbouring pairs).
 bool pair_contact(const double* xa, const double* xb, const double* va, const double* vb, const PairParams& p,
                   bool want_energy, double* hist, PairResult& out);
-// The same from precomputed triangle geometry.
+// The same from precomputed triangle geometry. held: bit s clear when slot s of hist is known to be all zero (the
+// previous call's out.held), so that slot is not read or written unless its edge is loaded.
 bool pair_contact(const TriangleGeometry& a, const TriangleGeometry& b, const double* va, const double* vb,
-                  const PairParams& p, bool want_energy, double* hist, PairResult& out);
+                  const PairParams& p, bool want_energy, double* hist, PairResult& out, unsigned held = 0x3f);
 
 // t INT_{A∩B} (c phi_A + c phi_B) dA (J): the pair's normal contact energy, by polygon clipping.
 double pair_energy(const double* xa, const double* xb, const PairParams& p);
