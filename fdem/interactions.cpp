@@ -273,7 +273,9 @@ int Interactions::insert_cracks(const double* x, const double* tri_sigma) {
                 const double* q = tri_sigma + 3 * static_cast<std::size_t>(t);
                 sg[0] += q[0], sg[1] += q[1], sg[2] += q[2], ++sides;
             }
-        for (double& q : sg) q /= sides;
+        // (x / 2 and x * 0.5 are the same bits, as x / 1 and x: no division)
+        const double inv_sides = sides == 2 ? 0.5 : 1.0;
+        for (double& q : sg) q *= inv_sides;
         // Frame of the element (cohesive_system.cpp): t along edge A's a0 -> a1, n = (t_y, -t_x) into side B, here
         // not normalised: both tractions are quadratic in (t, n), so one division by |t|^2 does it.
         const double tx = x[2 * el.n1] - x[2 * el.n0], ty = x[2 * el.n1 + 1] - x[2 * el.n0 + 1];
