@@ -35,6 +35,7 @@
 #include <map>
 #include <set>
 #include <sstream>
+#include <type_traits>
 
 #include "fdem/errors.hpp"
 #include "fdem/scene.hpp"
@@ -358,7 +359,7 @@ void Simulation::step() {
     // energy, unbalanced force) are those of that node. The unbalanced-force scale takes every member's own forces.
     // A prescribed DOF (a support takes every copy, check_ties) has each member's reaction of its mass share
     // w = m / M of F.
-    const bool tied = ties_;
+    const bool tied = ties_;  // (node_block below has it as the constant kTied)
     const int nu = tied ? static_cast<int>(unit_start_.size()) - 1 : nn;
     const int* u_start = tied ? unit_start_.data() : nullptr;
     const int* u_node = tied ? unit_node_.data() : nullptr;
@@ -383,17 +384,19 @@ void Simulation::step() {
     const uint8_t* kind = dof_kind_.data();
     const double* vpres = dof_vel_.data();
     double* reac = reaction_.data();
-#pragma omp parallel for schedule(static) if (nnb > 1)
-    for (int b = 0; b < nnb; ++b) {
+    // One block; compiled twice (kTied: a compile-time constant), so that a model without ties runs the plain node
+    // loop without the units' indirections.
+    auto node_block = [&](auto tied_const, int b) {
+        constexpr bool kTied = decltype(tied_const)::value;
         double dW = 0, dD = 0, unb = 0, scale = 0, K = 0, cW = 0, cD = 0, dM = 0, cM = 0;
         int bad = -1;
-        const int u0 = tied ? u_block[b] : b * kBlock, u1 = tied ? u_block[b + 1] : std::min(nu, (b + 1) * kBlock);
+        const int u0 = kTied ? u_block[b] : b * kBlock, u1 = kTied ? u_block[b + 1] : std::min(nu, (b + 1) * kBlock);
         for (int u = u0; u < u1; ++u) {
-            const int j0 = tied ? u_start[u] : u, j1 = tied ? u_start[u + 1] : u + 1;
+            const int j0 = kTied ? u_start[u] : u, j1 = kTied ? u_start[u + 1] : u + 1;
             // the resultant: internal (joints, contact, triangles) and external (loads, gravity) sums
             double S[4] = {0, 0, 0, 0};
             for (int j = j0; j < j1; ++j) {
-                const int k = tied ? u_node[j] : j;
+                const int k = kTied ? u_node[j] : j;
                 double fi0 = fmod[2 * k], fi1 = fmod[2 * k + 1];
                 fmod[2 * k] = 0, fmod[2 * k + 1] = 0;
                 for (int i = inc_ptr[k]; i < inc_ptr[k + 1]; ++i) {
@@ -405,9 +408,9 @@ void Simulation::step() {
                 scale += std::abs(fi1) + std::abs(fe1);
                 S[0] += fi0, S[1] += fi1, S[2] += fe0, S[3] += fe1;
             }
-            const int k0 = tied ? u_node[j0] : j0;
-            const double M = tied ? u_mass[u] : mass[k0];
-            const double im = tied ? u_inv[u] : inv_mass[k0];
+            const int k0 = kTied ? u_node[j0] : j0;
+            const double M = kTied ? u_mass[u] : mass[k0];
+            const double im = kTied ? u_inv[u] : inv_mass[k0];
             for (int c = 0; c < 2; ++c) {
                 const int d0 = 2 * k0 + c;
                 const double f = S[c] + S[2 + c], fe = S[2 + c];
@@ -433,8 +436,8 @@ void Simulation::step() {
                 } else {
                     vnew = kind[d0] == 1 ? 0.0 : vpres[d0];
                     for (int j = j0; j < j1; ++j) {
-                        const int k = tied ? u_node[j] : j;
-                        const double w = tied ? tie_w[k] : 1.0;
+                        const int k = kTied ? u_node[j] : j;
+                        const double w = kTied ? tie_w[k] : 1.0;
                         const double R = mass[k] * (vnew - vold) / dtv - w * f;
                         reac[2 * k + c] = R;
                         dW += dt * (w * fe + R) * 0.5 * (vold + vnew);
@@ -446,7 +449,7 @@ void Simulation::step() {
                 const double xn = xw[d0] + dt * vnew;  // the members' positions are the same bits
                 const double vr = vref ? vref[d0] + wf * (vnew - vref[d0]) : 0.0;
                 for (int j = j0; j < j1; ++j) {
-                    const int d = 2 * (tied ? u_node[j] : j) + c;
+                    const int d = 2 * (kTied ? u_node[j] : j) + c;
                     vw[d] = vnew;
                     xw[d] = xn;
                     if (vref) vref[d] = vr;
@@ -456,6 +459,13 @@ void Simulation::step() {
         block_a_[b] = dW, block_b_[b] = dD, block_c_[b] = unb, block_d_[b] = scale;
         block_e_[b] = K, block_f_[b] = cW, block_g_[b] = cD, block_h_[b] = dM, block_i_[b] = cM;
         block_bad_[b] = bad;
+    };
+    if (tied) {
+#pragma omp parallel for schedule(static) if (nnb > 1)
+        for (int b = 0; b < nnb; ++b) node_block(std::true_type{}, b);
+    } else {
+#pragma omp parallel for schedule(static) if (nnb > 1)
+        for (int b = 0; b < nnb; ++b) node_block(std::false_type{}, b);
     }
     double dW = 0, dD = 0, unb = 0, scale = 0, dM = 0;
     kinetic_n_ = 0, work_half_ = 0, damp_half_ = 0, mass_half_ = 0;
