@@ -67,7 +67,7 @@ K25 = dict(mesh=0.025, penalty=1.0e10, contact_penalty=1.0e9, rate=0.01, until=0
 # Since 27 Nov (RESULTS.md §33): mass scaling 15 per node ([numerics] mass_scaling = "per_node": the triangles' step,
 # the nodes whose joint penalty would need a smaller one made heavier) instead of 100 uniform: 20,812 steps against
 # 21,779, peak +0.81 % and K_e -2.0 % against the converged curve instead of +2.3 % and -7.1 %. Since RESULTS.md §34
-# at safety 0.7 (as the family): 23,482 steps.
+# at safety 0.7 (as the family): 23,480 steps.
 K25_QUICK = dict(K25, mass_scale=15)
 # 3DEC family: local damping 0.8 in the shear stage, as 3DEC's default (Itasca's local damping 0.8), signed by the
 # velocity minus its moving mean over 0.1 s, and contact dashpots at 0.3 of critical: without the filter the damping
@@ -338,8 +338,8 @@ def k25_case(r, quick=False):
 #   {s['drive_ramp']} s ramp) with per-node mass scaling ([numerics] mass_scale = {s['mass_scale']}, mass_scaling = "per_node"; gravity keeps
 #   the physical mass): every inertial mass x {s['mass_scale']}, the time step {s['safety']} of the triangles' limit at that, and the
 #   nodes whose contact springs (the joint penalty) would need a smaller step made heavier until they do not (total
-#   inertial mass x 2.4 over x {s['mass_scale']}): 23,482 steps. Against this wall's converged curve (uniform mass scaling 10 at
-#   half the rate, RESULTS.md §29, §33, recomputed in §34): peak +0.73 %, K_e -3.2 %, P_y +0.2 %, ductility -3.8 %, whole
+#   inertial mass x 2.4 over x {s['mass_scale']}): 23,480 steps. Against this wall's converged curve (uniform mass scaling 10 at
+#   half the rate, RESULTS.md §29, §33, recomputed in §34; this build §35): peak +0.99 %, K_e -3.2 %, P_y +0.2 %, ductility -3.8 %, whole
 #   curve 0-10 mm RMS 1.3 % of the peak; uniform mass scaling 100, the setting before §33, took 21,779 steps for
 #   +2.3 %, -7.1 % and 2.3 %. The family report is the validation; this is its fast preview."""
     else:
