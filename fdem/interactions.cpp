@@ -284,8 +284,8 @@ int Interactions::insert_cracks(const double* x, const double* tri_sigma) {
         // Traction on the plane of normal n: T = sigma n; sigma_n = n.T, tau = t.T.
         const double Tx = sg[0] * nx + sg[2] * ny, Ty = sg[2] * nx + sg[1] * ny;
         const double sn = (Tx * nx + Ty * ny) * inv_len2, tau = (Tx * tx + Ty * ty) * inv_len2;
-        // CohesiveSystem::reaches_strength on the copied constants
-        const bool due = sn >= el.tensile_strength || std::abs(tau) >= fracture::shear_strength(sn, el.cohesion, el.tan_friction);
+        // (CohesiveSystem::reaches_strength on the copied constants)
+        const bool due = fracture::reaches_peak_surface(sn, tau, el.tensile_strength, el.cohesion, el.tan_friction);
         due_[i] = due;
         if (due) {
             due_traction_[2 * static_cast<std::size_t>(i)] = sn;

@@ -97,7 +97,7 @@ class CohesiveSystem {
   bool dormant(int e) const { return dormant_[e] != 0; }
   bool reaches_strength(int e, double sigma, double tau) const {
     const JointLaw& L = law_[e];
-    return sigma >= L.tensile_strength || std::abs(tau) >= shear_strength(sigma, L.cohesion, L.tan_friction);
+    return reaches_peak_surface(sigma, tau, L.tensile_strength, L.cohesion, L.tan_friction);
   }
   struct Insertion {
     int element;

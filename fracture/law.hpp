@@ -83,6 +83,12 @@ inline double shear_strength(double sigma, double cohesion, double tan_friction)
   return cohesion + (sigma < 0.0 ? -sigma * tan_friction : 0.0);
 }
 
+// Whether the traction (sigma, tau) (Pa, tension positive) has reached the law's peak surface: sigma >= f_t or
+// |tau| >= f_s(sigma). Where the intrinsic law starts to soften, and where an extrinsic element is inserted.
+inline bool reaches_peak_surface(double sigma, double tau, double tensile_strength, double cohesion, double tan_friction) {
+  return sigma >= tensile_strength || std::abs(tau) >= shear_strength(sigma, cohesion, tan_friction);
+}
+
 // Constants of one element's law (all derived once from CohesiveProps and the edge length by make_joint_law;
 // reciprocals are stored because the kernel runs three points per element per step and divisions dominate it).
 struct JointLaw {
