@@ -104,6 +104,15 @@ public:
         }
         return static_cast<int>(*n->value<long long>());
     }
+    std::optional<bool> boolean(const std::string& key, bool required, const std::string& expect) {
+        const toml::node* n = node(key, required, expect);
+        if (!n) return std::nullopt;
+        if (!n->is_boolean()) {
+            ctx_.error(key_path(key), line_of(n), "expected " + expect + ", got " + describe(*n));
+            return std::nullopt;
+        }
+        return *n->value<bool>();
+    }
     std::optional<std::string> string(const std::string& key, bool required, const std::string& expect,
                                       const std::vector<std::string>& allowed = {}) {
         const toml::node* n = node(key, required, expect);
@@ -971,6 +980,8 @@ CaseSpec load_case(const std::string& path, const std::vector<std::string>& over
                                       "\"uniform\" (every mass times mass_scale) or \"per_node\" (and nodes whose springs "
                                       "need it heavier, for the triangles' time step)",
                                       {"uniform", "per_node"}).value_or("uniform") == "per_node";
+        spec.energy_audit = r.boolean("energy_audit", false, "true or false (the energy books of each part, in run.log)")
+                                .value_or(false);
         r.finish();
     }
 

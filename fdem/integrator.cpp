@@ -248,6 +248,7 @@ void Simulation::check_ties() const {
 
 void Simulation::step() {
     const double w0 = omp_get_wtime();
+    if (spec_.energy_audit) audit_step(0, dt_);
     const double dt_before = dt_;
     const int nt = model_.n_triangles(), nn = model_.n_nodes();
     const TriangleRef* tris = model_.tris.data();
@@ -310,7 +311,8 @@ void Simulation::step() {
     // evaluated on the steps whose energies are reported or checked.
     inter_.want_energy(history_due(time_ + dt, steps_ + 1) || (steps_ + 1) % 1000 == 0 || energy_every_step_);
     const double w2 = omp_get_wtime();
-    inter_.add_forces(x, v, dt, f_mod_.data());
+    inter_.add_forces(x, v, dt, f_mod_.data(), spec_.energy_audit ? audit_fj_.data() : nullptr, f_mod_.size());
+    if (spec_.energy_audit) audit_step(1, dt);
     const double w3 = omp_get_wtime();
 
     // Rigid groups first: one velocity per group and component from the resultant of its nodes' forces,
@@ -467,6 +469,7 @@ void Simulation::step() {
 #pragma omp parallel for schedule(static) if (nnb > 1)
         for (int b = 0; b < nnb; ++b) node_block(std::false_type{}, b);
     }
+    if (spec_.energy_audit) audit_step(2, dt);
     double dW = 0, dD = 0, unb = 0, scale = 0, dM = 0;
     kinetic_n_ = 0, work_half_ = 0, damp_half_ = 0, mass_half_ = 0;
     for (int b = 0; b < nnb; ++b) {
@@ -523,7 +526,11 @@ void Simulation::step() {
     }
     if (opt_.progress && (steps_ & 255) == 0) progress_line(false);
     if (opt_.progress_log && (steps_ & 255) == 0) progress_log_line();
-    if (steps_ % 1000 == 0) check_energy(energies());
+    if (steps_ % 1000 == 0) {
+        const Energies e = energies();
+        if (spec_.energy_audit) log(audit_text(e));
+        check_energy(e);
+    }
     step_times_.other += omp_get_wtime() - w4;
 }
 

@@ -302,8 +302,10 @@ int Interactions::insert_cracks(const double* x, const double* tri_sigma) {
     return found;
 }
 
-void Interactions::add_forces(const double* x, const double* v, double dt, double* f) {
+void Interactions::add_forces(const double* x, const double* v, double dt, double* f, double* after_joints,
+                              std::size_t n) {
     if (joints_) joints_->add_forces(x, f);
+    if (after_joints) std::copy(f, f + n, after_joints);
     if (contact_) contact_->step(x, v, dt, f);
 }
 

@@ -145,13 +145,20 @@ void Simulation::check_energy(const Energies& e) {
             cause += "; numerics.safety = " + sci(spec_.safety) + " > 1 puts the time step beyond the stability limit: reduce numerics.safety below 1";
         else if (spec_.dt_override)
             cause += "; numerics.dt fixes the step at " + sci(dt_) + " s against a stable limit of " + sci(dt_limit_) + " s";
+        else if (joints_made_it(e))
+            cause += "; the cohesive joints' forces gave out more energy than they hold and dissipated: the law's shear "
+                     "curve depends on the compression and is not a potential (fracture/law.hpp), and oscillating joints "
+                     "can pump energy; more local damping holds it down";
         else if (big == 3)
             cause += "; contact springs beyond their stable step: reduce numerics.safety or the contact penalty";
         else
             cause += "; unstable; reduce numerics.safety";
         const std::string crushed = crushed_broken_note();
+        const std::string audit = spec_.energy_audit ? audit_text(e)
+                                                     : "run again with --set numerics.energy_audit=true to see which "
+                                                       "part's forces made it";
         fail("energy grew without work: " + sci(held) + " J held or dissipated against " + sci(e.external) +
-             " J put in (" + (crushed.empty() ? "" : crushed + "; otherwise ") + cause + ")");
+             " J put in (" + (crushed.empty() ? "" : crushed + "; otherwise ") + cause + "); " + audit);
     }
 }
 
@@ -169,6 +176,96 @@ std::string Simulation::crushed_broken_note() const {
     return std::to_string(n) + " cohesive element(s) broke while crushed (largest plastic closure " + sci(largest) +
            " m): contact took over their overlap, plastic closure included, and pushes it apart (fracture/README.md, "
            "compressive cap)";
+}
+
+// Energy audit (numerics.energy_audit). Phase 0, at the start of a step: the books' baseline on the first audited
+// step, the velocities v^{n-1/2}. Phase 1, after the joints and contact added their forces: their sum (the joints'
+// alone was copied by Interactions::add_forces). Phase 2, after the node loop: each part's work over the step,
+// dt f . (v^{n-1/2} + v^{n+1/2}) / 2, the external work's rule; the contact forces are the sum less the joints' (to
+// rounding: the run's own sum is left as it is, so the audit changes no bit of the run).
+void Simulation::audit_step(int phase, double dt) {
+    const std::size_t n2 = model_.x.size();
+    if (phase == 0) {
+        if (audit_t0_ < 0) {
+            audit_parts(energies(), audit_base_);
+            audit_t0_ = time_;
+        }
+        audit_fj_.resize(n2);
+        audit_f_.resize(n2);
+        audit_v_.assign(model_.v.begin(), model_.v.end());
+        return;
+    }
+    if (phase == 1) {
+        audit_f_.assign(f_mod_.begin(), f_mod_.end());
+        return;
+    }
+    const int nn = model_.n_nodes();
+    const double* v = model_.v.data();
+    double w[3] = {0, 0, 0}, h[3] = {0, 0, 0};
+    for (int k = 0; k < nn; ++k)
+        for (int c = 0; c < 2; ++c) {
+            const std::size_t d = 2 * static_cast<std::size_t>(k) + c;
+            double ft = 0;
+            for (int i = model_.inc_ptr[k]; i < model_.inc_ptr[k + 1]; ++i) ft += tf_[2 * static_cast<std::size_t>(model_.inc_idx[i]) + c];
+            const double f[3] = {ft, audit_fj_[d], audit_f_[d] - audit_fj_[d]};
+            const double vbar = 0.5 * (audit_v_[d] + v[d]);
+            for (int m = 0; m < 3; ++m) {
+                w[m] += dt * f[m] * vbar;
+                h[m] += 0.5 * dt * f[m] * v[d];
+            }
+        }
+    for (int m = 0; m < 3; ++m) audit_w_[m] += w[m], audit_half_[m] = h[m];
+}
+
+// What each part holds and has dissipated (J): triangles (elastic, viscous element damping, crushing), cohesive
+// joints (elastic, fracture, their friction, less the pre-peak energy inserted elements started with: that came in
+// as work), contact (penalty energy, friction, dashpots).
+void Simulation::audit_parts(const Energies& e, double* held) const {
+    const contact::ContactSystem* c = inter_.contact();
+    const double contact_friction = c ? c->friction_dissipation() : 0.0;
+    held[0] = e.elastic + D_visc_ + crush_.dissipated();
+    held[1] = e.joint + inter_.fracture_dissipation() + (inter_.friction_dissipation() - contact_friction) -
+              inter_.inserted_energy();
+    held[2] = e.contact + contact_friction + inter_.contact_damping_dissipation();
+}
+
+std::array<Simulation::AuditPart, 3> Simulation::energy_audit(const Energies& e) const {
+    std::array<AuditPart, 3> parts;
+    if (audit_t0_ < 0) return parts;
+    double held[3];
+    audit_parts(e, held);
+    for (int m = 0; m < 3; ++m) {
+        parts[m].worked = 0.0 - (audit_w_[m] - audit_half_[m]);  // the nodes' work on the part, to t^n (+0, not -0)
+        parts[m].grew = held[m] - audit_base_[m];
+    }
+    return parts;
+}
+
+// With the audit on: whether the cohesive joints hold more than half of the energy the run made from nothing.
+bool Simulation::joints_made_it(const Energies& e) const {
+    if (!spec_.energy_audit || audit_t0_ < 0) return false;
+    const auto parts = energy_audit(e);
+    double total = 0;
+    for (const auto& q : parts) total += std::max(0.0, q.grew - q.worked);
+    return total > 0 && parts[1].grew - parts[1].worked > 0.5 * total;
+}
+
+std::string Simulation::audit_text(const Energies& e) const {
+    if (audit_t0_ < 0) return "energy audit: not started";
+    const auto parts = energy_audit(e);
+    static const char* names[3] = {"triangles", "cohesive joints", "contact"};
+    std::string s = "energy audit at t = " + sci(time_) + " s (since " + sci(audit_t0_) +
+                    " s), work done on each part against the growth of what it holds and dissipated:";
+    int worst = 0;
+    double excess[3];
+    for (int m = 0; m < 3; ++m) {
+        excess[m] = parts[m].grew - parts[m].worked;
+        if (excess[m] > excess[worst]) worst = m;
+        s += std::string(m ? ";" : "") + " " + names[m] + " " + sci(parts[m].worked) + " J / " + sci(parts[m].grew) + " J";
+    }
+    if (excess[worst] > 0)
+        s += "; the largest excess: " + std::string(names[worst]) + ", " + sci(excess[worst]) + " J more than worked";
+    return s;
 }
 
 // Monitors describe the state at the last force evaluation t^n, where reactions and loads were computed:

@@ -86,6 +86,13 @@ public:
     const std::vector<StageResult>& stage_results() const { return stage_results_; }
     double wall_time() const { return wall_time_; }
     const StepTimes& step_times() const { return step_times_; }
+    // Energy audit (case key numerics.energy_audit): per part (0 triangles, 1 cohesive joints, 2 contact) the work
+    // done on it by the nodes since the audit started and the growth of what it holds and dissipated, for energies e
+    // (J; inserted elements' starting energy counts as work done on the joints). All zero before the first step.
+    struct AuditPart {
+        double worked = 0, grew = 0;
+    };
+    std::array<AuditPart, 3> energy_audit(const Energies& e) const;
     int interrupted_signal() const { return interrupted_signal_; }  // 0, or the signal that stopped run()
     const std::vector<double>& reactions() const { return reaction_; }
     const Interactions& interactions() const { return inter_; }
@@ -160,7 +167,12 @@ private:
     long checkpoints_written_ = 0;
     int interrupted_signal_ = 0;
     void check_energy(const Energies& e);
-    std::string crushed_broken_note() const;  // "" or why contact may push crushed, broken joints apart
+    std::string crushed_broken_note() const;
+    // Energy audit (CaseSpec::energy_audit): audit_step's sums, and their report for energies e.
+    void audit_step(int phase, double dt);
+    std::string audit_text(const Energies& e) const;
+    bool joints_made_it(const Energies& e) const;
+    void audit_parts(const Energies& e, double* held) const;  // "" or why contact may push crushed, broken joints apart
     void write_history_row();
     void append_history(const std::string& row);  // append to history.csv and flush (header on first call)
     std::string history_row(const Energies& e);
@@ -246,6 +258,12 @@ private:
     std::vector<int> block_bad_;
     double unbalanced_ratio_ = 1;
     bool energy_every_step_ = false;  // tests that read energies after every step
+    // Energy audit: per part (0 triangles, 1 cohesive joints, 2 contact) the work its forces did on the nodes, sum of
+    // dt f . v_bar as the external work is booked (J), the last step's share past t^n, and what the part held and had
+    // dissipated when the audit started (at the first step of this process: not checkpointed, a restart starts over).
+    std::vector<double> audit_fj_, audit_f_, audit_v_;
+    double audit_w_[3] = {0, 0, 0}, audit_half_[3] = {0, 0, 0}, audit_base_[3] = {0, 0, 0};
+    double audit_t0_ = -1;  // s; < 0: not started
 
     // energies (cumulative)
     double W_ext_ = 0, D_damp_ = 0, D_visc_ = 0, D_mass_ = 0;
