@@ -388,3 +388,45 @@ TEST_CASE("compressive cap off (default): the law is unchanged bit for bit, on: 
   p.compressive_strength = -1.0;
   CHECK(any_contains(check(p, 0.0), "compressive strength f_c = -1 Pa is not physical"));
 }
+
+TEST_CASE("the shear curve depends on the compression: a closed loop below the peak takes net work K_s^2 s^3 / 12 "
+          "(1/f_s1 - 1/f_s2) with phi > 0, none with phi = 0", "[unit]") {
+  // The loop (o2, 0) -> (o2, s1) -> (o1, s1) -> (o1, 0) -> (o2, 0) with o2 < o1 < 0 (more compression first) and
+  // s1 below the peak slip of both: no damage. sigma = K_n o does not depend on s, so only the two slip legs count:
+  // INT tau ds at o2 minus at o1, tau = (2 y - y^2) f_s, y = s / s_p, s_p = 2 f_s / K_s, i.e.
+  // INT_0^s1 tau ds = K_s s1^2 / 2 - K_s^2 s1^3 / (12 f_s). A potential would give zero: this is the law's known
+  // non-conservative coupling (fracture/law.hpp header), which the engine's energy audit shows in cracking runs.
+  const double K_n = 4e12, K_s = 2e12, c = 4e6, o1 = -1e-6, o2 = -3e-6;
+  for (const double phi : {0.6, 0.0}) {
+    const JointLaw L = make_joint_law(K_n, K_s, 3e6, 100.0, c, std::tan(phi), 500.0);
+    const double f1 = c - K_n * o1 * std::tan(phi), f2 = c - K_n * o2 * std::tan(phi);
+    const double s1 = 0.8 * 2.0 * c / K_s;  // below s_p = 2 f_s / K_s at any compression
+    PointHistory h = initial_history(L);
+    double work = 0, scale = 0, o = o2, s = 0;
+    const int n = 4000;
+    auto leg = [&](double o_end, double s_end) {
+      const double o_start = o, s_start = s;
+      for (int i = 1; i <= n; ++i) {
+        const double on = o_start + (o_end - o_start) * i / n, sn = s_start + (s_end - s_start) * i / n;
+        const PointResponse a = evaluate_point(L, o, s, h), b = evaluate_point(L, on, sn, h);
+        work += 0.5 * (a.sigma + b.sigma) * (on - o) + 0.5 * (a.tau + b.tau) * (sn - s);  // trapezoid, J/m^2
+        scale += std::abs(0.5 * (a.tau + b.tau) * (sn - s));
+        CHECK(b.history.damage == 0.0);
+        o = on, s = sn;
+      }
+    };
+    const PointResponse start = evaluate_point(L, o, s, h);
+    h = start.history;
+    leg(o2, s1);
+    leg(o1, s1);
+    leg(o1, 0.0);
+    leg(o2, 0.0);
+    const double expected = K_s * K_s * s1 * s1 * s1 / 12.0 * (1.0 / f1 - 1.0 / f2);
+    if (phi > 0) {
+      CHECK(expected > 1e-3 * scale);
+      CHECK(work == Approx(expected).epsilon(1e-4));
+    } else {
+      CHECK(std::abs(work) < 1e-12 * scale);
+    }
+  }
+}
