@@ -32,6 +32,14 @@ int main(int argc, char** argv) {
     long triangles = 120000, steps = 200, repeats = 5;
     std::string csv = "bench.csv", threads_list = "1,2", case_file;
     std::vector<std::string> sets;
+    const char* usage =
+        "usage: fdem_bench [--triangles N | --case FILE [--set k=v ...]] [--steps S] [--repeats R] [--threads 1,2] "
+        "[--csv FILE]\n";
+    for (int i = 1; i < argc; ++i)
+        if (std::strcmp(argv[i], "--help") == 0 || std::strcmp(argv[i], "-h") == 0) {
+            std::cout << usage;
+            return 0;
+        }
     for (int i = 1; i + 1 < argc; i += 2) {
         const std::string a = argv[i], v = argv[i + 1];
         if (a == "--triangles") triangles = std::atol(v.c_str());
@@ -42,8 +50,7 @@ int main(int argc, char** argv) {
         else if (a == "--case") case_file = v;
         else if (a == "--set") sets.push_back(v);
         else {
-            std::cerr << "usage: fdem_bench [--triangles N | --case FILE [--set k=v ...]] [--steps S] [--repeats R] "
-                         "[--threads 1,2] [--csv FILE]\n";
+            std::cerr << "fdem_bench: unknown option '" << a << "'\n" << usage;
             return 1;
         }
     }
