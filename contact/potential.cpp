@@ -57,10 +57,9 @@ double integrate_affine(const double* poly, int n, const double* f) {
     return sum;
 }
 
-// INT over polygon omega of phi_X = min_k w_k L_k: split omega where each branch is the minimum.
-double integrate_potential(const double* omega, int n, const double* T, const double* w) {
-    double g[9];
-    area_coordinates(T, g);
+// INT over polygon omega of phi_X = min_k w_k L_k (g: X's area coordinates): split omega where each branch is the
+// minimum.
+double integrate_potential(const double* omega, int n, const double* g, const double* w) {
     double total = 0.0;
     double buf1[2 * 16], buf2[2 * 16];
     for (int k = 0; k < 3; ++k) {
@@ -341,25 +340,33 @@ bool edge_in_triangle(const double* p0, const double* p1, const double* T, const
     return edge_integrals(La, Lb, p0, p1, w, out, &len);
 }
 
-double pair_energy(const double* xa, const double* xb, const PairParams& p) {
-    double gb[9];
-    area_coordinates(xb, gb);
+namespace {
+
+// pair_energy on the triangles' geometry (area coordinates, altitudes), computed once per step by the caller.
+double pair_energy(const TriangleGeometry& A, const TriangleGeometry& B, const PairParams& p) {
     double buf1[2 * 16], buf2[2 * 16];
     int n = 3;
-    for (int i = 0; i < 6; ++i) buf1[i] = xa[i];
+    for (int i = 0; i < 6; ++i) buf1[i] = A.x[i];
     double* src = buf1;
     double* dst = buf2;
     for (int k = 0; k < 3 && n > 0; ++k) {
-        n = clip(src, n, gb + 3 * k, dst);
+        n = clip(src, n, B.g + 3 * k, dst);
         std::swap(src, dst);
     }
     if (n < 3) return 0.0;
-    double wa[3], wb[3];
-    potential_weights(xa, p.distance_potential, wa);
-    potential_weights(xb, p.distance_potential, wb);
-    const double ia = integrate_potential(src, n, xa, wa);
-    const double ib = integrate_potential(src, n, xb, wb);
+    static constexpr double kThree[3] = {3.0, 3.0, 3.0};
+    const double ia = integrate_potential(src, n, A.g, p.distance_potential ? A.h : kThree);
+    const double ib = integrate_potential(src, n, B.g, p.distance_potential ? B.h : kThree);
     return p.thickness * p.c * (ia + ib);
+}
+
+}  // namespace
+
+double pair_energy(const double* xa, const double* xb, const PairParams& p) {
+    TriangleGeometry a, b;
+    triangle_geometry(xa, a);
+    triangle_geometry(xb, b);
+    return pair_energy(a, b, p);
 }
 
 void triangle_geometry(const double* x, TriangleGeometry& t) {
@@ -409,7 +416,7 @@ bool pair_contact(const TriangleGeometry& A, const TriangleGeometry& B, const do
         for (int s = 0; s < 6; ++s) release(s);
         // Triangles with no face (inside their bodies) that overlap still hold energy: the loads of their edges
         // went to the faces of their neighbours, whose pairs carry them. (pair_energy is 0 when they are apart.)
-        if (!apart && want_energy) r.energy_normal = pair_energy(A.x, B.x, params);
+        if (!apart && want_energy) r.energy_normal = pair_energy(A, B, params);
         return false;
     }
     PairParams p = params;
@@ -439,7 +446,7 @@ bool pair_contact(const TriangleGeometry& A, const TriangleGeometry& B, const do
             release(3 + e);
         }
     }
-    if (want_energy) r.energy_normal = pair_energy(xa, xb, p);
+    if (want_energy) r.energy_normal = pair_energy(A, B, p);
     return r.active_edges > 0;
 }
 
