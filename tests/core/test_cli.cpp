@@ -219,6 +219,33 @@ TEST_CASE("the same case gives byte-identical history.csv with 1 and 2 threads",
     }
 }
 
+TEST_CASE("numerics.energy_audit: run.log gets each part's books every 1000 steps, history.csv is the same file",
+          "[unit]") {
+    const auto dir = testing::tmp_dir("cli_audit");
+    const auto path = testing::write_text(dir / "case.toml", replace(kGood, "duration = 0.001", "duration = 0.08"));
+    std::string hist[2];
+    for (int audit : {0, 1}) {
+        const auto out = dir / (audit ? "audit" : "plain");
+        const auto r = testing::run_fdem("run \"" + path + "\" --quiet --out \"" + out.string() + "\"" +
+                                             (audit ? " --set numerics.energy_audit=true" : ""), dir);
+        INFO(r.err);
+        REQUIRE(r.code == 0);
+        hist[audit] = testing::read_text(out / "history.csv");
+        const std::string log = testing::read_text(out / "run.log");
+        std::smatch m;
+        const bool found = std::regex_search(
+            log, m, std::regex("energy audit at t = [^,]+, [^:]+: triangles ([-0-9.e+]+) J / ([-0-9.e+]+) J; cohesive "
+                               "joints 0 J / 0 J; contact 0 J / 0 J"));
+        CHECK(found == (audit == 1));
+        if (found) {  // the plate's elastic energy and the work done on it, to the step's integration error
+            const double worked = std::stod(m[1].str()), grew = std::stod(m[2].str());
+            CHECK(worked > 0);
+            CHECK(grew == Approx(worked).epsilon(1e-3));
+        }
+    }
+    CHECK(hist[0] == hist[1]);
+}
+
 TEST_CASE("help after a command and the short and --option=VALUE forms of the options", "[unit]") {
     const auto dir = testing::tmp_dir("cli_forms");
     const auto path = testing::write_text(dir / "case.toml", kGood);
