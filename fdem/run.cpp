@@ -257,7 +257,8 @@ void Simulation::run() {
                   "a time step near its stability limit (numerics.safety) or a support doing work the loads do not "
                   "show; history.csv shows which column runs away";
         log("warning: the energy balance error " + sci(100 * e.balance_error(), 3) + " % exceeds " + sci(100 * kBalanceWarning) +
-            " %: the dissipation records are not reliable; " + why);
+            " %: the dissipation records are not reliable; " + why +
+            (spec_.energy_audit ? "" : "; numerics.energy_audit = true shows which part's books do not close"));
     }
     if (!opt_.out_dir.empty()) {
         flush_files();
