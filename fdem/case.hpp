@@ -260,8 +260,8 @@ struct CaseSpec {
     // node-by-node density scaling; integrator.cpp scale_node_masses). false = "uniform", the default.
     bool per_node_mass = false;
     // numerics.energy_audit = true: the work each part's forces (triangles, cohesive joints, contact) do on the nodes
-    // is summed every step and set against what the part holds and dissipated, in run.log at every energy check and
-    // in the message of a failed one (Simulation::audit_text). A diagnostic: a serial pass over the nodes per step.
+    // is summed every step and set against what the part holds and dissipated, in run.log every 1000 steps and in
+    // the message of a failed energy check (Simulation::audit_text). A diagnostic: a serial pass over the nodes per step.
     bool energy_audit = false;
     std::optional<double> dt_override;  // s, a fixed time step (tests of the stability limit), bypasses the safety factor
     double history_interval = 0;   // s; 0 = every 100 steps

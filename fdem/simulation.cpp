@@ -190,8 +190,7 @@ void Simulation::audit_step(int phase, double dt) {
             audit_parts(energies(), audit_base_);
             audit_t0_ = time_;
         }
-        audit_fj_.resize(n2);
-        audit_f_.resize(n2);
+        audit_fj_.resize(n2);  // (filled by Interactions::add_forces; audit_f_ by phase 1)
         audit_v_.assign(model_.v.begin(), model_.v.end());
         return;
     }

@@ -167,12 +167,12 @@ private:
     long checkpoints_written_ = 0;
     int interrupted_signal_ = 0;
     void check_energy(const Energies& e);
-    std::string crushed_broken_note() const;
+    std::string crushed_broken_note() const;  // "" or why contact may push crushed, broken joints apart
     // Energy audit (CaseSpec::energy_audit): audit_step's sums, and their report for energies e.
     void audit_step(int phase, double dt);
     std::string audit_text(const Energies& e) const;
     bool joints_made_it(const Energies& e) const;
-    void audit_parts(const Energies& e, double* held) const;  // "" or why contact may push crushed, broken joints apart
+    void audit_parts(const Energies& e, double* held) const;
     void write_history_row();
     void append_history(const std::string& row);  // append to history.csv and flush (header on first call)
     std::string history_row(const Energies& e);
