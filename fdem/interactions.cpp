@@ -254,17 +254,55 @@ void Interactions::list_dormant() {
     }
     due_.assign(dormant_.size(), 0);
     due_traction_.assign(2 * dormant_.size(), 0.0);
+    // The triangles that border a dormant edge, each with the smallest f_t and c of those edges (c = -inf when some
+    // edge's tan(phi) < 0: the bound of insert_cracks does not hold for it, so the triangle is always checked).
+    int n_tri = 0;
+    for (const DormantEdge& el : dormant_edge_) n_tri = std::max(n_tri, std::max(el.tri_a, el.tri_b) + 1);
+    const double inf = std::numeric_limits<double>::infinity();
+    tri_strength_.assign(2 * static_cast<std::size_t>(n_tri), inf);
+    near_.assign(n_tri, 0);  // here: whether the triangle borders a dormant edge
+    for (const DormantEdge& el : dormant_edge_)
+        for (int t : {el.tri_a, el.tri_b})
+            if (t >= 0) {
+                double* st = &tri_strength_[2 * static_cast<std::size_t>(t)];
+                st[0] = std::min(st[0], el.tensile_strength);
+                st[1] = std::min(st[1], el.tan_friction >= 0.0 ? el.cohesion : -inf);
+                near_[t] = 1;
+            }
+    dormant_tri_.clear();
+    for (int t = 0; t < n_tri; ++t)
+        if (near_[t]) dormant_tri_.push_back(t);
     dormant_listed_ = true;
 }
 
 int Interactions::insert_cracks(const double* x, const double* tri_sigma) {
     if (!has_dormant()) return 0;
     if (!dormant_listed_) list_dormant();
+    // Most of a unit is far from its strength, and that is decided per triangle from its stress alone
+    // (fracture::far_from_peak_surface against the smallest f_t and c of the triangle's dormant edges): an edge
+    // between two far triangles (or with one far triangle on a free boundary) cannot reach the peak surface with
+    // their mean stress, so only the edges with a triangle that is not far are checked below. The elements inserted
+    // are the ones the check of every edge would insert.
+    const int nt = static_cast<int>(dormant_tri_.size());
+    int near = 0;
+#pragma omp parallel for schedule(static) reduction(+ : near) if (nt >= 2048)
+    for (int i = 0; i < nt; ++i) {
+        const int t = dormant_tri_[i];
+        const double* st = &tri_strength_[2 * static_cast<std::size_t>(t)];
+        const bool far = fracture::far_from_peak_surface(tri_sigma + 3 * static_cast<std::size_t>(t), st[0], st[1]);
+        near_[t] = far ? 0 : 1;
+        near += far ? 0 : 1;
+    }
+    if (near == 0) return 0;
     const int ne = static_cast<int>(dormant_.size());
     int found = 0;
 #pragma omp parallel for schedule(static) reduction(+ : found) if (ne >= 2048)
     for (int i = 0; i < ne; ++i) {
         const DormantEdge& el = dormant_edge_[i];
+        if (!(el.tri_a >= 0 && near_[el.tri_a]) && !(el.tri_b >= 0 && near_[el.tri_b])) {
+            due_[i] = 0;
+            continue;
+        }
         // Mean stress of the two sides (one side on a free boundary: its own).
         double sg[3] = {0, 0, 0};
         int sides = 0;
@@ -389,7 +427,7 @@ double Interactions::friction_dissipation() const {
 // field to save_state and load_state if it changes during a run, then update the size.
 void Interactions::save_state(StateWriter& w) const {
 #if defined(__x86_64__) && defined(__GLIBCXX__)
-    static_assert(sizeof(Interactions) == 352, "Interactions changed: update save_state/load_state and this size");
+    static_assert(sizeof(Interactions) == 424, "Interactions changed: update save_state/load_state and this size");
 #endif
     w.section("interactions");
     w.str(cracks_csv_);

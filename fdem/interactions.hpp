@@ -113,6 +113,11 @@ private:
     bool dormant_listed_ = false;
     std::vector<std::uint8_t> due_;    // per entry of dormant_: reached the strength this step
     std::vector<double> due_traction_; // sigma, tau per entry of dormant_ (Pa)
+    // Per triangle index: the smallest f_t and c (Pa) of the dormant edges it borders (2 per triangle), and whether
+    // its stress may reach them this step (insert_cracks); dormant_tri_: the triangles that border one, ascending.
+    std::vector<double> tri_strength_;
+    std::vector<std::uint8_t> near_;
+    std::vector<int> dormant_tri_;
     void list_dormant();
     std::vector<mesh::CohesiveElement> dry_;
     std::vector<char> dry_open_, dry_slip_;

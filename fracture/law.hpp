@@ -92,6 +92,21 @@ inline bool reaches_peak_surface(double sigma, double tau, double tensile_streng
   return sigma >= tensile_strength || std::abs(tau) >= shear_strength(sigma, cohesion, tan_friction);
 }
 
+// Whether a stress (xx, yy, xy; Pa) is far from the peak surface on every plane: p + R < f_t and R < c, with p the
+// mean normal stress and R the radius of Mohr's circle, so that sigma_n <= p + R < f_t and |tau| <= R < c <= f_s on
+// any plane (tan(phi) >= 0; pass c = -inf otherwise, and the answer is false). p + R and R are convex in the stress,
+// so the mean of two far stresses is far too. The slack (1e-9 of the stress's size) covers the rounding of this test
+// and of the traction that reaches_peak_surface would be given: for an edge whose triangles are both far,
+// reaches_peak_surface on their mean stress is false (Interactions::insert_cracks; tests/fracture/test_law.cpp).
+// False for a NaN stress.
+inline bool far_from_peak_surface(const double* s, double tensile_strength, double cohesion) {
+  const double p = 0.5 * (s[0] + s[1]), d = 0.5 * (s[0] - s[1]);
+  const double R2 = d * d + s[2] * s[2];
+  const double slack = 1e-9 * (std::abs(s[0]) + std::abs(s[1]) + std::abs(s[2]));
+  const double ht = tensile_strength - p - slack, hs = cohesion - slack;
+  return ht > 0.0 && hs > 0.0 && R2 < ht * ht && R2 < hs * hs;
+}
+
 // Constants of one element's law (all derived once from CohesiveProps and the edge length by make_joint_law;
 // reciprocals are stored because the kernel runs three points per element per step and divisions dominate it).
 struct JointLaw {

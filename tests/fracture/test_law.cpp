@@ -1,7 +1,10 @@
 // Unit tests of the pure law functions and the property checks (fracture/README.md).
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
+#include <random>
 #include <string>
 
 #include "fracture/law.hpp"
@@ -429,4 +432,67 @@ TEST_CASE("the shear curve depends on the compression: a closed loop below the p
       CHECK(std::abs(work) < 1e-12 * scale);
     }
   }
+}
+
+// The insertion check's shortcut (Interactions::insert_cracks): an edge between two triangles whose stresses are far
+// from the peak surface is not checked. It is only right if no plane can then reach the surface with their mean
+// stress, computed as the check computes it; stresses are drawn on and near both branches of the bound.
+TEST_CASE("far_from_peak_surface: no edge between two far stresses reaches the peak surface, and the bound is tight",
+          "[unit]") {
+  std::mt19937_64 rng(2026);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const double kPi = 3.14159265358979323846;
+  // A stress with Mohr circle (p, R) and principal direction theta: (xx, yy, xy).
+  auto mohr = [](double p, double R, double th, double* s) {
+    s[0] = p + R * std::cos(2 * th), s[1] = p - R * std::cos(2 * th), s[2] = R * std::sin(2 * th);
+  };
+  long far_pairs = 0, tight = 0;
+  for (int n = 0; n < 200000; ++n) {
+    const double ft = std::pow(10.0, 4 + 3 * u(rng)), c = std::pow(10.0, 4 + 3 * u(rng)), tphi = 1.5 * u(rng);
+    double sa[3], sb[3];
+    for (double* s : {sa, sb}) {
+      // within +-2 % of the bound on one branch or the other, or anywhere in a wide range (compression too)
+      const int kind = static_cast<int>(3 * u(rng));
+      const double f = 0.98 + 0.04 * u(rng);
+      double R, p;
+      if (kind == 0) R = f * c, p = ft - R - (0.5 - u(rng)) * ft;  // shear branch
+      else if (kind == 1) R = c * u(rng), p = f * ft - R;           // tension branch
+      else R = 2 * c * u(rng), p = (u(rng) - 0.8) * 20 * ft;
+      mohr(p, R, kPi * u(rng), s);
+    }
+    const bool one_side = n % 5 == 0;  // an edge on a free boundary: its one triangle's stress
+    if (!far_from_peak_surface(sa, ft, c) || (!one_side && !far_from_peak_surface(sb, ft, c))) continue;
+    ++far_pairs;
+    double sg[3];
+    for (int i = 0; i < 3; ++i) sg[i] = one_side ? sa[i] : (sa[i] + sb[i]) * 0.5;
+    // Planes as the check meets them: edge end points anywhere, edges from 1e-4 m to 10 m, frame not normalised.
+    double worst = 0.0;
+    for (int e = 0; e < 16; ++e) {
+      const double x0 = 100 * (u(rng) - 0.5), y0 = 100 * (u(rng) - 0.5), len = std::pow(10.0, -4 + 5 * u(rng));
+      const double a = 2 * kPi * u(rng);
+      const double tx = (x0 + len * std::cos(a)) - x0, ty = (y0 + len * std::sin(a)) - y0;
+      const double nx = ty, ny = -tx, inv_len2 = 1.0 / (tx * tx + ty * ty);
+      const double Tx = sg[0] * nx + sg[2] * ny, Ty = sg[2] * nx + sg[1] * ny;
+      const double sn = (Tx * nx + Ty * ny) * inv_len2, tau = (Tx * tx + Ty * ty) * inv_len2;
+      REQUIRE_FALSE(reaches_peak_surface(sn, tau, ft, c, tphi));
+      worst = std::max(worst, std::max(sn / ft, std::abs(tau) / shear_strength(sn, c, tphi)));
+    }
+    if (worst > 0.97) ++tight;
+  }
+  CHECK(far_pairs > 20000);
+  CHECK(tight > 1000);  // the planes came within 3 % of the surface often: the test probes the bound's edge
+  // Tight on both branches, and false where a plane reaches the surface or the stress is not a number.
+  double s[3];
+  mohr(0.0, 0.999 * 1e5, 0.3, s);
+  CHECK(far_from_peak_surface(s, 1e6, 1e5));
+  mohr(0.0, 1.001 * 1e5, 0.3, s);
+  CHECK_FALSE(far_from_peak_surface(s, 1e6, 1e5));
+  mohr(1e6 - 0.5e5 - 1e3, 0.5e5, 1.1, s);
+  CHECK(far_from_peak_surface(s, 1e6, 1e5));
+  mohr(1e6 - 0.5e5 + 1e3, 0.5e5, 1.1, s);
+  CHECK_FALSE(far_from_peak_surface(s, 1e6, 1e5));
+  mohr(0.0, 0.5e5, 0.3, s);
+  CHECK_FALSE(far_from_peak_surface(s, 1e6, -std::numeric_limits<double>::infinity()));  // tan(phi) < 0: never
+  s[1] = std::nan("");
+  CHECK_FALSE(far_from_peak_surface(s, 1e6, 1e5));
 }
