@@ -7,6 +7,9 @@
 #include <cmath>
 #include <limits>
 #include <omp.h>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 #include <sstream>
 #include <stdexcept>
 
@@ -35,6 +38,34 @@ inline double forget(double* h) {
     if (any_history(h))
         for (int s = 0; s < 6; ++s) released += release_slot(h + kHistPerEdge * s);
     return released;
+}
+
+// max over the nodes of |v|^2 (m^2/s^2); a node with a NaN velocity is passed over (as std::max(m, NaN) = m). The
+// max is exact in any order, so the lanes and threads give the same bits as one loop.
+double largest_speed2(const double* v, int n) {
+    double m = 0.0;
+#pragma omp parallel for schedule(static) reduction(max : m) if (n > 4 * kParallelMin)
+    for (int b = 0; b < (n + 1023) / 1024; ++b) {
+        const int k0 = 1024 * b, k1 = std::min(n, k0 + 1024);
+        int k = k0;
+        double mb = 0.0;
+#if defined(__SSE2__)
+        // two nodes per step: (vx0^2 + vy0^2, vx1^2 + vy1^2), the same sums as below; maxpd keeps its second
+        // operand when the first is NaN
+        __m128d acc = _mm_setzero_pd();
+        for (; k + 1 < k1; k += 2) {
+            const __m128d a = _mm_loadu_pd(v + 2 * k), c = _mm_loadu_pd(v + 2 * k + 2);
+            const __m128d a2 = _mm_mul_pd(a, a), c2 = _mm_mul_pd(c, c);
+            acc = _mm_max_pd(_mm_add_pd(_mm_unpacklo_pd(a2, c2), _mm_unpackhi_pd(a2, c2)), acc);
+        }
+        double lanes[2];
+        _mm_storeu_pd(lanes, acc);
+        mb = std::max(lanes[0], lanes[1]);
+#endif
+        for (; k < k1; ++k) mb = std::max(mb, v[2 * k] * v[2 * k] + v[2 * k + 1] * v[2 * k + 1]);
+        m = std::max(m, mb);
+    }
+    return m;
 }
 
 inline void gather(const double* x, const int* t, double* out) {
@@ -377,10 +408,7 @@ void ContactSystem::detect(const double* x) {
 }
 
 void ContactSystem::step(const double* x, const double* v, double dt, double* f) {
-    double v2max = 0.0;  // max is exact in any order: a deterministic reduction
-#pragma omp parallel for schedule(static) reduction(max : v2max) if (n_nodes_ > kParallelMin)
-    for (int k = 0; k < n_nodes_; ++k) v2max = std::max(v2max, v[2 * k] * v[2 * k] + v[2 * k + 1] * v[2 * k + 1]);
-    const double vmax = std::sqrt(v2max);
+    const double vmax = std::sqrt(largest_speed2(v, n_nodes_));
     // [MA98]: a pair can only appear once two triangles have moved towards each other by the buffer; each moved
     // at most the accumulated dt max|v|. Anticipate this step's motion so the list is valid until the next call.
     if (faces_dirty_) update_faces();
@@ -393,12 +421,14 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f)
     const bool want_energy = opt_.compute_energy;
     // The kernel's parameters depend on the law, dt and the dashpot only: resolved once per law, not per pair.
     law_prm_.resize(laws_.size());
+    bool altitudes = false;  // some law's potential weighs by the altitudes (TriangleGeometry::h)
     for (std::size_t l = 0; l < laws_.size(); ++l) {
         const ResolvedLaw& L = laws_[l];
         PairParams& prm = law_prm_[l];
         prm = PairParams{};
         prm.thickness = thickness_;
         prm.distance_potential = L.normal_is_stiffness;
+        altitudes = altitudes || L.normal_is_stiffness;
         prm.c = L.normal_is_stiffness ? 0.5 * L.normal : L.normal;
         // A penalty p (Pa) becomes a pressure/overlap slope 3 p (1/H_a + 1/H_b) (Pa/m) ([MA00] phi = 3 min L_k):
         // p_t for friction, p_n for the dashpots; pair_contact works it out once it knows the pair overlaps.
@@ -437,7 +467,7 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f)
                     bx[4] = std::min(bx[4], T[2 * k]), bx[5] = std::max(bx[5], T[2 * k]);
                     bx[6] = std::min(bx[6], T[2 * k + 1]), bx[7] = std::max(bx[7], T[2 * k + 1]);
                 }
-            triangle_geometry(T, geom_[items_[i]]);
+            triangle_geometry(T, geom_[items_[i]], altitudes);
             geom_[items_[i]].faces = static_cast<int>(faces);
         }
 #pragma omp for schedule(dynamic, 512)

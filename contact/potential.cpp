@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace fdem::contact {
 
@@ -369,13 +370,18 @@ double pair_energy(const double* xa, const double* xb, const PairParams& p) {
     return pair_energy(a, b, p);
 }
 
-void triangle_geometry(const double* x, TriangleGeometry& t) {
+void triangle_geometry(const double* x, TriangleGeometry& t, bool altitudes) {
     for (int i = 0; i < 6; ++i) t.x[i] = x[i];
     area_coordinates(x, t.g);
-    potential_weights(x, true, t.h);
-    // smallest_altitude(x) = area2 / sqrt(longest edge^2) = min_k h_k exactly: the same rounded squares, and sqrt
-    // and the division by it are monotone.
-    t.inv_h_min = 1.0 / std::min(t.h[0], std::min(t.h[1], t.h[2]));
+    // smallest_altitude(x) = area2 / sqrt(longest edge^2) = min_k h_k exactly: the same rounded squares (each edge
+    // taken in the same direction), and sqrt and the division by it are monotone.
+    if (altitudes) {
+        potential_weights(x, true, t.h);
+        t.inv_h_min = 1.0 / std::min(t.h[0], std::min(t.h[1], t.h[2]));
+    } else {
+        t.h[0] = t.h[1] = t.h[2] = std::numeric_limits<double>::quiet_NaN();
+        t.inv_h_min = 1.0 / smallest_altitude(x);
+    }
     t.faces = 7;
 }
 

@@ -79,13 +79,16 @@ struct TriangleGeometry {
     double x[6];       // coordinates (m), as in DATA LAYOUT
     double g[9];       // area coordinates as affine functions: L_k(P) = g[3k] + g[3k+1] P.x + g[3k+2] P.y
     double h[3];       // altitude from each vertex onto the opposite edge (m): the distance-potential weights
+                       // (NaN when triangle_geometry was told no law needs them)
     double inv_h_min;  // 1 / smallest altitude (1/m)
     // Bit e set: edge e (nodes e, e+1) is a face that can carry contact load. triangle_geometry sets all three; an
     // edge inside a continuum or an intact joint is cleared by the caller (ContactSystem: its loads from the two
     // triangles that share it cancel, and it is not a face that friction can act on).
     int faces = 7;
 };
-void triangle_geometry(const double* x, TriangleGeometry& out);
+// altitudes = false: h is left NaN (only the distance potential, a stiffness law's, reads it) and inv_h_min is
+// computed from the longest edge alone, the same bits at one square root instead of three.
+void triangle_geometry(const double* x, TriangleGeometry& out, bool altitudes = true);
 
 // Clears one friction slot (kHistPerEdge doubles) and returns the energy its spring held (J), which the caller
 // books as dissipated: a stretched tangential spring that loses its contact lets its energy go.
