@@ -413,6 +413,7 @@ void Simulation::step() {
             const int k0 = kTied ? u_node[j0] : j0;
             const double M = kTied ? u_mass[u] : mass[k0];
             const double im = kTied ? u_inv[u] : inv_mass[k0];
+            double vn[2], xn[2], vr[2];  // the unit's new velocity, position and filter mean, written to its members below
             for (int c = 0; c < 2; ++c) {
                 const int d0 = 2 * k0 + c;
                 const double f = S[c] + S[2 + c], fe = S[2 + c];
@@ -448,14 +449,15 @@ void Simulation::step() {
                 }
                 K += 0.5 * M * vold * vnew;
                 if (!std::isfinite(vnew) && bad < 0) bad = k0;
-                const double xn = xw[d0] + dt * vnew;  // the members' positions are the same bits
-                const double vr = vref ? vref[d0] + wf * (vnew - vref[d0]) : 0.0;
-                for (int j = j0; j < j1; ++j) {
-                    const int d = 2 * (kTied ? u_node[j] : j) + c;
-                    vw[d] = vnew;
-                    xw[d] = xn;
-                    if (vref) vref[d] = vr;
-                }
+                vn[c] = vnew;
+                xn[c] = xw[d0] + dt * vnew;  // the members' positions are the same bits
+                vr[c] = vref ? vref[d0] + wf * (vnew - vref[d0]) : 0.0;
+            }
+            for (int j = j0; j < j1; ++j) {
+                const int d = 2 * (kTied ? u_node[j] : j);
+                vw[d] = vn[0], vw[d + 1] = vn[1];
+                xw[d] = xn[0], xw[d + 1] = xn[1];
+                if (vref) vref[d] = vr[0], vref[d + 1] = vr[1];
             }
         }
         block_a_[b] = dW, block_b_[b] = dD, block_c_[b] = unb, block_d_[b] = scale;
