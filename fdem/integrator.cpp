@@ -386,12 +386,15 @@ void Simulation::step() {
     const uint8_t* kind = dof_kind_.data();
     const double* vpres = dof_vel_.data();
     double* reac = reaction_.data();
-    // One block; compiled twice (kTied: a compile-time constant), so that a model without ties runs the plain node
-    // loop without the units' indirections.
-    auto node_block = [&](auto tied_const, int b) {
+    // One block; compiled for each combination of three compile-time constants, so that each model runs only the
+    // parts it has: kTied (units of tied copies, else plain nodes without the units' indirections), kFilter (the
+    // filtered local damping's moving means, vref) and kMass (mass-proportional damping, hm > 0).
+    auto node_block = [&](auto tied_const, auto filter_const, auto mass_const, int b) {
         constexpr bool kTied = decltype(tied_const)::value;
+        constexpr bool kFilter = decltype(filter_const)::value;
+        constexpr bool kMass = decltype(mass_const)::value;
         double dW = 0, dD = 0, unb = 0, scale = 0, K = 0, cW = 0, cD = 0, dM = 0, cM = 0;
-        int bad = -1;
+        double nonfinite = 0;  // v - v summed: 0 while every new velocity is finite, NaN after an inf or a NaN
         const int u0 = kTied ? u_block[b] : b * kBlock, u1 = kTied ? u_block[b + 1] : std::min(nu, (b + 1) * kBlock);
         for (int u = u0; u < u1; ++u) {
             const int j0 = kTied ? u_start[u] : u, j1 = kTied ? u_start[u + 1] : u + 1;
@@ -421,16 +424,16 @@ void Simulation::step() {
                 double vnew;
                 if (kind[d0] == 0) {
                     // [C79] local damping: -alpha |f| sign(v), or sign(v - vref) with the filter.
-                    const double vrel = vref ? vold - vref[d0] : vold;
+                    const double vrel = kFilter ? vold - vref[d0] : vold;
                     const double fd = vrel > 0 ? -alpha * std::abs(f) : vrel < 0 ? alpha * std::abs(f) : 0.0;
                     // (without mass damping the same bits without the division: (1 - 0) v = v, x / 1 = x)
-                    vnew = hm > 0 ? ((1 - hm) * vold + dtv * (f + fd) * im) / (1 + hm) : vold + dtv * (f + fd) * im;
+                    vnew = kMass ? ((1 - hm) * vold + dtv * (f + fd) * im) / (1 + hm) : vold + dtv * (f + fd) * im;
                     const double vbar = 0.5 * (vold + vnew);
                     dW += dt * fe * vbar;
                     dD -= dt * fd * vbar;
                     cW += 0.5 * dt * fe * vnew;
                     cD -= 0.5 * dt * fd * vnew;
-                    if (hm > 0) {  // -a m vbar: work dt (-a m vbar) vbar, and its share up to t^n
+                    if (kMass) {  // -a m vbar: work dt (-a m vbar) vbar, and its share up to t^n
                         const double fm = -beta_mass * M * vbar;
                         dM -= dt * fm * vbar;
                         cM -= 0.5 * dt * fm * vnew;
@@ -448,29 +451,43 @@ void Simulation::step() {
                     }
                 }
                 K += 0.5 * M * vold * vnew;
-                if (!std::isfinite(vnew) && bad < 0) bad = k0;
+                nonfinite += vnew - vnew;
                 vn[c] = vnew;
                 xn[c] = xw[d0] + dt * vnew;  // the members' positions are the same bits
-                vr[c] = vref ? vref[d0] + wf * (vnew - vref[d0]) : 0.0;
+                vr[c] = kFilter ? vref[d0] + wf * (vnew - vref[d0]) : 0.0;
             }
             for (int j = j0; j < j1; ++j) {
                 const int d = 2 * (kTied ? u_node[j] : j);
                 vw[d] = vn[0], vw[d + 1] = vn[1];
                 xw[d] = xn[0], xw[d + 1] = xn[1];
-                if (vref) vref[d] = vr[0], vref[d + 1] = vr[1];
+                if (kFilter) vref[d] = vr[0], vref[d + 1] = vr[1];
             }
         }
         block_a_[b] = dW, block_b_[b] = dD, block_c_[b] = unb, block_d_[b] = scale;
         block_e_[b] = K, block_f_[b] = cW, block_g_[b] = cD, block_h_[b] = dM, block_i_[b] = cM;
+        // The first unit (in loop order) with a non-finite velocity, looked for only when there is one.
+        int bad = -1;
+        if (!(nonfinite == 0))
+            for (int u = u0; u < u1 && bad < 0; ++u) {
+                const int k0 = kTied ? u_node[u_start[u]] : u;
+                if (!std::isfinite(vw[2 * k0]) || !std::isfinite(vw[2 * k0 + 1])) bad = k0;
+            }
         block_bad_[b] = bad;
     };
-    if (tied) {
+    auto run_blocks = [&](auto t, auto fl, auto m) {
 #pragma omp parallel for schedule(static) if (nnb > 1)
-        for (int b = 0; b < nnb; ++b) node_block(std::true_type{}, b);
-    } else {
-#pragma omp parallel for schedule(static) if (nnb > 1)
-        for (int b = 0; b < nnb; ++b) node_block(std::false_type{}, b);
-    }
+        for (int b = 0; b < nnb; ++b) node_block(t, fl, m, b);
+    };
+    auto with_mass = [&](auto t, auto fl) {
+        if (hm > 0) run_blocks(t, fl, std::true_type{});
+        else run_blocks(t, fl, std::false_type{});
+    };
+    auto with_filter = [&](auto t) {
+        if (vref) with_mass(t, std::true_type{});
+        else with_mass(t, std::false_type{});
+    };
+    if (tied) with_filter(std::true_type{});
+    else with_filter(std::false_type{});
     if (spec_.energy_audit) audit_step(2, dt);
     double dW = 0, dD = 0, unb = 0, scale = 0, dM = 0;
     kinetic_n_ = 0, work_half_ = 0, damp_half_ = 0, mass_half_ = 0;

@@ -203,3 +203,26 @@ TEST_CASE("SIGTERM and SIGINT finish the step and write history, snapshot and su
         CHECK(std::count(header.begin(), header.end(), ',') == std::count(last.begin(), last.end(), ','));
     }
 }
+
+TEST_CASE("a non-finite velocity stops the step naming the first node that has one, in every variant of the node loop",
+          "[engine]") {
+    // plain local damping, its filtered form (moving means) and mass damping: compiled as separate node loops
+    const std::vector<std::pair<std::string, std::string>> variants = {
+        {"plain", "local_damping = 0.2\n"},
+        {"filter", "local_damping = 0.2\nlocal_damping_filter = 0.01\n"},
+        {"mass", "local_damping = 0.2\nmass_damping = 4.0\n"}};
+    for (const auto& [name, keys] : variants)
+        for (double bad : {std::nan(""), HUGE_VAL}) {
+            auto sim = testing::make_simulation(testing::column_case_head("nonfinite") + "\n[[stages]]\nname = \"fall\"\n"
+                                                    "duration = 0.5\ngravity = [0.0, -9.81]\n" + keys,
+                                                "nonfinite_" + name);
+            sim.begin_stage(0);
+            for (int s = 0; s < 5; ++s) sim.step();
+            const int first = 7, later = 20;
+            REQUIRE(sim.model().n_nodes() > later);
+            sim.model().v[2 * later] = bad;
+            sim.model().v[2 * first + 1] = bad;
+            INFO(name << ", " << bad);
+            CHECK_THROWS_WITH(sim.step(), Catch::Contains("node 7 has a non-finite velocity"));
+        }
+}

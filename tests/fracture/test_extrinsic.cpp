@@ -279,3 +279,35 @@ TEST_CASE("contact_penalty sets the crack faces' penalty apart from p_j: the con
     CHECK(std::string(e.what()).find("materials.stone.fracture.contact_penalty") != std::string::npos);
   }
 }
+
+TEST_CASE("extrinsic bar: a non-finite velocity of a group of tied copies stops the step naming one of them", "[engine]") {
+  const std::string geo = testing::read_text(cases_dir() / "bar_structured.geo");
+  const std::string toml =
+      replace_once(testing::read_text(cases_dir() / "bar_structured.toml"), "  penalty = 1.0e11           # Pa\n", kExtrinsic);
+  for (double bad : {std::nan(""), HUGE_VAL}) {
+    auto sim = make_sim("extrinsic_bar_nonfinite", toml, {{"bar_structured.geo", geo}});
+    REQUIRE(sim.interactions().joints()->dormant_count() > 0);  // tied copies: the node loop runs by units
+    sim.begin_stage(0);
+    for (int s = 0; s < 5; ++s) sim.step();
+    // every copy of the vertex of node p (the same reference position): the group's velocity
+    auto& md = sim.model();
+    const int p = md.n_nodes() / 2;
+    int copies = 0;
+    for (int k = 0; k < md.n_nodes(); ++k)
+      if (md.X[2 * k] == md.X[2 * p] && md.X[2 * k + 1] == md.X[2 * p + 1]) md.v[2 * k + 1] = bad, ++copies;
+    REQUIRE(copies > 1);
+    std::string msg;
+    try {
+      sim.step();
+    } catch (const std::exception& e) {
+      msg = e.what();
+    }
+    INFO(msg);
+    const auto at = msg.find("node ");
+    REQUIRE(at != std::string::npos);
+    CHECK(msg.find("has a non-finite velocity") != std::string::npos);
+    const int k = std::stoi(msg.substr(at + 5));
+    CHECK(md.X[2 * k] == md.X[2 * p]);
+    CHECK(md.X[2 * k + 1] == md.X[2 * p + 1]);
+  }
+}
