@@ -500,16 +500,13 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f)
             gather(v, tri_ + 3 * b, vb);
             PairResult r;
             // pair_contact leaves the history all zero when it returns false (every slot released).
+            // (the forces straight into the pair's slots, read below only when it is on)
             const bool on = pair_contact(geom_[a], geom_[b], va, vb, law_prm_[pair_law_[p]], want_energy,
-                                         &hist_[kHistPerPair * static_cast<size_t>(p)], r, pair_hist_on_[p]);
+                                         &hist_[kHistPerPair * static_cast<size_t>(p)], r, pair_hist_on_[p],
+                                         &pair_f_[12 * static_cast<size_t>(p)]);
             pair_hist_on_[p] = static_cast<char>(r.held);
             if (on) {
                 pair_on_[p] = 1;
-                double* pf = &pair_f_[12 * static_cast<size_t>(p)];
-                for (int s = 0; s < 6; ++s) {
-                    pf[s] = r.fa[s];
-                    pf[6 + s] = r.fb[s];
-                }
                 double* pe = &pair_e_[4 * static_cast<size_t>(p)];
                 pe[0] = r.energy_normal;
                 pe[1] = r.energy_tangential;

@@ -394,8 +394,12 @@ bool pair_contact(const double* xa, const double* xb, const double* va, const do
 }
 
 bool pair_contact(const TriangleGeometry& A, const TriangleGeometry& B, const double* va, const double* vb,
-                  const PairParams& params, bool want_energy, double* hist, PairResult& r, unsigned held) {
-    for (int i = 0; i < 6; ++i) r.fa[i] = r.fb[i] = 0.0;
+                  const PairParams& params, bool want_energy, double* hist, PairResult& r, unsigned held,
+                  double* f12) {
+    double* fa = f12 ? f12 : r.fa;
+    double* fb = f12 ? f12 + 6 : r.fb;
+    if (!f12)
+        for (int i = 0; i < 6; ++i) r.fa[i] = r.fb[i] = 0.0;
     r.energy_normal = r.energy_tangential = r.dissipation = r.damping = 0.0;
     r.active_edges = 0;
     r.held = 0;
@@ -425,6 +429,8 @@ bool pair_contact(const TriangleGeometry& A, const TriangleGeometry& B, const do
         if (!apart && want_energy) r.energy_normal = pair_energy(A, B, params);
         return false;
     }
+    if (f12)
+        for (int i = 0; i < 12; ++i) f12[i] = 0.0;
     PairParams p = params;
     if (p.p_t > 0.0 || (p.beta > 0.0 && p.p_n > 0.0)) {
         const double inv_h = A.inv_h_min + B.inv_h_min;  // 1/m
@@ -438,14 +444,14 @@ bool pair_contact(const TriangleGeometry& A, const TriangleGeometry& B, const do
     for (int e = 0; e < 3; ++e) {
         const int e1 = (e + 1) % 3;
         if (((A.faces >> e) & 1) && edge_integrals(a_in_b + 3 * e, a_in_b + 3 * e1, xa + 2 * e, xa + 2 * e1, wb, I, &len)) {
-            load_edge(xa, va, r.fa, vb, r.fb, e, len, I, p, hist + kHistPerEdge * e, r);
+            load_edge(xa, va, fa, vb, fb, e, len, I, p, hist + kHistPerEdge * e, r);
             ++r.active_edges;
             r.held |= 1u << e;
         } else {
             release(e);
         }
         if (((B.faces >> e) & 1) && edge_integrals(b_in_a + 3 * e, b_in_a + 3 * e1, xb + 2 * e, xb + 2 * e1, wa, I, &len)) {
-            load_edge(xb, vb, r.fb, va, r.fa, e, len, I, p, hist + kHistPerEdge * (3 + e), r);
+            load_edge(xb, vb, fb, va, fa, e, len, I, p, hist + kHistPerEdge * (3 + e), r);
             ++r.active_edges;
             r.held |= 1u << (3 + e);
         } else {

@@ -102,9 +102,12 @@ double release_slot(double* h);
 bool pair_contact(const double* xa, const double* xb, const double* va, const double* vb, const PairParams& p,
                   bool want_energy, double* hist, PairResult& out);
 // The same from precomputed triangle geometry. held: bit s clear when slot s of hist is known to be all zero (the
-// previous call's out.held), so that slot is not read or written unless its edge is loaded.
+// previous call's out.held), so that slot is not read or written unless its edge is loaded. f12 (optional): the
+// forces go there (A's six, then B's six) instead of out.fa, out.fb, and are written only when the triangles
+// overlap (out.fa, out.fb are then not touched; f12 is not to be read when the call returns false).
 bool pair_contact(const TriangleGeometry& a, const TriangleGeometry& b, const double* va, const double* vb,
-                  const PairParams& p, bool want_energy, double* hist, PairResult& out, unsigned held = 0x3f);
+                  const PairParams& p, bool want_energy, double* hist, PairResult& out, unsigned held = 0x3f,
+                  double* f12 = nullptr);
 
 // t INT_{A∩B} (c phi_A + c phi_B) dA (J): the pair's normal contact energy, by polygon clipping.
 double pair_energy(const double* xa, const double* xb, const PairParams& p);

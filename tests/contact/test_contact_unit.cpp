@@ -325,6 +325,51 @@ TEST_CASE("No force without overlap, including touching triangles", "[unit]") {
 }
 
 
+TEST_CASE("pair_contact writing its forces to the caller's slots gives the same bits as through PairResult", "[unit]") {
+    std::mt19937_64 rng(11);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    PairParams p;
+    p.thickness = 0.2;
+    p.c = 1e9;
+    p.p_t = 1e9;
+    p.mu = 0.6;
+    p.dt = 1e-5;
+    int loaded = 0;
+    for (int n = 0; n < 3000; ++n) {
+        // B near A: overlapping in about half of the draws
+        double xa[6] = {0, 0, 1, 0, 0, 1}, xb[6], va[6], vb[6];
+        const double ox = 0.4 * u(rng), oy = 0.4 * u(rng);
+        const double xb0[6] = {0.2 + ox, 0.2 + oy, 1.0 + ox, 0.4 + oy, 0.3 + ox, 1.0 + oy};
+        for (int i = 0; i < 6; ++i) xb[i] = xb0[i] + 0.05 * u(rng), va[i] = u(rng), vb[i] = u(rng);
+        TriangleGeometry A, B;
+        triangle_geometry(xa, A, false);
+        triangle_geometry(xb, B, false);
+        p.beta = n % 2 ? 1e-4 : 0.0;
+        double h1[kHistPerPair], h2[kHistPerPair];
+        for (int i = 0; i < kHistPerPair; ++i) h1[i] = h2[i] = 0.0;
+        for (int step = 0; step < 3; ++step) {  // the second and third calls start from the friction state
+            PairResult r1, r2;
+            double f12[12];
+            std::fill(f12, f12 + 12, 7.0);
+            const bool on1 = pair_contact(A, B, va, vb, p, true, h1, r1);
+            const bool on2 = pair_contact(A, B, va, vb, p, true, h2, r2, 0x3f, f12);
+            REQUIRE(on1 == on2);
+            REQUIRE(std::memcmp(h1, h2, sizeof h1) == 0);
+            REQUIRE(r1.energy_normal == r2.energy_normal);
+            REQUIRE(r1.energy_tangential == r2.energy_tangential);
+            REQUIRE(r1.dissipation == r2.dissipation);
+            REQUIRE(r1.damping == r2.damping);
+            REQUIRE(r1.held == r2.held);
+            if (on1) {
+                ++loaded;
+                REQUIRE(std::memcmp(r1.fa, f12, sizeof r1.fa) == 0);
+                REQUIRE(std::memcmp(r1.fb, f12 + 6, sizeof r1.fb) == 0);
+            }
+        }
+    }
+    CHECK(loaded > 1000);
+}
+
 TEST_CASE("triangle_geometry without altitudes: the same area coordinates and 1 / smallest altitude, to the bit",
           "[unit]") {
     std::mt19937_64 rng(7);
