@@ -41,7 +41,8 @@ inline double forget(double* h) {
 }
 
 // max over the nodes of |v|^2 (m^2/s^2); a node with a NaN velocity is passed over (as std::max(m, NaN) = m). The
-// max is exact in any order, so the lanes and threads give the same bits as one loop.
+// max is exact in any order, so the lanes and threads give the same bits as one loop. In threads only above 16k
+// nodes: the scan takes about 1 ns per node, less than a parallel region's fork and join below that.
 double largest_speed2(const double* v, int n) {
     double m = 0.0;
 #pragma omp parallel for schedule(static) reduction(max : m) if (n > 4 * kParallelMin)

@@ -47,7 +47,9 @@ public:
     // one step: the Cauchy stress of the two triangles of every dormant element at positions x (tri_sigma: 3 per
     // triangle, xx yy xy, Pa; their mean is the stress the tied continuum carries across the edge) gives the traction
     // (sigma, tau) in the element's frame; the elements whose traction reached the law's peak surface are inserted.
-    // Returns how many were.
+    // Only the edges of triangles whose stress may reach the strengths are computed (fracture::far_from_peak_surface
+    // decides the others per triangle); the same elements are inserted as with every edge computed. Returns how many
+    // were.
     bool has_dormant() const { return joints_ && joints_->dormant_count() > 0; }
     int insert_cracks(const double* x, const double* tri_sigma);
     double inserted_energy() const { return joints_ ? joints_->inserted_energy() : 0.0; }  // J
