@@ -22,6 +22,8 @@ namespace {
 // Below this many items a loop runs on one thread: a parallel region costs more than it saves, and on a shared,
 // oversubscribed machine its barrier can cost milliseconds. Results are the same bits either way.
 constexpr int kParallelMin = 4096;
+// Pairs per block of the pair loop (the unit of its dynamic schedule and of the lists of pairs with something to add).
+constexpr int kPairBlock = 512;
 
 // Whether a pair's friction state holds anything (some slot not all zero).
 inline bool any_history(const double* h) {
@@ -448,6 +450,9 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f)
     // area coordinates and altitudes computed once. One parallel region for this loop and the pair loop (a fork
     // and join less; the capable triangles, about half as many as the pairs, were below kParallelMin on their own
     // and ran serially in the wall cases).
+    const int n_blocks = (np + kPairBlock - 1) / kPairBlock;
+    on_idx_.resize(np);
+    on_cnt_.resize(n_blocks);
 #pragma omp parallel if (np > kParallelMin || n_items > kParallelMin)
     {
 #pragma omp for schedule(static)
@@ -471,8 +476,8 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f)
             triangle_geometry(T, geom_[items_[i]], altitudes);
             geom_[items_[i]].faces = static_cast<int>(faces);
         }
-#pragma omp for schedule(dynamic, 512)
-        for (int p = 0; p < np; ++p) {
+        // One pair: its kernel, or the history it forgets; pair_on_[p] says what the serial sums below take.
+        auto eval_pair = [&](int p) {
             const int a = pair_a_[p], b = pair_b_[p];
             pair_on_[p] = 0;
             const double* ba = &box_[8 * static_cast<size_t>(a)];
@@ -485,7 +490,7 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f)
             // Disjoint triangle boxes also mean no overlap energy; only that is wanted of other faceless overlaps.
             const bool boxes_apart = disjoint(ba, bb);
             if (boxes_apart || (!want_energy && disjoint(ba + 4, bb) && disjoint(bb + 4, ba))) {
-                if (!pair_hist_on_[p]) continue;  // nothing to forget (the common case: apart since detection)
+                if (!pair_hist_on_[p]) return;  // nothing to forget (the common case: apart since detection)
                 pair_hist_on_[p] = 0;
                 const double released = forget(&hist_[kHistPerPair * static_cast<size_t>(p)]);
                 if (released != 0.0) {  // booked in the serial sum below, no forces
@@ -494,7 +499,7 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f)
                     pe[0] = pe[1] = pe[3] = 0.0;
                     pe[2] = released;
                 }
-                continue;
+                return;
             }
             double va[6], vb[6];
             gather(v, tri_ + 3 * a, va);
@@ -522,34 +527,49 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f)
                 pe[1] = pe[3] = 0.0;
                 pe[2] = r.dissipation;
             }
+        };
+        // Blocks of kPairBlock pairs, each evaluated by one thread in pair order, which lists its pairs that have
+        // something to add (on_idx_, on_cnt_): the serial sums below walk those lists instead of every pair.
+#pragma omp for schedule(dynamic, 1)
+        for (int blk = 0; blk < n_blocks; ++blk) {
+            const int p0 = blk * kPairBlock, p1 = std::min(np, p0 + kPairBlock);
+            int cnt = 0;
+            for (int p = p0; p < p1; ++p) {
+                eval_pair(p);
+                if (pair_on_[p]) on_idx_[p0 + cnt++] = p;
+            }
+            on_cnt_[blk] = cnt;
         }
     }  // omp parallel
-    // Serial scatter and sums in pair order: the same bits for any thread count.
+    // Serial scatter and sums in pair order (the blocks in order, each block's listed pairs in order): the same bits
+    // for any thread count, and the same as a walk over every pair.
     const double t1 = omp_get_wtime();
     double en = 0.0, et = 0.0, ed = 0.0, ec = 0.0;
     int active = 0;
-    for (int p = 0; p < np; ++p) {
-        if (!pair_on_[p]) continue;
-        if (pair_on_[p] == 2) {
-            en += pair_e_[4 * static_cast<size_t>(p)];
-            ed += pair_e_[4 * static_cast<size_t>(p) + 2];
-            continue;
+    for (int blk = 0; blk < n_blocks; ++blk) {
+        for (int i = 0; i < on_cnt_[blk]; ++i) {
+            const int p = on_idx_[blk * kPairBlock + i];
+            if (pair_on_[p] == 2) {
+                en += pair_e_[4 * static_cast<size_t>(p)];
+                ed += pair_e_[4 * static_cast<size_t>(p) + 2];
+                continue;
+            }
+            ++active;
+            const int* ta = tri_ + 3 * pair_a_[p];
+            const int* tb = tri_ + 3 * pair_b_[p];
+            const double* pf = &pair_f_[12 * static_cast<size_t>(p)];
+            for (int k = 0; k < 3; ++k) {
+                f[2 * ta[k]] += pf[2 * k];
+                f[2 * ta[k] + 1] += pf[2 * k + 1];
+                f[2 * tb[k]] += pf[6 + 2 * k];
+                f[2 * tb[k] + 1] += pf[6 + 2 * k + 1];
+            }
+            const double* pe = &pair_e_[4 * static_cast<size_t>(p)];
+            en += pe[0];
+            et += pe[1];
+            ed += pe[2];
+            ec += pe[3];
         }
-        ++active;
-        const int* ta = tri_ + 3 * pair_a_[p];
-        const int* tb = tri_ + 3 * pair_b_[p];
-        const double* pf = &pair_f_[12 * static_cast<size_t>(p)];
-        for (int k = 0; k < 3; ++k) {
-            f[2 * ta[k]] += pf[2 * k];
-            f[2 * ta[k] + 1] += pf[2 * k + 1];
-            f[2 * tb[k]] += pf[6 + 2 * k];
-            f[2 * tb[k] + 1] += pf[6 + 2 * k + 1];
-        }
-        const double* pe = &pair_e_[4 * static_cast<size_t>(p)];
-        en += pe[0];
-        et += pe[1];
-        ed += pe[2];
-        ec += pe[3];
     }
     energy_normal_ = en;
     energy_tangential_ = et;
@@ -584,7 +604,7 @@ double ContactSystem::normal_energy_at(const double* x) const {
 // add the field to save_state and load_state if it carries from one step to the next, then update the size.
 void ContactSystem::save_state(StateWriter& w) const {
 #if defined(__x86_64__) && defined(__GLIBCXX__)
-    static_assert(sizeof(ContactSystem) == 1256, "ContactSystem changed: update save_state/load_state and this size");
+    static_assert(sizeof(ContactSystem) == 1304, "ContactSystem changed: update save_state/load_state and this size");
 #endif
     w.section("contact");
     w.pod(static_cast<std::int32_t>(kHistPerPair));

@@ -179,6 +179,7 @@ private:
     std::vector<double> pair_f_;   // 12 per pair
     std::vector<double> pair_e_;   // 4 per pair: normal energy, tangential energy, friction dissipation, dashpot work
     std::vector<char> pair_on_;
+    std::vector<int> on_idx_, on_cnt_;  // per block of pairs: its pairs with pair_on_ set, in order, and how many
     std::vector<double> box_;      // 8 per triangle, capable ones, this step: xmin, xmax, ymin, ymax (m) of the
                                    // triangle, then of its faces' end points (empty without faces)
     std::vector<TriangleGeometry> geom_;  // per triangle, capable ones, this step: what the pair kernel needs
