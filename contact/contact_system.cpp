@@ -401,6 +401,8 @@ void ContactSystem::detect(const double* x) {
     pair_f_.resize(12 * static_cast<size_t>(np));
     pair_e_.resize(4 * static_cast<size_t>(np));
     pair_on_.resize(np);
+    on_idx_.resize(np);
+    on_cnt_.resize((np + kPairBlock - 1) / kPairBlock);
     box_.resize(8 * static_cast<size_t>(n_tri_));
     geom_.resize(n_tri_);
     dirty_ = false;
@@ -451,8 +453,6 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f)
     // and join less; the capable triangles, about half as many as the pairs, were below kParallelMin on their own
     // and ran serially in the wall cases).
     const int n_blocks = (np + kPairBlock - 1) / kPairBlock;
-    on_idx_.resize(np);
-    on_cnt_.resize(n_blocks);
 #pragma omp parallel if (np > kParallelMin || n_items > kParallelMin)
     {
 #pragma omp for schedule(static)
@@ -656,6 +656,8 @@ void ContactSystem::load_state(StateReader& r) {
     pair_f_.assign(12 * np, 0.0);
     pair_e_.assign(4 * np, 0.0);
     pair_on_.assign(np, 0);
+    on_idx_.assign(np, 0);
+    on_cnt_.assign((np + kPairBlock - 1) / kPairBlock, 0);
     box_.assign(8 * static_cast<std::size_t>(n_tri_), 0.0);
     geom_.resize(static_cast<std::size_t>(n_tri_));
     faces_dirty_ = true;

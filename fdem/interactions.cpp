@@ -260,18 +260,19 @@ void Interactions::list_dormant() {
     for (const DormantEdge& el : dormant_edge_) n_tri = std::max(n_tri, std::max(el.tri_a, el.tri_b) + 1);
     const double inf = std::numeric_limits<double>::infinity();
     tri_strength_.assign(2 * static_cast<std::size_t>(n_tri), inf);
-    near_.assign(n_tri, 0);  // here: whether the triangle borders a dormant edge
+    std::vector<char> borders(n_tri, 0);
     for (const DormantEdge& el : dormant_edge_)
         for (int t : {el.tri_a, el.tri_b})
             if (t >= 0) {
                 double* st = &tri_strength_[2 * static_cast<std::size_t>(t)];
                 st[0] = std::min(st[0], el.tensile_strength);
                 st[1] = std::min(st[1], el.tan_friction >= 0.0 ? el.cohesion : -inf);
-                near_[t] = 1;
+                borders[t] = 1;
             }
     dormant_tri_.clear();
     for (int t = 0; t < n_tri; ++t)
-        if (near_[t]) dormant_tri_.push_back(t);
+        if (borders[t]) dormant_tri_.push_back(t);
+    near_.assign(n_tri, 0);  // set by insert_cracks for the triangles of dormant_tri_
     dormant_listed_ = true;
 }
 
