@@ -453,6 +453,9 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f)
     // and join less; the capable triangles, about half as many as the pairs, were below kParallelMin on their own
     // and ran serially in the wall cases).
     const int n_blocks = (np + kPairBlock - 1) / kPairBlock;
+    double t1 = t0;
+    double en = 0.0, et = 0.0, ed = 0.0, ec = 0.0;  // the sums in pair order (thread 0)
+    int active = 0;
 #pragma omp parallel if (np > kParallelMin || n_items > kParallelMin)
     {
 #pragma omp for schedule(static)
@@ -540,37 +543,41 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f)
             }
             on_cnt_[blk] = cnt;
         }
-    }  // omp parallel
-    // Serial scatter and sums in pair order (the blocks in order, each block's listed pairs in order): the same bits
-    // for any thread count, and the same as a walk over every pair.
-    const double t1 = omp_get_wtime();
-    double en = 0.0, et = 0.0, ed = 0.0, ec = 0.0;
-    int active = 0;
-    for (int blk = 0; blk < n_blocks; ++blk) {
-        for (int i = 0; i < on_cnt_[blk]; ++i) {
-            const int p = on_idx_[blk * kPairBlock + i];
-            if (pair_on_[p] == 2) {
-                en += pair_e_[4 * static_cast<size_t>(p)];
-                ed += pair_e_[4 * static_cast<size_t>(p) + 2];
-                continue;
+        // Scatter in pair order (the blocks in order, each block's listed pairs in order), each thread adding the
+        // forces of the nodes it owns (set_node_owner: the nodes it integrates next) and thread 0 the energy sums:
+        // every node's sum is that of a serial walk over every pair, the same bits for any thread count.
+        const int T = omp_get_num_threads(), me = omp_get_thread_num();
+        if (me == 0) t1 = omp_get_wtime();
+        const unsigned char* own =
+            owner_parts_ == T && owner_.size() == static_cast<std::size_t>(n_nodes_) ? owner_.data() : nullptr;
+        auto mine = [&](int k) {
+            return T == 1 || (own ? own[k] == me : static_cast<long long>(k) * T / n_nodes_ == me);
+        };
+        for (int blk = 0; blk < n_blocks; ++blk) {
+            for (int i = 0; i < on_cnt_[blk]; ++i) {
+                const int p = on_idx_[blk * kPairBlock + i];
+                const double* pe = &pair_e_[4 * static_cast<size_t>(p)];
+                if (pair_on_[p] == 2) {
+                    if (me == 0) en += pe[0], ed += pe[2];
+                    continue;
+                }
+                const int* ta = tri_ + 3 * pair_a_[p];
+                const int* tb = tri_ + 3 * pair_b_[p];
+                const double* pf = &pair_f_[12 * static_cast<size_t>(p)];
+                for (int k = 0; k < 3; ++k) {
+                    if (mine(ta[k])) f[2 * ta[k]] += pf[2 * k], f[2 * ta[k] + 1] += pf[2 * k + 1];
+                    if (mine(tb[k])) f[2 * tb[k]] += pf[6 + 2 * k], f[2 * tb[k] + 1] += pf[6 + 2 * k + 1];
+                }
+                if (me == 0) {
+                    ++active;
+                    en += pe[0];
+                    et += pe[1];
+                    ed += pe[2];
+                    ec += pe[3];
+                }
             }
-            ++active;
-            const int* ta = tri_ + 3 * pair_a_[p];
-            const int* tb = tri_ + 3 * pair_b_[p];
-            const double* pf = &pair_f_[12 * static_cast<size_t>(p)];
-            for (int k = 0; k < 3; ++k) {
-                f[2 * ta[k]] += pf[2 * k];
-                f[2 * ta[k] + 1] += pf[2 * k + 1];
-                f[2 * tb[k]] += pf[6 + 2 * k];
-                f[2 * tb[k] + 1] += pf[6 + 2 * k + 1];
-            }
-            const double* pe = &pair_e_[4 * static_cast<size_t>(p)];
-            en += pe[0];
-            et += pe[1];
-            ed += pe[2];
-            ec += pe[3];
         }
-    }
+    }  // omp parallel
     energy_normal_ = en;
     energy_tangential_ = et;
     energy_current_ = want_energy;
@@ -604,7 +611,7 @@ double ContactSystem::normal_energy_at(const double* x) const {
 // add the field to save_state and load_state if it carries from one step to the next, then update the size.
 void ContactSystem::save_state(StateWriter& w) const {
 #if defined(__x86_64__) && defined(__GLIBCXX__)
-    static_assert(sizeof(ContactSystem) == 1304, "ContactSystem changed: update save_state/load_state and this size");
+    static_assert(sizeof(ContactSystem) == 1336, "ContactSystem changed: update save_state/load_state and this size");
 #endif
     w.section("contact");
     w.pod(static_cast<std::int32_t>(kHistPerPair));

@@ -103,6 +103,14 @@ public:
     double dashpot_dissipation() const { return damping_; }  // J, cumulative
     // Forces a detection at the next step (e.g. after the engine moved nodes by other means).
     void invalidate() { dirty_ = true; }
+    // Which thread of a parallel step adds the contact forces of node k: owner[k] in 0..parts-1 (the engine gives
+    // the threads' shares of its node loop, so each thread's forces are written where that thread reads them next).
+    // Only where the writes happen depends on it, never the result: every node's forces are added by one thread in
+    // pair order. Without it, or for another thread count, node k goes to thread k * T / n_nodes.
+    void set_node_owner(std::vector<unsigned char> owner, int parts) {
+        owner_ = std::move(owner);
+        owner_parts_ = parts;
+    }
 
     // J, at the last step (the normal part only if that step computed energies, else 0)
     double elastic_energy() const { return energy_normal_ + energy_tangential_; }
@@ -180,6 +188,8 @@ private:
     std::vector<double> pair_e_;   // 4 per pair: normal energy, tangential energy, friction dissipation, dashpot work
     std::vector<char> pair_on_;
     std::vector<int> on_idx_, on_cnt_;  // per block of pairs: its pairs with pair_on_ set, in order, and how many
+    std::vector<unsigned char> owner_;  // per node: the thread that adds its forces (set_node_owner), for owner_parts_
+    int owner_parts_ = 0;
     std::vector<double> box_;      // 8 per triangle, capable ones, this step: xmin, xmax, ymin, ymax (m) of the
                                    // triangle, then of its faces' end points (empty without faces)
     std::vector<TriangleGeometry> geom_;  // per triangle, capable ones, this step: what the pair kernel needs

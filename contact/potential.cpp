@@ -96,8 +96,9 @@ namespace {
 // Normal load c * phi_Q on the owner's edge along -n_O; the reaction on Q through its area coordinates.
 // Friction: one tangential spring per edge ([K25] Eqs. 4-5) between two material points, the stick anchors.
 // len: the owner's edge length (m), as edge_integrals computed it. h: the edge's friction state (kHistPerEdge).
-void load_edge(const double* xo, const double* vo, double* fo, const double* vq, double* fq, int e, double len,
-               const double* I, const PairParams& p, double* h, PairResult& r) {
+void load_edge(const double* __restrict xo, const double* __restrict vo, double* __restrict fo,
+               const double* __restrict vq, double* __restrict fq, int e, double len, const double* __restrict I,
+               const PairParams& p, double* __restrict h, PairResult& r) {
     const int e1 = (e + 1) % 3;
     const double dx = xo[2 * e1] - xo[2 * e], dy = xo[2 * e1 + 1] - xo[2 * e + 1];
     // (n = (t_y, -t_x): the same bits as dy / len and -dx / len, division rounds symmetrically; two divisions)

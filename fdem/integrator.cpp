@@ -204,6 +204,7 @@ void Simulation::build_ties() {
     unit_block_.assign(1, 0);
     for (int u = 0; u < nu; ++u)
         if (unit_start_[u + 1] - unit_start_[unit_block_.back()] >= kBlock || u + 1 == nu) unit_block_.push_back(u + 1);
+    node_part_threads_ = 0;  // the node loop's shares changed
     if (stage_ >= 0) check_ties();
 }
 
@@ -474,9 +475,27 @@ void Simulation::step() {
             }
         block_bad_[b] = bad;
     };
+    // Each thread takes a static share of the blocks (share_begin), the same nodes every step; the contact scatter
+    // of the next steps adds each node's forces on the thread that integrates it (set_node_owner).
+    const int n_thr = nnb > 1 ? omp_get_max_threads() : 1;
+    if (n_thr != node_part_threads_ && n_thr <= 255) {  // (more threads: the scatter's own share, k * T / nn)
+        std::vector<unsigned char> owner(nn, 0);
+        for (int t = 0; t < n_thr; ++t)
+            for (int b = share_begin(nnb, n_thr, t); b < share_begin(nnb, n_thr, t + 1); ++b) {
+                const int u0 = tied ? u_block[b] : b * kBlock, u1 = tied ? u_block[b + 1] : std::min(nu, (b + 1) * kBlock);
+                for (int u = u0; u < u1; ++u)
+                    for (int j = tied ? u_start[u] : u; j < (tied ? u_start[u + 1] : u + 1); ++j)
+                        owner[tied ? u_node[j] : j] = static_cast<unsigned char>(t);
+            }
+        inter_.set_node_owner(std::move(owner), n_thr);
+        node_part_threads_ = n_thr;
+    }
     auto run_blocks = [&](auto t, auto fl, auto m) {
-#pragma omp parallel for schedule(static) if (nnb > 1)
-        for (int b = 0; b < nnb; ++b) node_block(t, fl, m, b);
+#pragma omp parallel if (nnb > 1)
+        {
+            const int T = omp_get_num_threads(), me = omp_get_thread_num();
+            for (int b = share_begin(nnb, T, me); b < share_begin(nnb, T, me + 1); ++b) node_block(t, fl, m, b);
+        }
     };
     auto with_mass = [&](auto t, auto fl) {
         if (hm > 0) run_blocks(t, fl, std::true_type{});

@@ -39,6 +39,10 @@ public:
         if (contact_) contact_->set_dashpot(beta_s);
     }
     double contact_damping_dissipation() const { return contact_ ? contact_->dashpot_dissipation() : 0.0; }  // J
+    // Which thread adds the contact forces of each node (contact::ContactSystem::set_node_owner).
+    void set_node_owner(std::vector<unsigned char> owner, int parts) {
+        if (contact_) contact_->set_node_owner(std::move(owner), parts);
+    }
     // Whether the next add_forces must evaluate the contact energy (it costs a polygon clip per active pair).
     void want_energy(bool on) {
         if (contact_) contact_->set_compute_energy(on);

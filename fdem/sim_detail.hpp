@@ -13,6 +13,9 @@ namespace fdem::sim_detail {
 // wall-sized mesh: with 4096, a 4620-triangle wall had two blocks (4096 + 524 triangles), so the second thread idled
 // for most of the triangle loop. Changing it changes the order of the energy sums only, not the motion.
 constexpr int kBlock = 256;
+// First of the n items thread t of T takes in a static share (the first n % T threads one more): thread t takes
+// [share_begin(n, T, t), share_begin(n, T, t + 1)). The node loop's shares, which the contact scatter is told.
+inline int share_begin(int n, int T, int t) { return t * (n / T) + (t < n % T ? t : n % T); }
 constexpr double kBalanceWarning = 0.05;  // relative energy balance error above which a run is flagged
 constexpr double kPi = 3.14159265358979323846;
 

@@ -236,6 +236,7 @@ private:
     std::vector<int> unit_start_, unit_node_;  // CSR: the node loop's units (a lone node or a group), by first node
     std::vector<int> unit_block_;              // the node loop's blocks: first unit of each, then the end
     std::vector<double> unit_mass_, unit_inv_mass_;  // kg, 1/kg: per unit
+    int node_part_threads_ = 0;              // the thread count the contact scatter was told the shares for (0: none)
     std::vector<double> tri_sigma_;          // Pa, per triangle: Cauchy stress xx, yy, xy of the step (ties only)
     std::vector<double> eff_mass_;           // kg, per node: its group's mass (tied) or its own (empty: no ties)
     std::vector<int> tie_rep_;               // per node: its group's first node, or itself (empty: no ties)
