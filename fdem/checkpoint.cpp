@@ -135,7 +135,7 @@ std::string Simulation::checkpoint_path() const { return (std::filesystem::path(
 void Simulation::save_state(StateWriter& w) const {
 #if defined(__x86_64__) && defined(__GLIBCXX__)
     // (not saved: the energy audit's sums, a diagnostic of one process; after a restart it starts over)
-    static_assert(sizeof(Simulation) == 4960, "Simulation changed: update save_state/load_state (fdem/checkpoint.cpp) and this size");
+    static_assert(sizeof(Simulation) == 4984, "Simulation changed: update save_state/load_state (fdem/checkpoint.cpp) and this size");
     static_assert(sizeof(ActiveSupport) == 376, "ActiveSupport changed: update save_state/load_state and this size");
     static_assert(sizeof(ActiveLoad) == 296, "ActiveLoad changed: update save_state/load_state and this size");
 #endif

@@ -133,6 +133,7 @@ void Simulation::build_ties() {
     if (!ties_) {
         tie_w_.clear(), eff_mass_.clear(), tie_rep_.clear();
         unit_start_.clear(), unit_node_.clear(), unit_mass_.clear(), unit_inv_mass_.clear(), unit_block_.clear();
+        unit_slot_.clear();
         return;
     }
     std::vector<int> parent(nn);
@@ -197,6 +198,13 @@ void Simulation::build_ties() {
         unit_start_.push_back(static_cast<int>(unit_node_.size()));
         unit_mass_.push_back(g >= 0 ? eff_mass_[k] : model_.mass[k]);
         unit_inv_mass_.push_back(g >= 0 ? 1.0 / eff_mass_[k] : model_.inv_mass[k]);
+    }
+    // Each member's triangle-force slot when it has exactly one (a copy, in its one triangle), else -1: the node loop
+    // then reads it without the incidence lists.
+    unit_slot_.resize(unit_node_.size());
+    for (std::size_t j = 0; j < unit_node_.size(); ++j) {
+        const int k = unit_node_[j];
+        unit_slot_[j] = model_.inc_ptr[k + 1] - model_.inc_ptr[k] == 1 ? model_.inc_idx[model_.inc_ptr[k]] : -1;
     }
     // Blocks of whole units with at least kBlock members each (the last may have fewer): the same work per block
     // whatever the mix of groups and lone nodes, and no more blocks than ceil(nn / kBlock).
@@ -366,6 +374,7 @@ void Simulation::step() {
     const int nu = tied ? static_cast<int>(unit_start_.size()) - 1 : nn;
     const int* u_start = tied ? unit_start_.data() : nullptr;
     const int* u_node = tied ? unit_node_.data() : nullptr;
+    const int* u_slot = tied ? unit_slot_.data() : nullptr;
     const double* u_mass = tied ? unit_mass_.data() : nullptr;
     const double* u_inv = tied ? unit_inv_mass_.data() : nullptr;
     const double* tie_w = tied ? tie_w_.data() : nullptr;
@@ -404,10 +413,16 @@ void Simulation::step() {
             for (int j = j0; j < j1; ++j) {
                 const int k = kTied ? u_node[j] : j;
                 double fi0 = fmod[2 * k], fi1 = fmod[2 * k + 1];
-                fmod[2 * k] = 0, fmod[2 * k + 1] = 0;
-                for (int i = inc_ptr[k]; i < inc_ptr[k + 1]; ++i) {
-                    const double* r = tf + 2 * static_cast<std::size_t>(inc_idx[i]);
+                // (most nodes get no module force: their lines are not written; the sums never make a -0.0)
+                if (fi0 != 0.0 || fi1 != 0.0) fmod[2 * k] = 0, fmod[2 * k + 1] = 0;
+                if (kTied && u_slot[j] >= 0) {
+                    const double* r = tf + 2 * static_cast<std::size_t>(u_slot[j]);
                     fi0 += r[0], fi1 += r[1];
+                } else {
+                    for (int i = inc_ptr[k]; i < inc_ptr[k + 1]; ++i) {
+                        const double* r = tf + 2 * static_cast<std::size_t>(inc_idx[i]);
+                        fi0 += r[0], fi1 += r[1];
+                    }
                 }
                 const double fe0 = fext[2 * k] + gmass[k] * gx, fe1 = fext[2 * k + 1] + gmass[k] * gy;
                 scale += std::abs(fi0) + std::abs(fe0);

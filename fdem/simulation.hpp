@@ -235,6 +235,7 @@ private:
     std::vector<double> tie_w_;              // -, per node: its mass over its group's mass
     std::vector<int> unit_start_, unit_node_;  // CSR: the node loop's units (a lone node or a group), by first node
     std::vector<int> unit_block_;              // the node loop's blocks: first unit of each, then the end
+    std::vector<int> unit_slot_;               // per entry of unit_node_: its one triangle-force slot, or -1
     std::vector<double> unit_mass_, unit_inv_mass_;  // kg, 1/kg: per unit
     int node_part_threads_ = 0;              // the thread count the contact scatter was told the shares for (0: none)
     std::vector<double> tri_sigma_;          // Pa, per triangle: Cauchy stress xx, yy, xy of the step (ties only)
