@@ -53,7 +53,7 @@ struct ContactStats {
     long long pair_evaluations = 0;  // candidate pairs evaluated, cumulative
     double time_detection = 0.0;   // s, cumulative wall time in detection
     double time_forces = 0.0;      // s, cumulative wall time in the force evaluation and scatter
-    double time_scatter = 0.0;     // s, the serial part of time_forces (adding pair forces in pair order)
+    double time_scatter = 0.0;     // s, the part of time_forces adding pair forces in pair order (each thread its nodes)
 };
 
 class ContactSystem {

@@ -1,7 +1,7 @@
 // fdem_bench: step throughput (triangle-steps per second) for 1 and 2 threads (or --threads LIST), median of
 // several runs, written to a CSV, with the time per step of each kernel (Simulation::step_times and the contact
 // statistics): triangle forces, cohesive elements, contact detection, contact forces (pair kernels), contact scatter
-// (the serial sum in pair order), integration (node loop) and the rest (loads, damage update, outputs). Without --case: triangle forces and integration of an elastic plate of about N
+// (the sum in pair order, each thread its own nodes), integration (node loop) and the rest (loads, damage update, outputs). Without --case: triangle forces and integration of an elastic plate of about N
 // triangles. With --case FILE: the first steps of that case's first stage (contact, joints and all), so that the
 // thread scaling of a real scene is measured; --set key=value as for `fdem run`.
 //   fdem_bench [--triangles N | --case FILE [--set k=v ...]] [--steps S] [--repeats R] [--threads 1,2] [--csv FILE]
