@@ -126,6 +126,7 @@ void Simulation::compute_dt() {
 }
 
 void Simulation::build_ties() {
+    node_part_threads_ = 0;  // the node loop's blocks change: the contact scatter is told the new shares
     const fracture::CohesiveSystem* J = inter_.joints();
     ties_ = J && J->dormant_count() > 0;
     const int nn = model_.n_nodes();
@@ -212,8 +213,26 @@ void Simulation::build_ties() {
     unit_block_.assign(1, 0);
     for (int u = 0; u < nu; ++u)
         if (unit_start_[u + 1] - unit_start_[unit_block_.back()] >= kBlock || u + 1 == nu) unit_block_.push_back(u + 1);
-    node_part_threads_ = 0;  // the node loop's shares changed
     if (stage_ >= 0) check_ties();
+}
+
+void Simulation::share_nodes_with_contact(int n_thr) {
+    node_part_threads_ = n_thr;
+    if (n_thr > 255) return;  // (the scatter then takes its own shares, node k to thread k * T / nn)
+    // The node loop's blocks (units of tied copies, or kBlock nodes) and each thread's share of them, as in step().
+    const int nn = model_.n_nodes();
+    const int nnb = ties_ ? static_cast<int>(unit_block_.size()) - 1 : (nn + kBlock - 1) / kBlock;
+    std::vector<unsigned char> owner(nn, 0);
+    for (int t = 0; t < n_thr; ++t)
+        for (int b = share_begin(nnb, n_thr, t); b < share_begin(nnb, n_thr, t + 1); ++b) {
+            if (!ties_) {
+                for (int k = b * kBlock; k < std::min(nn, (b + 1) * kBlock); ++k) owner[k] = static_cast<unsigned char>(t);
+                continue;
+            }
+            for (int j = unit_start_[unit_block_[b]]; j < unit_start_[unit_block_[b + 1]]; ++j)
+                owner[unit_node_[j]] = static_cast<unsigned char>(t);
+        }
+    inter_.set_node_owner(std::move(owner), n_thr);
 }
 
 void Simulation::reduce_dt_after_insertion() {
@@ -490,21 +509,9 @@ void Simulation::step() {
             }
         block_bad_[b] = bad;
     };
-    // Each thread takes a static share of the blocks (share_begin), the same nodes every step; the contact scatter
-    // of the next steps adds each node's forces on the thread that integrates it (set_node_owner).
+    // Each thread takes a static share of the blocks (share_begin), the same nodes every step.
     const int n_thr = nnb > 1 ? omp_get_max_threads() : 1;
-    if (n_thr != node_part_threads_ && n_thr <= 255) {  // (more threads: the scatter's own share, k * T / nn)
-        std::vector<unsigned char> owner(nn, 0);
-        for (int t = 0; t < n_thr; ++t)
-            for (int b = share_begin(nnb, n_thr, t); b < share_begin(nnb, n_thr, t + 1); ++b) {
-                const int u0 = tied ? u_block[b] : b * kBlock, u1 = tied ? u_block[b + 1] : std::min(nu, (b + 1) * kBlock);
-                for (int u = u0; u < u1; ++u)
-                    for (int j = tied ? u_start[u] : u; j < (tied ? u_start[u + 1] : u + 1); ++j)
-                        owner[tied ? u_node[j] : j] = static_cast<unsigned char>(t);
-            }
-        inter_.set_node_owner(std::move(owner), n_thr);
-        node_part_threads_ = n_thr;
-    }
+    if (n_thr != node_part_threads_) share_nodes_with_contact(n_thr);
     auto run_blocks = [&](auto t, auto fl, auto m) {
 #pragma omp parallel if (nnb > 1)
         {

@@ -248,6 +248,7 @@ private:
     double dt_initial_ = 0;                  // s, the step at the start (the restart check compares it)
     double dt_logged_ = 0;                   // s, the last step reported in the log
     void reduce_dt_after_insertion();        // the step after nodes were untied: never larger, smaller if needed
+    void share_nodes_with_contact(int n_thr);  // tells the contact which thread integrates each node
 
     // per-step scratch
     std::vector<double> tf_;  // 6 per triangle
