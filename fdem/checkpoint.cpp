@@ -135,7 +135,7 @@ std::string Simulation::checkpoint_path() const { return (std::filesystem::path(
 void Simulation::save_state(StateWriter& w) const {
 #if defined(__x86_64__) && defined(__GLIBCXX__)
     // (not saved: the energy audit's sums, a diagnostic of one process; after a restart it starts over)
-    static_assert(sizeof(Simulation) == 4984, "Simulation changed: update save_state/load_state (fdem/checkpoint.cpp) and this size");
+    static_assert(sizeof(Simulation) == 5008, "Simulation changed: update save_state/load_state (fdem/checkpoint.cpp) and this size");
     static_assert(sizeof(ActiveSupport) == 376, "ActiveSupport changed: update save_state/load_state and this size");
     static_assert(sizeof(ActiveLoad) == 296, "ActiveLoad changed: update save_state/load_state and this size");
 #endif
@@ -264,6 +264,8 @@ void Simulation::load_state(StateReader& r) {
     r.vec_sized(f_ext_, nd, "applied loads");
     r.vec(loaded_dofs_);
     for (int d : loaded_dofs_) check_index(d, static_cast<int>(nd), "loaded DOF");
+    node_loaded_.assign(nd / 2, 0);
+    for (int d : loaded_dofs_) node_loaded_[d / 2] = 1;
 
     r.section("gravity");
     r.pod(gravity_), r.pod(gravity_start_), r.pod(gravity_target_), r.pod(applied_gravity_);

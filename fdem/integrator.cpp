@@ -411,6 +411,7 @@ void Simulation::step() {
     double* xw = model_.x.data();
     double* vw = model_.v.data();
     const double* fext = f_ext_.data();
+    const unsigned char* loaded = node_loaded_.data();
     double* fmod = f_mod_.data();
     const uint8_t* kind = dof_kind_.data();
     const double* vpres = dof_vel_.data();
@@ -443,7 +444,9 @@ void Simulation::step() {
                         fi0 += r[0], fi1 += r[1];
                     }
                 }
-                const double fe0 = fext[2 * k] + gmass[k] * gx, fe1 = fext[2 * k + 1] + gmass[k] * gy;
+                // (f_ext_ is +0.0 off the loaded nodes, so 0.0 + m g is the same sum without reading it)
+                const bool ld = loaded[k] != 0;
+                const double fe0 = (ld ? fext[2 * k] : 0.0) + gmass[k] * gx, fe1 = (ld ? fext[2 * k + 1] : 0.0) + gmass[k] * gy;
                 scale += std::abs(fi0) + std::abs(fe0);
                 scale += std::abs(fi1) + std::abs(fe1);
                 S[0] += fi0, S[1] += fi1, S[2] += fe0, S[3] += fe1;

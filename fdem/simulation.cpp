@@ -58,6 +58,7 @@ Simulation::Simulation(CaseSpec spec, Model model, RunOptions options)
     dof_vel_.assign(2 * nn, 0.0);
     reaction_.assign(2 * nn, 0.0);
     f_ext_.assign(2 * nn, 0.0);
+    node_loaded_.assign(nn, 0);
     f_mod_.assign(2 * nn, 0.0);
     tf_.assign(6 * static_cast<std::size_t>(nt), 0.0);
     const int nb = std::max((nn + kBlock - 1) / kBlock, (nt + kBlock - 1) / kBlock);

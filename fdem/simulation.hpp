@@ -218,6 +218,7 @@ private:
     std::vector<ActiveLoad> loads_;
     std::vector<double> f_ext_;      // N, applied loads (no gravity), 2 per node
     std::vector<int> loaded_dofs_;   // DOFs with a nonzero f_ext_ entry
+    std::vector<unsigned char> node_loaded_;  // per node: 1 when a DOF of it is in loaded_dofs_ (derived, not saved)
     std::array<double, 2> gravity_{0, 0}, gravity_start_{0, 0}, gravity_target_{0, 0};
     std::array<double, 2> applied_gravity_{0, 0};  // m/s^2, after the tilt rotation
     double gravity_ramp_ = 0, tilt_rate_ = 0, tilt_deg_ = 0;

@@ -285,7 +285,7 @@ void Simulation::apply_time_dependent(double t) {
                             gf * (std::sin(a) * gravity_[0] + std::cos(a) * gravity_[1])};
     }
     // Loads.
-    for (int d : loaded_dofs_) f_ext_[d] = 0;
+    for (int d : loaded_dofs_) f_ext_[d] = 0, node_loaded_[d / 2] = 0;
     loaded_dofs_.clear();
     for (const ActiveLoad& l : loads_) {
         if (l.is_spring) {
@@ -325,6 +325,7 @@ void Simulation::apply_time_dependent(double t) {
             }
         }
     }
+    for (int d : loaded_dofs_) node_loaded_[d / 2] = 1;  // the node loop reads f_ext_ of these nodes only
     // Prescribed velocities for the update to t + dt (evaluated at the half step).
     const double th = t + 0.5 * dt_;
     for (std::size_t id = 0; id < supports_.size(); ++id) {
