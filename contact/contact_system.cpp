@@ -479,7 +479,7 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f)
             triangle_geometry(T, geom_[items_[i]], altitudes);
             geom_[items_[i]].faces = static_cast<int>(faces);
         }
-        // One pair: its kernel, or the history it forgets; pair_on_[p] says what the serial sums below take.
+        // One pair: its kernel, or the history it forgets; pair_on_[p] says what the scatter and sums below take.
         auto eval_pair = [&](int p) {
             const int a = pair_a_[p], b = pair_b_[p];
             pair_on_[p] = 0;
@@ -496,7 +496,7 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f)
                 if (!pair_hist_on_[p]) return;  // nothing to forget (the common case: apart since detection)
                 pair_hist_on_[p] = 0;
                 const double released = forget(&hist_[kHistPerPair * static_cast<size_t>(p)]);
-                if (released != 0.0) {  // booked in the serial sum below, no forces
+                if (released != 0.0) {  // booked in the sums below, no forces
                     pair_on_[p] = 2;
                     double* pe = &pair_e_[4 * static_cast<size_t>(p)];
                     pe[0] = pe[1] = pe[3] = 0.0;
@@ -532,7 +532,7 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f)
             }
         };
         // Blocks of kPairBlock pairs, each evaluated by one thread in pair order, which lists its pairs that have
-        // something to add (on_idx_, on_cnt_): the serial sums below walk those lists instead of every pair.
+        // something to add (on_idx_, on_cnt_): the scatter and sums below walk those lists instead of every pair.
 #pragma omp for schedule(dynamic, 1)
         for (int blk = 0; blk < n_blocks; ++blk) {
             const int p0 = blk * kPairBlock, p1 = std::min(np, p0 + kPairBlock);

@@ -216,12 +216,16 @@ void Simulation::build_ties() {
     if (stage_ >= 0) check_ties();
 }
 
+int Simulation::node_block_count() const {
+    return ties_ ? static_cast<int>(unit_block_.size()) - 1 : (model_.n_nodes() + kBlock - 1) / kBlock;
+}
+
 void Simulation::share_nodes_with_contact(int n_thr) {
     node_part_threads_ = n_thr;
     if (n_thr > 255) return;  // (the scatter then takes its own shares, node k to thread k * T / nn)
     // The node loop's blocks (units of tied copies, or kBlock nodes) and each thread's share of them, as in step().
     const int nn = model_.n_nodes();
-    const int nnb = ties_ ? static_cast<int>(unit_block_.size()) - 1 : (nn + kBlock - 1) / kBlock;
+    const int nnb = node_block_count();
     std::vector<unsigned char> owner(nn, 0);
     for (int t = 0; t < n_thr; ++t)
         for (int b = share_begin(nnb, n_thr, t); b < share_begin(nnb, n_thr, t + 1); ++b) {
@@ -398,7 +402,7 @@ void Simulation::step() {
     const double* u_inv = tied ? unit_inv_mass_.data() : nullptr;
     const double* tie_w = tied ? tie_w_.data() : nullptr;
     // blocks of units: kBlock nodes (tied: whole units of at least kBlock members, unit_block_)
-    const int nnb = tied ? static_cast<int>(unit_block_.size()) - 1 : (nn + kBlock - 1) / kBlock;
+    const int nnb = node_block_count();
     const int* u_block = tied ? unit_block_.data() : nullptr;
     const double alpha = alpha_;
     const double beta_mass = beta_mass_;

@@ -250,6 +250,7 @@ private:
     double dt_logged_ = 0;                   // s, the last step reported in the log
     void reduce_dt_after_insertion();        // the step after nodes were untied: never larger, smaller if needed
     void share_nodes_with_contact(int n_thr);  // tells the contact which thread integrates each node
+    int node_block_count() const;              // the node loop's blocks: units of tied copies, or kBlock nodes
 
     // per-step scratch
     std::vector<double> tf_;  // 6 per triangle
