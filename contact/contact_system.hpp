@@ -193,6 +193,13 @@ private:
     std::vector<double> box_;      // 8 per triangle, capable ones, this step: xmin, xmax, ymin, ymax (m) of the
                                    // triangle, then of its faces' end points (empty without faces)
     std::vector<TriangleGeometry> geom_;  // per triangle, capable ones, this step: what the pair kernel needs
+    // per thread: a block's pairs in their batch, and those pending in it (on lines of its own: the batch's counters
+    // change with every pair)
+    struct alignas(128) PairScratch {
+        PairBatch batch;
+        std::vector<int> pending;
+    };
+    std::vector<PairScratch> scratch_;
 
     double energy_normal_ = 0.0, energy_tangential_ = 0.0, dissipation_ = 0.0, damping_ = 0.0;
     double beta_ = 0.0;  // s

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 
 namespace fdem::contact {
@@ -238,82 +239,146 @@ void potential_weights(const double* x, bool distance_potential, double* w) {
 
 namespace {
 
-// Core of edge_in_triangle on the area coordinates of the segment ends: La[k] = L_k(p0), Lb[k] = L_k(p1).
-// The segment's length is computed only once it is known to enter the triangle; *len_out receives it then.
-bool edge_integrals(const double* La, const double* Lb, const double* p0, const double* p1, const double* w,
-                    double* out, double* len_out) {
-    // Both ends on the outside of one edge line: the segment misses the triangle. Exactly the cases in which the
-    // interval below comes out empty (or b = 0 with a < 0), taken before its three divisions.
-    for (int k = 0; k < 3; ++k)
-        if ((La[k] < 0.0 && Lb[k] <= 0.0) || (La[k] <= 0.0 && Lb[k] < 0.0)) return false;
-    // The part inside: L_k(s) = a_k + b_k s >= 0 for all k, s in [lo, hi]. The three roots -a_k / b_k are computed
-    // side by side and selected without branches (the sign of b_k is data, a branch on it mispredicts); b_k = 0 with
-    // a_k < 0 cannot reach here (both ends outside that edge line, rejected above).
-    double a[3], b[3], q[3];
+// Columns of PairBatch::soa_, one queued edge a row: inputs La[3], Lb[3] (area coordinates of the edge's ends p0, p1
+// in the other triangle), p0, p1 (m), the other's potential weights w[3]; results I[6] (as edge_in_triangle's out)
+// and the edge's length (m).
+enum : int { kLa = 0, kLb = 3, kP0x = 6, kP0y = 7, kP1x = 8, kP1y = 9, kW = 10, kI = 13, kLen = 19, kEdgeColumns = 20 };
+
+// (GCC's note that a 4-double vector is passed differently without AVX: such vectors are used only inside
+// edge_batch_avx2, where every function taking them is inlined)
+#pragma GCC diagnostic ignored "-Wpsabi"
+template <int W>
+struct Lanes {
+    typedef double d __attribute__((vector_size(8 * W)));
+    typedef long long m __attribute__((vector_size(8 * W)));
+};
+
+template <int W>
+inline __attribute__((always_inline)) typename Lanes<W>::d load_lanes(const double* p) {
+    typename Lanes<W>::d r;
+    std::memcpy(&r, p, sizeof r);
+    return r;
+}
+template <int W>
+inline __attribute__((always_inline)) void store_lanes(double* p, typename Lanes<W>::d v) {
+    std::memcpy(p, &v, sizeof v);
+}
+// x >= 0 (a squared length): the square root of each lane, one instruction (the lanes' std::sqrt become one packed
+// square root in the AVX2 function: this file is compiled without errno for the math functions, contact/CMakeLists.txt).
+template <int W>
+inline __attribute__((always_inline)) typename Lanes<W>::d sqrt_lanes(typename Lanes<W>::d x) {
+#if defined(__SSE2__)
+    if constexpr (W == 2) return __builtin_ia32_sqrtpd(x);
+#endif
+    for (int l = 0; l < W; ++l) x[l] = std::sqrt(x[l]);
+    return x;
+}
+
+// The part of each edge inside the other triangle and its integrals, W edges (rows i0 .. i0 + W - 1 of the columns
+// col[c] = &soa[c * cap]) side by side. Per edge, segment p0-p1 with L_k(s) = a_k + b_k s (a = La, b = Lb - La) in
+// the other triangle, whose potential is phi = min_k w_k L_k:
+//   inside where every L_k >= 0: s in [lo, hi] (both ends outside one edge line: no part inside);
+//   phi is linear between its breakpoints, where two branches w_j L_j, w_k L_k are equal, inside (lo, hi);
+//   with P0 = INT phi ds and P1 = INT s phi ds over the inside part (N0 = 1 - s, N1 = s),
+//     I0 = INT N0 phi dG = len (P0 - P1),  I1 = INT N1 phi dG = len P1,  I(2+k) = INT L_k phi dG = len (a_k P0 + b_k P1),
+//   and on a piece [s0, s1] with end values f0, f1 (trapezoid rule exact for linear, Simpson for the quadratic):
+//     INT phi ds = h (f0 + f1) / 2,  INT s phi ds = h (s0 (2 f0 + f1) + s1 (f0 + 2 f1)) / 6,  h = s1 - s0;
+//   I5 = (hi - lo) len, the length inside. loaded[i] = 1 when the edge enters with P0 > 0.
+// No branch on the data: every edge takes every operation; an edge's results are the same bits in any lane and at
+// any width (IEEE operations lane by lane; the selections are written as the scalar std::min / std::max they
+// replace: std::max(x, y) = x < y ? y : x, std::min(x, y) = y < x ? y : x, so that signed zeros come out the same).
+template <int W>
+inline __attribute__((always_inline)) void edge_rows(double* const* col, int i0, unsigned char* loaded) {
+    using vd = typename Lanes<W>::d;
+    using vm = typename Lanes<W>::m;
+    const vd zero = vd{}, one = zero + 1.0;
+    vd a[3], b[3], w[3];
+    vm out = vm{};  // lanes whose segment misses the triangle: both ends outside one edge line
     for (int k = 0; k < 3; ++k) {
-        a[k] = La[k];
-        b[k] = Lb[k] - La[k];
+        const vd La = load_lanes<W>(col[kLa + k] + i0), Lb = load_lanes<W>(col[kLb + k] + i0);
+        out |= ((La < 0.0) & (Lb <= 0.0)) | ((La <= 0.0) & (Lb < 0.0));
+        a[k] = La;
+        b[k] = Lb - La;
+        w[k] = load_lanes<W>(col[kW + k] + i0);
     }
-    for (int k = 0; k < 3; ++k) q[k] = -a[k] / (b[k] != 0.0 ? b[k] : 1.0);
-    double lo = 0.0, hi = 1.0;
+    // L_k(s) >= 0 for all k: s >= -a_k / b_k where b_k > 0, s <= -a_k / b_k where b_k < 0 (b_k = 0 with a_k < 0 is
+    // an edge outside, taken above).
+    vd lo = zero, hi = one;
     for (int k = 0; k < 3; ++k) {
-        lo = b[k] > 0.0 ? std::max(lo, q[k]) : lo;
-        hi = b[k] < 0.0 ? std::min(hi, q[k]) : hi;
+        const vd q = -a[k] / (b[k] != 0.0 ? b[k] : one);
+        lo = b[k] > 0.0 ? (lo < q ? q : lo) : lo;
+        hi = b[k] < 0.0 ? (q < hi ? q : hi) : hi;
     }
-    if (!(hi > lo)) return false;
-    const double len = std::sqrt((p1[0] - p0[0]) * (p1[0] - p0[0]) + (p1[1] - p0[1]) * (p1[1] - p0[1]));
-    *len_out = len;
-    // breakpoints of min_k w_k L_k(s) inside (lo, hi)
-    // (branch pairs (0,1), (0,2), (1,2) in that order, as three independent divisions; a breakpoint is appended
-    // without a branch: written, then counted if it lies inside)
-    double br[5];
-    int nb = 0;
-    br[nb++] = lo;
+    const vd dx = load_lanes<W>(col[kP1x] + i0) - load_lanes<W>(col[kP0x] + i0);
+    const vd dy = load_lanes<W>(col[kP1y] + i0) - load_lanes<W>(col[kP0y] + i0);
+    const vd len = sqrt_lanes<W>(dx * dx + dy * dy);
+    // Breakpoints of min_k w_k L_k(s), branch pairs (0,1), (0,2), (1,2); one outside (lo, hi) is put at hi, where
+    // it makes a piece of no length, which is skipped.
+    vd c[3];
     {
         static constexpr int kJ[3] = {0, 0, 1}, kK[3] = {1, 2, 2};
-        double num[3], den[3], sb[3];
         for (int i = 0; i < 3; ++i) {
             const int j = kJ[i], k = kK[i];
-            den[i] = w[j] * b[j] - w[k] * b[k];
-            num[i] = w[j] * a[j] - w[k] * a[k];
-        }
-        for (int i = 0; i < 3; ++i) sb[i] = -num[i] / (den[i] != 0.0 ? den[i] : 1.0);
-        for (int i = 0; i < 3; ++i) {
-            br[nb] = sb[i];
-            nb += (den[i] != 0.0 && sb[i] > lo && sb[i] < hi) ? 1 : 0;
+            const vd den = w[j] * b[j] - w[k] * b[k];
+            const vd num = w[j] * a[j] - w[k] * a[k];
+            const vd sb = -num / (den != 0.0 ? den : one);
+            c[i] = ((den != 0.0) & (sb > lo) & (sb < hi)) ? sb : hi;
         }
     }
-    br[nb++] = hi;
-    for (int i = 2; i < nb - 1; ++i)  // insertion sort of at most 3 interior breakpoints
-        for (int j = i; j > 1 && br[j] < br[j - 1]; --j) std::swap(br[j], br[j - 1]);
-    // phi is continuous and linear between breakpoints, so its values at the breakpoints (clamped at 0 against
-    // rounding) define it. With P0 = INT phi ds and P1 = INT s phi ds over the inside part (s in [0, 1] along the
-    // segment), N1 = s, N0 = 1 - s and L_k = a_k + b_k s:
-    //   INT N0 phi dG = len (P0 - P1),  INT N1 phi dG = len P1,  INT L_k phi dG = len (a_k P0 + b_k P1).
-    // On a piece [s0, s1] with end values f0, f1 (trapezoid rule exact for linear, Simpson for the quadratic):
-    //   INT phi ds = h (f0 + f1) / 2,  INT s phi ds = h (s0 (2 f0 + f1) + s1 (f0 + 2 f1)) / 6,  h = s1 - s0.
-    auto phi = [&](double s) {
-        double m = w[0] * (a[0] + b[0] * s);
-        m = std::min(m, w[1] * (a[1] + b[1] * s));
-        m = std::min(m, w[2] * (a[2] + b[2] * s));
-        return std::max(0.0, m);
+    auto order = [](vd& x, vd& y) __attribute__((always_inline)) {
+        const vm swap = y < x;
+        const vd mn = swap ? y : x, mx = swap ? x : y;
+        x = mn, y = mx;
     };
-    double P0 = 0.0, P1 = 0.0;
-    double s0 = br[0], f0 = phi(s0);
-    for (int i = 1; i < nb; ++i) {
-        const double s1 = br[i];
-        if (!(s1 > s0)) continue;
-        const double f1 = phi(s1), h = s1 - s0;
-        P0 += 0.5 * h * (f0 + f1);
-        P1 += h * (s0 * (2.0 * f0 + f1) + s1 * (f0 + 2.0 * f1)) * (1.0 / 6.0);
-        s0 = s1;
-        f0 = f1;
+    order(c[0], c[1]), order(c[1], c[2]), order(c[0], c[1]);
+    // phi clamped at 0 against rounding
+    auto phi = [&](vd s) __attribute__((always_inline)) {
+        vd m = w[0] * (a[0] + b[0] * s);
+        vd t = w[1] * (a[1] + b[1] * s);
+        m = t < m ? t : m;
+        t = w[2] * (a[2] + b[2] * s);
+        m = t < m ? t : m;
+        return 0.0 < m ? m : zero;
+    };
+    const vd br[4] = {c[0], c[1], c[2], hi};
+    vd P0 = zero, P1 = zero, s0 = lo, f0 = phi(lo);
+    for (int i = 0; i < 4; ++i) {
+        const vd s1 = br[i];
+        const vm piece = s1 > s0;
+        const vd f1 = phi(s1), h = s1 - s0;
+        P0 = piece ? P0 + 0.5 * h * (f0 + f1) : P0;
+        P1 = piece ? P1 + h * (s0 * (2.0 * f0 + f1) + s1 * (f0 + 2.0 * f1)) * (1.0 / 6.0) : P1;
+        s0 = piece ? s1 : s0;
+        f0 = piece ? f1 : f0;
     }
-    out[0] = len * (P0 - P1);
-    out[1] = len * P1;
-    for (int k = 0; k < 3; ++k) out[2 + k] = len * (a[k] * P0 + b[k] * P1);
-    out[5] = (hi - lo) * len;
-    return P0 > 0.0;
+    store_lanes<W>(col[kI] + i0, len * (P0 - P1));
+    store_lanes<W>(col[kI + 1] + i0, len * P1);
+    for (int k = 0; k < 3; ++k) store_lanes<W>(col[kI + 2 + k] + i0, len * (a[k] * P0 + b[k] * P1));
+    store_lanes<W>(col[kI + 5] + i0, (hi - lo) * len);
+    store_lanes<W>(col[kLen] + i0, len);
+    const vm in = ~out & (hi > lo) & (P0 > 0.0);
+    for (int l = 0; l < W; ++l) loaded[i0 + l] = in[l] != 0 ? 1 : 0;
+}
+
+template <int W>
+void edge_batch(double* const* col, int n, unsigned char* loaded) {
+    for (int i0 = 0; i0 < n; i0 += W) edge_rows<W>(col, i0, loaded);
+}
+#if defined(__x86_64__) && defined(__GNUC__)
+__attribute__((target("avx2"))) void edge_batch_avx2(double* const* col, int n, unsigned char* loaded) {
+    for (int i0 = 0; i0 < n; i0 += 4) edge_rows<4>(col, i0, loaded);
+}
+int default_lanes() { return __builtin_cpu_supports("avx2") ? 4 : 2; }
+#else
+void edge_batch_avx2(double* const* col, int n, unsigned char* loaded) { edge_batch<4>(col, n, loaded); }
+int default_lanes() { return 2; }
+#endif
+int g_lanes = default_lanes();
+
+void run_edge_batch(double* const* col, int n, unsigned char* loaded) {
+    if (g_lanes == 4) edge_batch_avx2(col, n, loaded);
+    else if (g_lanes == 2) edge_batch<2>(col, n, loaded);
+    else edge_batch<1>(col, n, loaded);
 }
 
 // Area coordinates in T (affine coefficients g) of the three vertices of X: L[3 v + k] = L_k(x_v).
@@ -332,14 +397,21 @@ inline bool separated(const double* L) {
 }  // namespace
 
 bool edge_in_triangle(const double* p0, const double* p1, const double* T, const double* w, double* out) {
-    double g[9], La[3], Lb[3];
+    double g[9], row[kEdgeColumns];
+    double* col[kEdgeColumns];
+    for (int c = 0; c < kEdgeColumns; ++c) col[c] = row + c;
     area_coordinates(T, g);
     for (int k = 0; k < 3; ++k) {
-        La[k] = affine(g + 3 * k, p0[0], p0[1]);
-        Lb[k] = affine(g + 3 * k, p1[0], p1[1]);
+        row[kLa + k] = affine(g + 3 * k, p0[0], p0[1]);
+        row[kLb + k] = affine(g + 3 * k, p1[0], p1[1]);
+        row[kW + k] = w[k];
     }
-    double len;
-    return edge_integrals(La, Lb, p0, p1, w, out, &len);
+    row[kP0x] = p0[0], row[kP0y] = p0[1], row[kP1x] = p1[0], row[kP1y] = p1[1];
+    unsigned char in = 0;
+    edge_rows<1>(col, 0, &in);
+    if (!in) return false;
+    for (int i = 0; i < 6; ++i) out[i] = row[kI + i];
+    return true;
 }
 
 namespace {
@@ -397,18 +469,36 @@ bool pair_contact(const double* xa, const double* xb, const double* va, const do
 bool pair_contact(const TriangleGeometry& A, const TriangleGeometry& B, const double* va, const double* vb,
                   const PairParams& params, bool want_energy, double* hist, PairResult& r, unsigned held,
                   double* f12) {
-    double* fa = f12 ? f12 : r.fa;
-    double* fb = f12 ? f12 + 6 : r.fb;
-    if (!f12)
-        for (int i = 0; i < 6; ++i) r.fa[i] = r.fb[i] = 0.0;
-    r.energy_normal = r.energy_tangential = r.dissipation = r.damping = 0.0;
-    r.active_edges = 0;
-    r.held = 0;
-    // A slot that may hold state and is not loaded now lets its spring go; the others are all zero already and
-    // are left untouched (a pair's six slots are 288 bytes, most of them idle: not read, not dirtied).
-    auto release = [&](int s) {
-        if ((held >> s) & 1u) r.dissipation += release_slot(hist + kHistPerEdge * s);
-    };
+    thread_local PairBatch batch;
+    batch.clear(1);
+    if (!batch.begin(A, B, params, want_energy, hist, r, held)) return false;
+    batch.integrate();
+    return batch.end(A, B, va, vb, params, want_energy, hist, r, held, f12);
+}
+
+int PairBatch::lanes() { return g_lanes; }
+
+int PairBatch::set_lanes(int w) {
+    const int old = g_lanes;
+    if (w == 1 || w == 2 || (w == 4 && default_lanes() == 4)) g_lanes = w;
+    return old;
+}
+
+void PairBatch::clear(int max_pairs) {
+    static_assert(kColumns == kEdgeColumns, "PairBatch::kColumns");
+    n_edges_ = 0, n_pending_ = 0, next_pending_ = 0, next_edge_ = 0;
+    if (static_cast<int>(tested_.size()) < max_pairs) tested_.resize(max_pairs);
+    const int cap = (6 * max_pairs + 3) / 4 * 4;  // whole vectors of 4 lanes
+    if (cap > cap_) {
+        soa_.assign(static_cast<std::size_t>(kEdgeColumns) * cap, 0.0);
+        loaded_.assign(cap, 0);
+        cap_ = cap;
+    }
+    for (int c = 0; c < kEdgeColumns; ++c) col_[c] = soa_.data() + static_cast<std::size_t>(c) * cap_;
+}
+
+bool PairBatch::begin(const TriangleGeometry& A, const TriangleGeometry& B, const PairParams& p, bool want_energy,
+                      double* hist, PairResult& r, unsigned held) {
     const double* xa = A.x;
     const double* xb = B.x;
     // Area coordinates of each triangle's vertices in the other, for the edges that are faces (a triangle without
@@ -424,41 +514,85 @@ bool pair_contact(const TriangleGeometry& A, const TriangleGeometry& B, const do
         apart = separated(b_in_a);
     }
     if (apart || (A.faces | B.faces) == 0) {
-        for (int s = 0; s < 6; ++s) release(s);
+        for (int i = 0; i < 6; ++i) r.fa[i] = r.fb[i] = 0.0;
+        r.energy_normal = r.energy_tangential = r.dissipation = r.damping = 0.0;
+        r.active_edges = 0;
+        r.held = 0;
+        // A slot that may hold state lets its spring go (the others are all zero already).
+        for (int s = 0; s < 6; ++s)
+            if ((held >> s) & 1u) r.dissipation += release_slot(hist + kHistPerEdge * s);
         // Triangles with no face (inside their bodies) that overlap still hold energy: the loads of their edges
         // went to the faces of their neighbours, whose pairs carry them. (pair_energy is 0 when they are apart.)
-        if (!apart && want_energy) r.energy_normal = pair_energy(A, B, params);
+        if (!apart && want_energy) r.energy_normal = pair_energy(A, B, p);
         return false;
     }
-    if (f12)
-        for (int i = 0; i < 12; ++i) f12[i] = 0.0;
+    // Queue the faces' edges in slot order (edge e of A, then edge e of B, e = 0, 1, 2): end() loads them in it.
+    static constexpr double kThree[3] = {3.0, 3.0, 3.0};
+    const double* wa = p.distance_potential ? A.h : kThree;
+    const double* wb = p.distance_potential ? B.h : kThree;
+    unsigned tested = 0;
+    double* const* col = col_;
+    auto queue = [&](const double* L, const double* X, const double* w, int e) {
+        const int e1 = (e + 1) % 3;
+        const int i = n_edges_++;
+        for (int k = 0; k < 3; ++k) {
+            col[kLa + k][i] = L[3 * e + k];
+            col[kLb + k][i] = L[3 * e1 + k];
+            col[kW + k][i] = w[k];
+        }
+        col[kP0x][i] = X[2 * e], col[kP0y][i] = X[2 * e + 1];
+        col[kP1x][i] = X[2 * e1], col[kP1y][i] = X[2 * e1 + 1];
+    };
+    for (int e = 0; e < 3; ++e) {
+        if ((A.faces >> e) & 1) queue(a_in_b, xa, wb, e), tested |= 1u << e;
+        if ((B.faces >> e) & 1) queue(b_in_a, xb, wa, e), tested |= 1u << (3 + e);
+    }
+    tested_[n_pending_++] = static_cast<unsigned char>(tested);
+    return true;
+}
+
+void PairBatch::integrate() {
+    run_edge_batch(col_, n_edges_, loaded_.data());
+}
+
+bool PairBatch::end(const TriangleGeometry& A, const TriangleGeometry& B, const double* va, const double* vb,
+                    const PairParams& params, bool want_energy, double* hist, PairResult& r, unsigned held,
+                    double* f12) {
+    const unsigned tested = tested_[next_pending_++];
+    double* fa = f12 ? f12 : r.fa;
+    double* fb = f12 ? f12 + 6 : r.fb;
+    for (int i = 0; i < 6; ++i) fa[i] = fb[i] = 0.0;
+    r.energy_normal = r.energy_tangential = r.dissipation = r.damping = 0.0;
+    r.active_edges = 0;
+    r.held = 0;
     PairParams p = params;
     if (p.p_t > 0.0 || (p.beta > 0.0 && p.p_n > 0.0)) {
         const double inv_h = A.inv_h_min + B.inv_h_min;  // 1/m
         if (p.p_t > 0.0) p.k_s = 3.0 * p.p_t * inv_h;
         if (p.beta > 0.0 && p.p_n > 0.0) p.k_n_area = 3.0 * p.p_n * inv_h;
     }
-    static constexpr double kThree[3] = {3.0, 3.0, 3.0};
-    const double* wa = p.distance_potential ? A.h : kThree;
-    const double* wb = p.distance_potential ? B.h : kThree;
-    double I[6], len;
-    for (int e = 0; e < 3; ++e) {
-        const int e1 = (e + 1) % 3;
-        if (((A.faces >> e) & 1) && edge_integrals(a_in_b + 3 * e, a_in_b + 3 * e1, xa + 2 * e, xa + 2 * e1, wb, I, &len)) {
-            load_edge(xa, va, fa, vb, fb, e, len, I, p, hist + kHistPerEdge * e, r);
-            ++r.active_edges;
-            r.held |= 1u << e;
-        } else {
-            release(e);
+    double* const* col = col_;
+    // Slots in order (A's edge e, then B's edge e): a loaded edge carries its load, any other slot that may hold
+    // state lets its spring go (a pair's six slots are 288 bytes, most of them idle: not read, not dirtied).
+    for (int e = 0; e < 3; ++e)
+        for (int side = 0; side < 2; ++side) {
+            const int s = 3 * side + e;
+            bool on = false;
+            if ((tested >> s) & 1u) {
+                const int i = next_edge_++;
+                if (loaded_[i]) {
+                    double I[6];
+                    for (int k = 0; k < 6; ++k) I[k] = col[kI + k][i];
+                    const double len = col[kLen][i];
+                    if (side == 0) load_edge(A.x, va, fa, vb, fb, e, len, I, p, hist + kHistPerEdge * s, r);
+                    else load_edge(B.x, vb, fb, va, fa, e, len, I, p, hist + kHistPerEdge * s, r);
+                    ++r.active_edges;
+                    r.held |= 1u << s;
+                    on = true;
+                }
+            }
+            if (!on && ((held >> s) & 1u)) r.dissipation += release_slot(hist + kHistPerEdge * s);
         }
-        if (((B.faces >> e) & 1) && edge_integrals(b_in_a + 3 * e, b_in_a + 3 * e1, xb + 2 * e, xb + 2 * e1, wa, I, &len)) {
-            load_edge(xb, vb, fb, va, fa, e, len, I, p, hist + kHistPerEdge * (3 + e), r);
-            ++r.active_edges;
-            r.held |= 1u << (3 + e);
-        } else {
-            release(3 + e);
-        }
-    }
     if (want_energy) r.energy_normal = pair_energy(A, B, p);
     return r.active_edges > 0;
 }

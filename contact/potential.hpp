@@ -31,6 +31,8 @@
 //   Both ends get the same distributed load at the same points: sum of forces and of moments are zero exactly.
 #pragma once
 
+#include <vector>
+
 namespace fdem::contact {
 
 constexpr int kHistPerEdge = 6;                  // doubles of friction state per loaded-edge slot
@@ -108,6 +110,45 @@ bool pair_contact(const double* xa, const double* xb, const double* va, const do
 bool pair_contact(const TriangleGeometry& a, const TriangleGeometry& b, const double* va, const double* vb,
                   const PairParams& p, bool want_energy, double* hist, PairResult& out, unsigned held = 0x3f,
                   double* f12 = nullptr);
+
+// pair_contact for many pairs, in three stages, so that the edge integrals of many pairs run side by side, several
+// edges per vector instruction (each edge takes the same operations in the same order as alone: the same bits for
+// any batch and any vector width). pair_contact itself is these three stages on one pair.
+//   for each pair: begin(...)  -> false: settled (apart or faceless), out as pair_contact leaves it
+//   integrate()                   the edge integrals of every pending pair
+//   for each pair begin kept, in begin's order: end(...) with the same a, b, p, want_energy, hist, held
+class PairBatch {
+public:
+    // Scratch: a copy starts empty (col_ points into the object's own soa_).
+    PairBatch() = default;
+    PairBatch(const PairBatch&) : PairBatch() {}
+    PairBatch& operator=(const PairBatch&) { return *this; }
+    // Separating-axis test and the pair's candidate edges (faces of one whose end points' area coordinates in the
+    // other are queued). Returns false when the pair needs no edge integral: out and hist are then as pair_contact
+    // leaves them when it returns false (out.fa, out.fb zero). True: the pair is pending.
+    bool begin(const TriangleGeometry& a, const TriangleGeometry& b, const PairParams& p, bool want_energy,
+               double* hist, PairResult& out, unsigned held = 0x3f);
+    void integrate();
+    // The next pending pair: loads its edges (pair_contact's f12 and return value).
+    bool end(const TriangleGeometry& a, const TriangleGeometry& b, const double* va, const double* vb,
+             const PairParams& p, bool want_energy, double* hist, PairResult& out, unsigned held = 0x3f,
+             double* f12 = nullptr);
+    // Forget all pairs and make room for up to max_pairs more (the storage stays).
+    void clear(int max_pairs);
+
+    // Vector width of integrate() (edges per instruction): 4 where the processor has AVX2 (chosen when the
+    // program starts), else 2 (SSE2, every x86-64). set_lanes(1, 2 or 4) forces one, for tests; returns the old one.
+    static int lanes();
+    static int set_lanes(int w);
+
+private:
+    static constexpr int kColumns = 20;  // per queued edge: 13 inputs, 7 results (potential.cpp)
+    int n_edges_ = 0, n_pending_ = 0, next_pending_ = 0, next_edge_ = 0, cap_ = 0;
+    std::vector<double> soa_;            // kColumns columns of cap_ edges
+    double* col_[kColumns] = {};         // the columns, set by clear()
+    std::vector<unsigned char> tested_;  // per pending pair: bit s set when slot s's edge was queued
+    std::vector<unsigned char> loaded_;  // per queued edge: it enters the other triangle with load
+};
 
 // t INT_{A∩B} (c phi_A + c phi_B) dA (J): the pair's normal contact energy, by polygon clipping.
 double pair_energy(const double* xa, const double* xb, const PairParams& p);

@@ -12,6 +12,7 @@
 #include <set>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "contact/contact_system.hpp"
 #include "contact/nbs.hpp"
@@ -368,6 +369,113 @@ TEST_CASE("pair_contact writing its forces to the caller's slots gives the same 
         }
     }
     CHECK(loaded > 1000);
+}
+
+TEST_CASE("PairBatch: many pairs side by side give pair_contact's bits one pair at a time, at every vector width",
+          "[unit]") {
+    std::mt19937_64 rng(23);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    std::uniform_int_distribution<int> grid(-3, 3), face_bits(0, 7);
+    // A triangle, counter-clockwise and not degenerate: random, or (every third pair) on a grid of 0.25 so that
+    // vertices lie exactly on the other triangle's edge lines and edges run parallel to the other's.
+    auto triangle = [&](bool on_grid, double ox, double oy, double* x) {
+        for (;;) {
+            for (int i = 0; i < 3; ++i) {
+                x[2 * i] = on_grid ? 0.25 * grid(rng) : ox + 0.6 * u(rng);
+                x[2 * i + 1] = on_grid ? 0.25 * grid(rng) : oy + 0.6 * u(rng);
+            }
+            const double a2 = (x[2] - x[0]) * (x[5] - x[1]) - (x[4] - x[0]) * (x[3] - x[1]);
+            if (std::abs(a2) < 1e-3) continue;
+            if (a2 < 0) std::swap(x[2], x[4]), std::swap(x[3], x[5]);
+            return;
+        }
+    };
+    const int n = 3000;
+    for (const bool distance : {false, true}) {
+        PairParams p;
+        p.thickness = 0.2;
+        p.c = distance ? 5e10 : 1e9;
+        p.distance_potential = distance;
+        p.p_t = 1e9;
+        p.mu = 0.6;
+        p.dt = 1e-5;
+        p.beta = 1e-4;
+        p.p_n = 1e9;
+        std::vector<TriangleGeometry> A(n), B(n);
+        std::vector<double> va(6 * n), vb(6 * n);
+        for (int i = 0; i < n; ++i) {
+            double xa[6], xb[6];
+            const bool on_grid = i % 3 == 0;
+            triangle(on_grid, 0.0, 0.0, xa);
+            triangle(on_grid, 0.3 * u(rng), 0.3 * u(rng), xb);
+            triangle_geometry(xa, A[i], distance);
+            triangle_geometry(xb, B[i], distance);
+            A[i].faces = i % 5 == 0 ? 7 : face_bits(rng);
+            B[i].faces = i % 7 == 0 ? 7 : face_bits(rng);
+            for (int k = 0; k < 6; ++k) va[6 * i + k] = u(rng), vb[6 * i + k] = u(rng);
+        }
+        // The reference: pair_contact one pair at a time with one lane (the scalar arithmetic); three steps each,
+        // the friction state carried.
+        const int lanes0 = PairBatch::set_lanes(1);
+        std::vector<double> h_ref(kHistPerPair * static_cast<std::size_t>(n), 0.0);
+        std::vector<PairResult> r_ref(3 * n);
+        std::vector<char> on_ref(3 * n);
+        int loaded = 0;
+        for (int step = 0; step < 3; ++step)
+            for (int i = 0; i < n; ++i) {
+                on_ref[3 * i + step] = pair_contact(A[i], B[i], &va[6 * i], &vb[6 * i], p, true,
+                                                    &h_ref[kHistPerPair * static_cast<std::size_t>(i)], r_ref[3 * i + step]);
+                loaded += on_ref[3 * i + step];
+            }
+        CHECK(loaded > n / 2);
+        for (const int lanes : {1, 2, 4}) {
+            PairBatch::set_lanes(lanes);
+            if (PairBatch::lanes() != lanes) {
+                WARN("this processor has no AVX2: 4 lanes not checked");
+                continue;
+            }
+            INFO("lanes " << lanes << ", distance potential " << distance);
+            std::vector<double> h(kHistPerPair * static_cast<std::size_t>(n), 0.0);
+            std::vector<unsigned> held(n, 0x3f);
+            PairBatch batch;
+            for (int step = 0; step < 3; ++step)
+                for (int i0 = 0; i0 < n; i0 += 97) {  // batches of 97 pairs: every lane position in turn
+                    const int i1 = std::min(n, i0 + 97);
+                    batch.clear(97);
+                    std::vector<int> pending;
+                    std::vector<PairResult> r(n);
+                    std::vector<char> on(n, 0);
+                    for (int i = i0; i < i1; ++i) {
+                        if (batch.begin(A[i], B[i], p, true, &h[kHistPerPair * static_cast<std::size_t>(i)], r[i], held[i]))
+                            pending.push_back(i);
+                    }
+                    batch.integrate();
+                    for (int i : pending) {
+                        double f12[12];
+                        std::fill(f12, f12 + 12, 7.0);
+                        on[i] = batch.end(A[i], B[i], &va[6 * i], &vb[6 * i], p, true,
+                                          &h[kHistPerPair * static_cast<std::size_t>(i)], r[i], held[i], f12);
+                        if (on[i]) {
+                            REQUIRE(std::memcmp(f12, r_ref[3 * i + step].fa, sizeof r[i].fa) == 0);
+                            REQUIRE(std::memcmp(f12 + 6, r_ref[3 * i + step].fb, sizeof r[i].fb) == 0);
+                        }
+                    }
+                    for (int i = i0; i < i1; ++i) {
+                        const PairResult& q = r_ref[3 * i + step];
+                        REQUIRE(on[i] == on_ref[3 * i + step]);
+                        REQUIRE(r[i].held == q.held);
+                        REQUIRE(r[i].active_edges == q.active_edges);
+                        REQUIRE(std::memcmp(&r[i].energy_normal, &q.energy_normal, sizeof(double)) == 0);
+                        REQUIRE(std::memcmp(&r[i].energy_tangential, &q.energy_tangential, sizeof(double)) == 0);
+                        REQUIRE(std::memcmp(&r[i].dissipation, &q.dissipation, sizeof(double)) == 0);
+                        REQUIRE(std::memcmp(&r[i].damping, &q.damping, sizeof(double)) == 0);
+                        held[i] = r[i].held;
+                    }
+                }
+            REQUIRE(std::memcmp(h.data(), h_ref.data(), h.size() * sizeof(double)) == 0);
+        }
+        PairBatch::set_lanes(lanes0);
+    }
 }
 
 TEST_CASE("triangle_geometry without altitudes: the same area coordinates and 1 / smallest altitude, to the bit",
