@@ -404,6 +404,7 @@ void ContactSystem::detect(const double* x) {
     pair_hist_on_.swap(non);
     pair_law_.resize(np);
     for (int p = 0; p < np; ++p) pair_law_[p] = law_of(pair_a_[p], pair_b_[p]);
+    set_pair_nodes();
     pair_f_.resize(12 * static_cast<size_t>(np));
     pair_e_.resize(4 * static_cast<size_t>(np));
     pair_on_.resize(np);
@@ -416,6 +417,17 @@ void ContactSystem::detect(const double* x) {
     ++stats_.detections;
     stats_.candidate_pairs = np;
     stats_.time_detection += omp_get_wtime() - t0;
+}
+
+void ContactSystem::set_pair_nodes() {
+    const std::size_t np = pair_a_.size();
+    pair_nodes_.resize(6 * np);
+    for (std::size_t p = 0; p < np; ++p)
+        for (int k = 0; k < 3; ++k) {
+            pair_nodes_[6 * p + k] = tri_[3 * pair_a_[p] + k];
+            pair_nodes_[6 * p + 3 + k] = tri_[3 * pair_b_[p] + k];
+        }
+    own_threads_ = 0;
 }
 
 void ContactSystem::step(const double* x, const double* v, double dt, double* f) {
@@ -463,7 +475,22 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f)
     double en = 0.0, et = 0.0, ed = 0.0, ec = 0.0;  // the sums in pair order (thread 0)
     int active = 0;
     if (scratch_.size() < static_cast<std::size_t>(omp_get_max_threads())) scratch_.resize(omp_get_max_threads());
-#pragma omp parallel if (np > kParallelMin || n_items > kParallelMin)
+    const bool parallel = np > kParallelMin || n_items > kParallelMin;
+    // The scatter's node masks for the team about to run (made again after a detection or new owners).
+    const int team = parallel ? omp_get_max_threads() : 1;
+    if (own_threads_ != team) {
+        const unsigned char* own =
+            owner_parts_ == team && owner_.size() == static_cast<std::size_t>(n_nodes_) ? owner_.data() : nullptr;
+        pair_mask_.assign(static_cast<std::size_t>(team) * np, 0);
+        for (int p = 0; p < np; ++p)
+            for (int s = 0; s < 6; ++s) {
+                const int k = pair_nodes_[6 * static_cast<size_t>(p) + s];
+                const int t = team == 1 ? 0 : own ? own[k] : static_cast<int>(static_cast<long long>(k) * team / n_nodes_);
+                pair_mask_[static_cast<std::size_t>(t) * np + p] |= static_cast<unsigned char>(1u << s);
+            }
+        own_threads_ = team;
+    }
+#pragma omp parallel if (parallel)
     {
 #pragma omp for schedule(static)
         for (int i = 0; i < n_items; ++i) {
@@ -587,6 +614,8 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f)
         auto mine = [&](int k) {
             return T == 1 || (own ? own[k] == me : static_cast<long long>(k) * T / n_nodes_ == me);
         };
+        // this thread's bits of each pair's nodes (a team of another size than the masks': looked up node by node)
+        const unsigned char* mask = own_threads_ == T ? &pair_mask_[static_cast<std::size_t>(me) * np] : nullptr;
         for (int blk = 0; blk < n_blocks; ++blk) {
             for (int i = 0; i < on_cnt_[blk]; ++i) {
                 const int p = on_idx_[blk * kPairBlock + i];
@@ -595,12 +624,17 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f)
                     if (me == 0) en += pe[0], ed += pe[2];
                     continue;
                 }
-                const int* ta = tri_ + 3 * pair_a_[p];
-                const int* tb = tri_ + 3 * pair_b_[p];
-                const double* pf = &pair_f_[12 * static_cast<size_t>(p)];
-                for (int k = 0; k < 3; ++k) {
-                    if (mine(ta[k])) f[2 * ta[k]] += pf[2 * k], f[2 * ta[k] + 1] += pf[2 * k + 1];
-                    if (mine(tb[k])) f[2 * tb[k]] += pf[6 + 2 * k], f[2 * tb[k] + 1] += pf[6 + 2 * k + 1];
+                const int* nd = &pair_nodes_[6 * static_cast<size_t>(p)];
+                unsigned m = 0;
+                if (mask) m = mask[p];
+                else
+                    for (int s = 0; s < 6; ++s) m |= mine(nd[s]) ? 1u << s : 0u;
+                if (m) {
+                    const double* pf = &pair_f_[12 * static_cast<size_t>(p)];
+                    for (int k = 0; k < 3; ++k) {
+                        if ((m >> k) & 1u) f[2 * nd[k]] += pf[2 * k], f[2 * nd[k] + 1] += pf[2 * k + 1];
+                        if ((m >> (3 + k)) & 1u) f[2 * nd[3 + k]] += pf[6 + 2 * k], f[2 * nd[3 + k] + 1] += pf[6 + 2 * k + 1];
+                    }
                 }
                 if (me == 0) {
                     ++active;
@@ -645,7 +679,7 @@ double ContactSystem::normal_energy_at(const double* x) const {
 // add the field to save_state and load_state if it carries from one step to the next, then update the size.
 void ContactSystem::save_state(StateWriter& w) const {
 #if defined(__x86_64__) && defined(__GLIBCXX__)
-    static_assert(sizeof(ContactSystem) == 1360, "ContactSystem changed: update save_state/load_state and this size");
+    static_assert(sizeof(ContactSystem) == 1416, "ContactSystem changed: update save_state/load_state and this size");
 #endif
     w.section("contact");
     w.pod(static_cast<std::int32_t>(kHistPerPair));
@@ -690,6 +724,7 @@ void ContactSystem::load_state(StateReader& r) {
             throw StateError("contact: pair index out of range");
     for (int t : items_)
         if (t < 0 || t >= n_tri_) throw StateError("contact: item index out of range");
+    set_pair_nodes();
     r.pod(energy_normal_), r.pod(energy_tangential_), r.pod(dissipation_), r.pod(damping_);
     r.pod(beta_), r.pod(energy_current_), r.pod(opt_.compute_energy);
     r.pod(stats_.detections), r.pod(stats_.candidate_pairs), r.pod(stats_.active_pairs), r.pod(stats_.pair_evaluations);

@@ -9,8 +9,8 @@
 //   resolved law table, hist[kHistPerPair p] friction state (slots as in potential.hpp), pair_hist_on[p] bit s
 //   set when slot s of hist may hold something (0: all zero, nothing to forget or read). Per law: law_prm[l], the pair kernel's parameters
 //   resolved once per step (they depend on the law, dt and the dashpot only). Per-pair scratch
-//   (forces 12 p, energies) is written by one thread per pair in parallel and then added serially in pair order,
-//   so the result has the same bits for any thread count.
+//   (forces 12 p, energies) is written by one thread per pair in parallel and then added in pair order, each node's
+//   forces by one thread (set_node_owner), so the result has the same bits for any thread count.
 //   "No index" is -1.
 //
 // HOW THE ENGINE USES IT
@@ -110,6 +110,7 @@ public:
     void set_node_owner(std::vector<unsigned char> owner, int parts) {
         owner_ = std::move(owner);
         owner_parts_ = parts;
+        own_threads_ = 0;  // the pairs' node masks follow
     }
 
     // J, at the last step (the normal part only if that step computed energies, else 0)
@@ -145,6 +146,7 @@ private:
     std::vector<double> node_stiffness(const double* x) const;
     void update_faces();
     void detect(const double* x);
+    void set_pair_nodes();  // pair_nodes_ from the pair list; the masks to be made again
     int law_of(int ta, int tb) const;
 
     const int* tri_;
@@ -190,6 +192,11 @@ private:
     std::vector<int> on_idx_, on_cnt_;  // per block of pairs: its pairs with pair_on_ set, in order, and how many
     std::vector<unsigned char> owner_;  // per node: the thread that adds its forces (set_node_owner), for owner_parts_
     int owner_parts_ = 0;
+    // Per pair, for the scatter: its six nodes (A's, then B's), and per thread t the bits of those that t adds
+    // (pair_mask_[t * n_pairs + p]), for own_threads_ threads (0: to be made; detection and set_node_owner reset it).
+    std::vector<int> pair_nodes_;
+    std::vector<unsigned char> pair_mask_;
+    int own_threads_ = 0;
     std::vector<double> box_;      // 8 per triangle, capable ones, this step: xmin, xmax, ymin, ymax (m) of the
                                    // triangle, then of its faces' end points (empty without faces)
     std::vector<TriangleGeometry> geom_;  // per triangle, capable ones, this step: what the pair kernel needs
