@@ -26,10 +26,8 @@ constexpr int kParallelMin = 4096;
 constexpr int kPairBlock = 512;
 // Pairs per batch of edge integrals (PairBatch): its queued edges (about one per pair, 160 bytes each) and the pairs'
 // geometry and history stay in the core's first-level cache from the first stage to the loads.
-#ifndef FDEM_BATCH_PAIRS
-#define FDEM_BATCH_PAIRS 64
-#endif
-constexpr int kBatchPairs = FDEM_BATCH_PAIRS;
+// (32 and 64 measured alike, 512 took as long as one pair at a time: lourenco2005/RESULTS.md §39)
+constexpr int kBatchPairs = 64;
 
 // Whether a pair's friction state holds anything (some slot not all zero).
 inline bool any_history(const double* h) {
@@ -485,7 +483,9 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f)
         for (int p = 0; p < np; ++p)
             for (int s = 0; s < 6; ++s) {
                 const int k = pair_nodes_[6 * static_cast<size_t>(p) + s];
-                const int t = team == 1 ? 0 : own ? own[k] : static_cast<int>(static_cast<long long>(k) * team / n_nodes_);
+                const int t = team == 1 ? 0
+                              : own     ? own[k]
+                                        : static_cast<int>(static_cast<long long>(k) * team / n_nodes_);
                 pair_mask_[static_cast<std::size_t>(t) * np + p] |= static_cast<unsigned char>(1u << s);
             }
         own_threads_ = team;
@@ -633,7 +633,8 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f)
                     const double* pf = &pair_f_[12 * static_cast<size_t>(p)];
                     for (int k = 0; k < 3; ++k) {
                         if ((m >> k) & 1u) f[2 * nd[k]] += pf[2 * k], f[2 * nd[k] + 1] += pf[2 * k + 1];
-                        if ((m >> (3 + k)) & 1u) f[2 * nd[3 + k]] += pf[6 + 2 * k], f[2 * nd[3 + k] + 1] += pf[6 + 2 * k + 1];
+                        if ((m >> (3 + k)) & 1u)
+                            f[2 * nd[3 + k]] += pf[6 + 2 * k], f[2 * nd[3 + k] + 1] += pf[6 + 2 * k + 1];
                     }
                 }
                 if (me == 0) {

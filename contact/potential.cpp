@@ -264,7 +264,8 @@ inline __attribute__((always_inline)) void store_lanes(double* p, typename Lanes
     std::memcpy(p, &v, sizeof v);
 }
 // x >= 0 (a squared length): the square root of each lane, one instruction (the lanes' std::sqrt become one packed
-// square root in the AVX2 function: this file is compiled without errno for the math functions, contact/CMakeLists.txt).
+// square root in the AVX2 function: this file is compiled without errno for the math functions,
+// contact/CMakeLists.txt).
 template <int W>
 inline __attribute__((always_inline)) typename Lanes<W>::d sqrt_lanes(typename Lanes<W>::d x) {
 #if defined(__SSE2__)
@@ -280,7 +281,8 @@ inline __attribute__((always_inline)) typename Lanes<W>::d sqrt_lanes(typename L
 //   inside where every L_k >= 0: s in [lo, hi] (both ends outside one edge line: no part inside);
 //   phi is linear between its breakpoints, where two branches w_j L_j, w_k L_k are equal, inside (lo, hi);
 //   with P0 = INT phi ds and P1 = INT s phi ds over the inside part (N0 = 1 - s, N1 = s),
-//     I0 = INT N0 phi dG = len (P0 - P1),  I1 = INT N1 phi dG = len P1,  I(2+k) = INT L_k phi dG = len (a_k P0 + b_k P1),
+//     I0 = INT N0 phi dG = len (P0 - P1),  I1 = INT N1 phi dG = len P1,
+//     I(2+k) = INT L_k phi dG = len (a_k P0 + b_k P1),
 //   and on a piece [s0, s1] with end values f0, f1 (trapezoid rule exact for linear, Simpson for the quadratic):
 //     INT phi ds = h (f0 + f1) / 2,  INT s phi ds = h (s0 (2 f0 + f1) + s1 (f0 + 2 f1)) / 6,  h = s1 - s0;
 //   I5 = (hi - lo) len, the length inside. loaded[i] = 1 when the edge enters with P0 > 0.

@@ -1,5 +1,6 @@
 // contact/potential.hpp: distributed-potential contact force and Coulomb friction of one triangle pair
-// ([MA00]; [M04] ch. 2; [K25] Eqs. 2-5; README.md 'Physics', contact). Pure functions on small fixed arrays.
+// ([MA00]; [M04] ch. 2; [K25] Eqs. 2-5; README.md 'Physics', contact). Pure functions on small fixed arrays, and
+// PairBatch, the same kernel run on many pairs at once (their edge integrals side by side).
 //
 // DATA LAYOUT
 //   A triangle is 6 doubles (x0, y0, x1, y1, x2, y2), counter-clockwise, current configuration (m).
