@@ -29,6 +29,13 @@ constexpr int kPairBlock = 512;
 // (32 and 64 measured alike, 512 took as long as one pair at a time: lourenco2005/RESULTS.md §39)
 constexpr int kBatchPairs = 64;
 
+// The thread of a team of T that adds node k's contact forces: own[k] (set_node_owner's map, when it is for T
+// threads), else the node's share k * T / n_nodes.
+inline int thread_of(int k, int T, const unsigned char* own, int n_nodes) {
+    if (T == 1) return 0;
+    return own ? own[k] : static_cast<int>(static_cast<long long>(k) * T / n_nodes);
+}
+
 // Whether a pair's friction state holds anything (some slot not all zero).
 inline bool any_history(const double* h) {
     bool any = false;
@@ -483,9 +490,7 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f)
         for (int p = 0; p < np; ++p)
             for (int s = 0; s < 6; ++s) {
                 const int k = pair_nodes_[6 * static_cast<size_t>(p) + s];
-                const int t = team == 1 ? 0
-                              : own     ? own[k]
-                                        : static_cast<int>(static_cast<long long>(k) * team / n_nodes_);
+                const int t = thread_of(k, team, own, n_nodes_);
                 pair_mask_[static_cast<std::size_t>(t) * np + p] |= static_cast<unsigned char>(1u << s);
             }
         own_threads_ = team;
@@ -513,6 +518,16 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f)
             triangle_geometry(T, geom_[items_[i]], altitudes);
             geom_[items_[i]].faces = static_cast<int>(faces);
         }
+        // A pair without forces that has energy to book in the sums below (released friction springs, or the
+        // energy of an overlap whose load the faces of neighbouring pairs carry): pair_on_[p] = 2.
+        auto book = [&](int p, double energy_normal, double released) {
+            if (released == 0.0 && energy_normal == 0.0) return;
+            pair_on_[p] = 2;
+            double* pe = &pair_e_[4 * static_cast<size_t>(p)];
+            pe[0] = energy_normal;
+            pe[1] = pe[3] = 0.0;
+            pe[2] = released;
+        };
         // One pair, first stage: the boxes, then the separating-axis test and its edges queued in the thread's batch
         // (pending), or the history it forgets; pair_on_[p] says what the scatter and sums below take.
         auto begin_pair = [&](int p, PairBatch& batch, std::vector<int>& pending) {
@@ -531,12 +546,7 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f)
                 if (!pair_hist_on_[p]) return;  // nothing to forget (the common case: apart since detection)
                 pair_hist_on_[p] = 0;
                 const double released = forget(&hist_[kHistPerPair * static_cast<size_t>(p)]);
-                if (released != 0.0) {  // booked in the sums below, no forces
-                    pair_on_[p] = 2;
-                    double* pe = &pair_e_[4 * static_cast<size_t>(p)];
-                    pe[0] = pe[1] = pe[3] = 0.0;
-                    pe[2] = released;
-                }
+                book(p, 0.0, released);
                 return;
             }
             PairResult r;
@@ -548,13 +558,7 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f)
             // apart, or no face on either: the history is all zero now; released springs, or the energy of an
             // overlap whose load the faces of neighbouring pairs carry, to book
             pair_hist_on_[p] = 0;
-            if (r.dissipation != 0.0 || r.energy_normal != 0.0) {
-                pair_on_[p] = 2;
-                double* pe = &pair_e_[4 * static_cast<size_t>(p)];
-                pe[0] = r.energy_normal;
-                pe[1] = pe[3] = 0.0;
-                pe[2] = r.dissipation;
-            }
+            book(p, r.energy_normal, r.dissipation);
         };
         // Second stage, after the batch's edge integrals: the pending pair's loads (pair_contact's third stage).
         auto end_pair = [&](int p, PairBatch& batch) {
@@ -576,12 +580,8 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f)
                 pe[1] = r.energy_tangential;
                 pe[2] = r.dissipation;
                 pe[3] = r.damping;
-            } else if (r.dissipation != 0.0 || r.energy_normal != 0.0) {
-                pair_on_[p] = 2;
-                double* pe = &pair_e_[4 * static_cast<size_t>(p)];
-                pe[0] = r.energy_normal;
-                pe[1] = pe[3] = 0.0;
-                pe[2] = r.dissipation;
+            } else {
+                book(p, r.energy_normal, r.dissipation);
             }
         };
         // Blocks of kPairBlock pairs, each evaluated by one thread: the first stage of every pair in the block, the
@@ -611,9 +611,7 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f)
         if (me == 0) t1 = omp_get_wtime();
         const unsigned char* own =
             owner_parts_ == T && owner_.size() == static_cast<std::size_t>(n_nodes_) ? owner_.data() : nullptr;
-        auto mine = [&](int k) {
-            return T == 1 || (own ? own[k] == me : static_cast<long long>(k) * T / n_nodes_ == me);
-        };
+        auto mine = [&](int k) { return thread_of(k, T, own, n_nodes_) == me; };
         // this thread's bits of each pair's nodes (a team of another size than the masks': looked up node by node)
         const unsigned char* mask = own_threads_ == T ? &pair_mask_[static_cast<std::size_t>(me) * np] : nullptr;
         for (int blk = 0; blk < n_blocks; ++blk) {

@@ -478,6 +478,16 @@ bool pair_contact(const TriangleGeometry& A, const TriangleGeometry& B, const do
     return batch.end(A, B, va, vb, params, want_energy, hist, r, held, f12);
 }
 
+namespace {
+// A pair's result before its edges: no force (on fa, fb: r's own or the caller's slots), no energy, no edge.
+void clear_result(PairResult& r, double* fa, double* fb) {
+    for (int i = 0; i < 6; ++i) fa[i] = fb[i] = 0.0;
+    r.energy_normal = r.energy_tangential = r.dissipation = r.damping = 0.0;
+    r.active_edges = 0;
+    r.held = 0;
+}
+}  // namespace
+
 int PairBatch::lanes() { return g_lanes; }
 
 int PairBatch::set_lanes(int w) {
@@ -516,10 +526,7 @@ bool PairBatch::begin(const TriangleGeometry& A, const TriangleGeometry& B, cons
         apart = separated(b_in_a);
     }
     if (apart || (A.faces | B.faces) == 0) {
-        for (int i = 0; i < 6; ++i) r.fa[i] = r.fb[i] = 0.0;
-        r.energy_normal = r.energy_tangential = r.dissipation = r.damping = 0.0;
-        r.active_edges = 0;
-        r.held = 0;
+        clear_result(r, r.fa, r.fb);
         // A slot that may hold state lets its spring go (the others are all zero already).
         for (int s = 0; s < 6; ++s)
             if ((held >> s) & 1u) r.dissipation += release_slot(hist + kHistPerEdge * s);
@@ -563,10 +570,7 @@ bool PairBatch::end(const TriangleGeometry& A, const TriangleGeometry& B, const 
     const unsigned tested = tested_[next_pending_++];
     double* fa = f12 ? f12 : r.fa;
     double* fb = f12 ? f12 + 6 : r.fb;
-    for (int i = 0; i < 6; ++i) fa[i] = fb[i] = 0.0;
-    r.energy_normal = r.energy_tangential = r.dissipation = r.damping = 0.0;
-    r.active_edges = 0;
-    r.held = 0;
+    clear_result(r, fa, fb);
     PairParams p = params;
     if (p.p_t > 0.0 || (p.beta > 0.0 && p.p_n > 0.0)) {
         const double inv_h = A.inv_h_min + B.inv_h_min;  // 1/m
