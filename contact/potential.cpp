@@ -96,10 +96,13 @@ namespace {
 // One loaded edge: the edge (nodes e, e+1) of triangle O ("owner") lies partly inside triangle Q ("other").
 // Normal load c * phi_Q on the owner's edge along -n_O; the reaction on Q through its area coordinates.
 // Friction: one tangential spring per edge ([K25] Eqs. 4-5) between two material points, the stick anchors.
-// len: the owner's edge length (m), as edge_integrals computed it. h: the edge's friction state (kHistPerEdge).
+// len: the owner's edge length (m), as edge_integrals computed it; its integrals I_k at I[k * stride] (the batch's
+// columns, read where they are: copied to a small array, they were stored a double at a time and read back in pairs,
+// a stalled store forwarding on every loaded edge). h: the edge's friction state (kHistPerEdge).
 void load_edge(const double* __restrict xo, const double* __restrict vo, double* __restrict fo,
-               const double* __restrict vq, double* __restrict fq, int e, double len, const double* __restrict I,
-               const PairParams& p, double* __restrict h, PairResult& r) {
+               const double* __restrict vq, double* __restrict fq, int e, double len, const double* __restrict In,
+               std::size_t stride, const PairParams& p, double* __restrict h, PairResult& r) {
+    const double I[6] = {In[0], In[stride], In[2 * stride], In[3 * stride], In[4 * stride], In[5 * stride]};
     const int e1 = (e + 1) % 3;
     const double dx = xo[2 * e1] - xo[2 * e], dy = xo[2 * e1 + 1] - xo[2 * e + 1];
     // (n = (t_y, -t_x): the same bits as dy / len and -dx / len, division rounds symmetrically; two divisions)
@@ -587,11 +590,10 @@ bool PairBatch::end(const TriangleGeometry& A, const TriangleGeometry& B, const 
             if ((tested >> s) & 1u) {
                 const int i = next_edge_++;
                 if (loaded_[i]) {
-                    double I[6];
-                    for (int k = 0; k < 6; ++k) I[k] = col[kI + k][i];
+                    const double* I = col[kI] + i;  // I_k at I[k cap_] (clear: the columns cap_ apart)
                     const double len = col[kLen][i];
-                    if (side == 0) load_edge(A.x, va, fa, vb, fb, e, len, I, p, hist + kHistPerEdge * s, r);
-                    else load_edge(B.x, vb, fb, va, fa, e, len, I, p, hist + kHistPerEdge * s, r);
+                    if (side == 0) load_edge(A.x, va, fa, vb, fb, e, len, I, cap_, p, hist + kHistPerEdge * s, r);
+                    else load_edge(B.x, vb, fb, va, fa, e, len, I, cap_, p, hist + kHistPerEdge * s, r);
                     ++r.active_edges;
                     r.held |= 1u << s;
                     on = true;

@@ -459,6 +459,9 @@ void Simulation::step() {
             const double M = kTied ? u_mass[u] : mass[k0];
             const double im = kTied ? u_inv[u] : inv_mass[k0];
             double vn[2], xn[2], vr[2];  // the unit's new velocity, position and filter mean, written to its members below
+            // (unrolled: vn, xn and vr stay in registers; a loop over c stored them one double at a time and read them
+            // back as pairs below, a stalled store forwarding on every unit)
+#pragma GCC unroll 2
             for (int c = 0; c < 2; ++c) {
                 const int d0 = 2 * k0 + c;
                 const double f = S[c] + S[2 + c], fe = S[2 + c];
