@@ -28,6 +28,7 @@ constexpr int kPairBlock = 512;
 // geometry and history stay in the core's first-level cache from the first stage to the loads.
 // (32 and 64 measured alike, 512 took as long as one pair at a time: lourenco2005/RESULTS.md §39)
 constexpr int kBatchPairs = 64;
+constexpr int kPrefetchPairs = 8;  // how far ahead the pair loop asks for the boxes and geometry it will read
 
 // The thread of a team of T that adds node k's contact forces: own[k] (set_node_owner's map, when it is for T
 // threads), else the node's share k * T / n_nodes.
@@ -553,6 +554,12 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f)
             if (batch.begin(geom_[a], geom_[b], law_prm_[pair_law_[p]], want_energy,
                             &hist_[kHistPerPair * static_cast<size_t>(p)], r, pair_hist_on_[p])) {
                 pending.push_back(p);
+                // (its nodes' velocities and its friction history, which the loads read after the batch's
+                // integrals, asked for now)
+                for (int k = 0; k < 3; ++k)
+                    __builtin_prefetch(&v[2 * tri_[3 * a + k]]), __builtin_prefetch(&v[2 * tri_[3 * b + k]]);
+                const char* h = reinterpret_cast<const char*>(&hist_[kHistPerPair * static_cast<size_t>(p)]);
+                for (std::size_t o = 0; o < kHistPerPair * sizeof(double); o += 64) __builtin_prefetch(h + o, 1);
                 return;
             }
             // apart, or no face on either: the history is all zero now; released springs, or the energy of an
@@ -595,7 +602,20 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f)
             for (int c0 = p0; c0 < p1; c0 += kBatchPairs) {
                 scratch.batch.clear(kBatchPairs);
                 scratch.pending.clear();
-                for (int p = c0; p < std::min(p1, c0 + kBatchPairs); ++p) begin_pair(p, scratch.batch, scratch.pending);
+                for (int p = c0; p < std::min(p1, c0 + kBatchPairs); ++p) {
+                    // (the boxes and geometry of a pair a few ahead asked for now: indexed by triangle, they are
+                    // read in no order the hardware prefetcher follows, and the test waits on them)
+                    if (p + kPrefetchPairs < np) {
+                        const int a = pair_a_[p + kPrefetchPairs], b = pair_b_[p + kPrefetchPairs];
+                        __builtin_prefetch(&box_[8 * static_cast<size_t>(a)]);
+                        __builtin_prefetch(&box_[8 * static_cast<size_t>(b)]);
+                        const char* ga = reinterpret_cast<const char*>(&geom_[a]);
+                        const char* gb = reinterpret_cast<const char*>(&geom_[b]);
+                        for (std::size_t o = 0; o < sizeof(TriangleGeometry); o += 64)
+                            __builtin_prefetch(ga + o), __builtin_prefetch(gb + o);
+                    }
+                    begin_pair(p, scratch.batch, scratch.pending);
+                }
                 scratch.batch.integrate();
                 for (int p : scratch.pending) end_pair(p, scratch.batch);
             }
