@@ -436,8 +436,8 @@ void ContactSystem::set_pair_nodes() {
     own_threads_ = 0;
 }
 
-void ContactSystem::step(const double* x, const double* v, double dt, double* f) {
-    const double vmax = std::sqrt(largest_speed2(v, n_nodes_));
+void ContactSystem::step(const double* x, const double* v, double dt, double* f, double v2max) {
+    const double vmax = std::sqrt(v2max >= 0.0 ? v2max : largest_speed2(v, n_nodes_));
     // [MA98]: a pair can only appear once two triangles have moved towards each other by the buffer; each moved
     // at most the accumulated dt max|v|. Anticipate this step's motion so the list is valid until the next call.
     if (faces_dirty_) update_faces();

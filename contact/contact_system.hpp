@@ -91,8 +91,10 @@ public:
     void required_mass(const double* x, double dt, double* need) const;
 
     // One step: re-detects when 2 * (sum of dt max|v| since the last detection) would exceed the buffer, then
-    // evaluates all pairs and adds the contact forces (N) to f. dt in s.
-    void step(const double* x, const double* v, double dt, double* f);
+    // evaluates all pairs and adds the contact forces (N) to f. dt in s. v2max >= 0: the caller's largest |v|^2 over
+    // the nodes (m^2/s^2; vx * vx + vy * vy, NaN passed over), which it had at hand (Simulation's node loop, which
+    // wrote v); else the nodes are scanned for it here. Either way the same bits.
+    void step(const double* x, const double* v, double dt, double* f, double v2max = -1.0);
     void set_compute_energy(bool on) { opt_.compute_energy = on; }
     // Contact dashpots ([C79]'s viscous contact damping, made stiffness-proportional like Rayleigh beta damping;
     // PairParams::beta, s; 0 = none, the default): c = beta k on every loaded edge, normal and,

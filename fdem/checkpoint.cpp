@@ -134,8 +134,9 @@ std::string Simulation::checkpoint_path() const { return (std::filesystem::path(
 // Everything that changes during a run. The order is the format: load_state reads the same sequence.
 void Simulation::save_state(StateWriter& w) const {
 #if defined(__x86_64__) && defined(__GLIBCXX__)
-    // (not saved: the energy audit's sums, a diagnostic of one process; after a restart it starts over)
-    static_assert(sizeof(Simulation) == 5008, "Simulation changed: update save_state/load_state (fdem/checkpoint.cpp) and this size");
+    // (not saved: the energy audit's sums, a diagnostic of one process; after a restart it starts over; the node
+    // loop's speeds block_v2_ and v2max_, which load_state marks unknown)
+    static_assert(sizeof(Simulation) == 5040, "Simulation changed: update save_state/load_state (fdem/checkpoint.cpp) and this size");
     static_assert(sizeof(ActiveSupport) == 376, "ActiveSupport changed: update save_state/load_state and this size");
     static_assert(sizeof(ActiveLoad) == 296, "ActiveLoad changed: update save_state/load_state and this size");
 #endif
@@ -219,6 +220,7 @@ void Simulation::load_state(StateReader& r) {
     if (r.get<int>() != nn || r.get<int>() != model_.n_triangles()) throw StateError("another mesh (node or triangle count)");
     r.vec_sized(model_.x, nd, "positions");
     r.vec_sized(model_.v, nd, "velocities");
+    v2max_ = -1.0;
     r.vec_sized(model_.mass, static_cast<std::size_t>(nn), "masses");
     r.vec_sized(model_.inv_mass, static_cast<std::size_t>(nn), "inverse masses");
     r.vec_sized(model_.grav_mass, static_cast<std::size_t>(nn), "gravitational masses");

@@ -295,8 +295,9 @@ void Simulation::step() {
     // 2. Triangle forces; per block: viscous power and the first inverted triangle.
     const double w1 = omp_get_wtime();
     const int ntb = (nt + kBlock - 1) / kBlock;
-#pragma omp parallel for schedule(static) if (ntb > 1)
-    for (int b = 0; b < ntb; ++b) {
+#pragma omp parallel if (ntb > 1)
+    for (int b = block_share_begin(nt, omp_get_num_threads(), omp_get_thread_num());
+         b < block_share_begin(nt, omp_get_num_threads(), omp_get_thread_num() + 1); ++b) {
         double pv = 0;
         int bad = -1;
         const int e1 = std::min(nt, (b + 1) * kBlock);
@@ -343,7 +344,7 @@ void Simulation::step() {
     // evaluated on the steps whose energies are reported or checked.
     inter_.want_energy(history_due(time_ + dt, steps_ + 1) || (steps_ + 1) % 1000 == 0 || energy_every_step_);
     const double w2 = omp_get_wtime();
-    inter_.add_forces(x, v, dt, f_mod_.data(), spec_.energy_audit ? audit_fj_.data() : nullptr, f_mod_.size());
+    inter_.add_forces(x, v, dt, f_mod_.data(), spec_.energy_audit ? audit_fj_.data() : nullptr, f_mod_.size(), v2max_);
     if (spec_.energy_audit) audit_step(1, dt);
     const double w3 = omp_get_wtime();
 
@@ -429,6 +430,7 @@ void Simulation::step() {
         constexpr bool kMass = decltype(mass_const)::value;
         double dW = 0, dD = 0, unb = 0, scale = 0, K = 0, cW = 0, cD = 0, dM = 0, cM = 0;
         double nonfinite = 0;  // v - v summed: 0 while every new velocity is finite, NaN after an inf or a NaN
+        double v2 = 0;  // the largest |v|^2 of the block's units (a NaN passed over, as std::max(v2, NaN) = v2)
         const int u0 = kTied ? u_block[b] : b * kBlock, u1 = kTied ? u_block[b + 1] : std::min(nu, (b + 1) * kBlock);
         for (int u = u0; u < u1; ++u) {
             const int j0 = kTied ? u_start[u] : u, j1 = kTied ? u_start[u + 1] : u + 1;
@@ -501,6 +503,7 @@ void Simulation::step() {
                 xn[c] = xw[d0] + dt * vnew;  // the members' positions are the same bits
                 vr[c] = kFilter ? vref[d0] + wf * (vnew - vref[d0]) : 0.0;
             }
+            v2 = std::max(v2, vn[0] * vn[0] + vn[1] * vn[1]);  // (every member's |v|^2, the bits of v written below)
             for (int j = j0; j < j1; ++j) {
                 const int d = 2 * (kTied ? u_node[j] : j);
                 vw[d] = vn[0], vw[d + 1] = vn[1];
@@ -510,6 +513,7 @@ void Simulation::step() {
         }
         block_a_[b] = dW, block_b_[b] = dD, block_c_[b] = unb, block_d_[b] = scale;
         block_e_[b] = K, block_f_[b] = cW, block_g_[b] = cD, block_h_[b] = dM, block_i_[b] = cM;
+        block_v2_[b] = v2;
         // The first unit (in loop order) with a non-finite velocity, looked for only when there is one.
         int bad = -1;
         if (!(nonfinite == 0))
@@ -542,7 +546,9 @@ void Simulation::step() {
     if (spec_.energy_audit) audit_step(2, dt);
     double dW = 0, dD = 0, unb = 0, scale = 0, dM = 0;
     kinetic_n_ = 0, work_half_ = 0, damp_half_ = 0, mass_half_ = 0;
+    v2max_ = 0.0;
     for (int b = 0; b < nnb; ++b) {
+        v2max_ = std::max(v2max_, block_v2_[b]);
         dW += block_a_[b], dD += block_b_[b], unb += block_c_[b], scale += block_d_[b];
         kinetic_n_ += block_e_[b], work_half_ += block_f_[b], damp_half_ += block_g_[b];
         dM += block_h_[b], mass_half_ += block_i_[b];

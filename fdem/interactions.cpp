@@ -342,10 +342,10 @@ int Interactions::insert_cracks(const double* x, const double* tri_sigma) {
 }
 
 void Interactions::add_forces(const double* x, const double* v, double dt, double* f, double* after_joints,
-                              std::size_t n) {
+                              std::size_t n, double v2max) {
     if (joints_) joints_->add_forces(x, f);
     if (after_joints) std::copy(f, f + n, after_joints);
-    if (contact_) contact_->step(x, v, dt, f);
+    if (contact_) contact_->step(x, v, dt, f, v2max);
 }
 
 int Interactions::after_step(double time, double control_displacement, const double* x) {

@@ -59,8 +59,9 @@ public:
     double inserted_energy() const { return joints_ ? joints_->inserted_energy() : 0.0; }  // J
     // Adds joint and contact forces (N) at positions x, velocities v, to f.
     // after_joints (energy audit): receives the n values of f after the cohesive joints added theirs, before contact.
+    // v2max: the largest |v|^2 over the nodes when the caller has it, else -1 (ContactSystem::step).
     void add_forces(const double* x, const double* v, double dt, double* f, double* after_joints = nullptr,
-                    std::size_t n = 0);
+                    std::size_t n = 0, double v2max = -1.0);
     // After the update: removes broken joints, makes their triangles contact-capable, records them.
     // Returns the number of joints that broke.
     int after_step(double time, double control_displacement, const double* x);

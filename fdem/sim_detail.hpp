@@ -16,6 +16,16 @@ constexpr int kBlock = 256;
 // First of the n items thread t of T takes in a static share (the first n % T threads one more): thread t takes
 // [share_begin(n, T, t), share_begin(n, T, t + 1)). The node loop's shares, which the contact scatter is told.
 inline int share_begin(int n, int T, int t) { return t * (n / T) + (t < n % T ? t : n % T); }
+// First block of kBlock items that thread t of T takes when n items are shared by items, not blocks: each share
+// ends at the block boundary nearest to an equal split. A static schedule of the blocks gave the first thread of two
+// 10 of a 4620-triangle wall's 19 blocks (2560 triangles against 2060).
+inline int block_share_begin(int n, int T, int t) {
+    const int nb = (n + kBlock - 1) / kBlock;
+    if (t >= T) return nb;
+    const long long first = static_cast<long long>(n) * t / T;  // the item an equal split would start at
+    const int b = static_cast<int>((first + kBlock / 2) / kBlock);
+    return b < nb ? b : nb;
+}
 constexpr double kBalanceWarning = 0.05;  // relative energy balance error above which a run is flagged
 constexpr double kPi = 3.14159265358979323846;
 

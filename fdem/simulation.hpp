@@ -74,7 +74,14 @@ public:
     bool stage_finished();  // evaluates the termination rule of the current stage
 
     const Model& model() const { return model_; }
-    Model& model() { return model_; }
+    // (a caller that may write v: the node loop's largest speed is forgotten, ContactSystem::step scans v again)
+    Model& model() {
+        v2max_ = -1.0;
+        return model_;
+    }
+    // The node loop's largest |v|^2 over the nodes (m^2/s^2) that the next contact step takes; -1: v was set elsewhere
+    // since (initial conditions, a restart, model()), and the contact step scans v itself.
+    double speed2_of_node_loop() const { return v2max_; }
     double dt() const { return dt_; }
     const CaseSpec& spec() const { return spec_; }
     double time() const { return time_; }
@@ -261,6 +268,10 @@ private:
     double damp_half_ = 0;   // J, the same for local damping
     double mass_half_ = 0;   // J, the same for mass-proportional damping
     std::vector<int> block_bad_;
+    // The largest |v|^2 over the nodes, which the node loop keeps per block (block_v2_) for the contact's detection
+    // schedule (ContactSystem::step's v2max: a scan of every node less); -1 when v was set elsewhere since.
+    std::vector<double> block_v2_;
+    double v2max_ = -1.0;
     double unbalanced_ratio_ = 1;
     bool energy_every_step_ = false;  // tests that read energies after every step
     // Energy audit: per part (0 triangles, 1 cohesive joints, 2 contact) the work its forces did on the nodes, sum of
