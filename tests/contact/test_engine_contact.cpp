@@ -832,7 +832,8 @@ TEST_CASE("engine: the node loop's largest speed, which the contact step takes f
         kept.step();
         const std::vector<double>& v = std::as_const(kept).model().v;
         double scan = 0;
-        for (std::size_t k = 0; 2 * k + 1 < v.size(); ++k) scan = std::max(scan, v[2 * k] * v[2 * k] + v[2 * k + 1] * v[2 * k + 1]);
+        for (std::size_t k = 0; 2 * k + 1 < v.size(); ++k)
+            scan = std::max(scan, v[2 * k] * v[2 * k] + v[2 * k + 1] * v[2 * k + 1]);
         if (kept.speed2_of_node_loop() != scan) ++mismatches;
         vmax2 = std::max(vmax2, scan);
         forgot.model();  // (non-const: the next contact step scans v itself)
