@@ -37,6 +37,15 @@ inline int thread_of(int k, int T, const unsigned char* own, int n_nodes) {
     return own ? own[k] : static_cast<int>(static_cast<long long>(k) * T / n_nodes);
 }
 
+// Asks for the cache lines of bytes [p, p + n) ahead of their use (write: for a store).
+inline void prefetch_bytes(const void* p, std::size_t n, bool write = false) {
+    const char* c = static_cast<const char*>(p);
+    for (std::size_t o = 0; o < n; o += 64) {
+        if (write) __builtin_prefetch(c + o, 1);
+        else __builtin_prefetch(c + o);
+    }
+}
+
 // Whether a pair's friction state holds anything (some slot not all zero).
 inline bool any_history(const double* h) {
     bool any = false;
@@ -558,8 +567,7 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f,
                 // integrals, asked for now)
                 for (int k = 0; k < 3; ++k)
                     __builtin_prefetch(&v[2 * tri_[3 * a + k]]), __builtin_prefetch(&v[2 * tri_[3 * b + k]]);
-                const char* h = reinterpret_cast<const char*>(&hist_[kHistPerPair * static_cast<size_t>(p)]);
-                for (std::size_t o = 0; o < kHistPerPair * sizeof(double); o += 64) __builtin_prefetch(h + o, 1);
+                prefetch_bytes(&hist_[kHistPerPair * static_cast<size_t>(p)], kHistPerPair * sizeof(double), true);
                 return;
             }
             // apart, or no face on either: the history is all zero now; released springs, or the energy of an
@@ -609,10 +617,8 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f,
                         const int a = pair_a_[p + kPrefetchPairs], b = pair_b_[p + kPrefetchPairs];
                         __builtin_prefetch(&box_[8 * static_cast<size_t>(a)]);
                         __builtin_prefetch(&box_[8 * static_cast<size_t>(b)]);
-                        const char* ga = reinterpret_cast<const char*>(&geom_[a]);
-                        const char* gb = reinterpret_cast<const char*>(&geom_[b]);
-                        for (std::size_t o = 0; o < sizeof(TriangleGeometry); o += 64)
-                            __builtin_prefetch(ga + o), __builtin_prefetch(gb + o);
+                        prefetch_bytes(&geom_[a], sizeof(TriangleGeometry));
+                        prefetch_bytes(&geom_[b], sizeof(TriangleGeometry));
                     }
                     begin_pair(p, scratch.batch, scratch.pending);
                 }
