@@ -22,13 +22,19 @@ namespace {
 // Below this many items a loop runs on one thread: a parallel region costs more than it saves, and on a shared,
 // oversubscribed machine its barrier can cost milliseconds. Results are the same bits either way.
 constexpr int kParallelMin = 4096;
-// Pairs per block of the pair loop (the unit of its dynamic schedule and of the lists of pairs with something to add).
-constexpr int kPairBlock = 512;
+// Pairs per block of the pair loop (the unit of its threads' shares and of the lists of pairs with something to add):
+// four batches, so that shares of a wall's 5662 pairs (22 blocks) are cut to a few per cent (64 and 128 measured
+// alike on two threads and 1 % slower on one: RESULTS.md §41).
+constexpr int kPairBlock = 256;
 // Pairs per batch of edge integrals (PairBatch): its queued edges (about one per pair, 160 bytes each) and the pairs'
 // geometry and history stay in the core's first-level cache from the first stage to the loads.
 // (32 and 64 measured alike, 512 took as long as one pair at a time: lourenco2005/RESULTS.md §39)
 constexpr int kBatchPairs = 64;
 constexpr int kPrefetchPairs = 8;  // how far ahead the pair loop asks for the boxes and geometry it will read
+static_assert(kPairBlock % kBatchPairs == 0, "a block is whole batches");
+// The cost of a block of the pair loop in units of a pair rejected by its boxes: a pair queued for edge integrals
+// counts kQueuedCost more (the shares need only be about right: the queued pairs are spread evenly along the list).
+constexpr int kQueuedCost = 8;
 
 // The thread of a team of T that adds node k's contact forces: own[k] (set_node_owner's map, when it is for T
 // threads), else the node's share k * T / n_nodes.
@@ -425,6 +431,7 @@ void ContactSystem::detect(const double* x) {
     pair_on_.resize(np);
     on_idx_.resize(np);
     on_cnt_.resize((np + kPairBlock - 1) / kPairBlock);
+    block_cost_.assign((np + kPairBlock - 1) / kPairBlock, 1);  // (equal shares of blocks until the first step)
     box_.resize(8 * static_cast<size_t>(n_tri_));
     geom_.resize(n_tri_);
     dirty_ = false;
@@ -504,6 +511,24 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f,
                 pair_mask_[static_cast<std::size_t>(t) * np + p] |= static_cast<unsigned char>(1u << s);
             }
         own_threads_ = team;
+    }
+    // Each thread's share of the pair blocks: a contiguous run of about equal cost in the last step. Contiguous and
+    // nearly the same every step, a pair's friction history, forces and triangles stay in the cache of the core that
+    // evaluated it the step before, and in the list's order (NBS cells) a thread's pairs are mostly on the nodes its
+    // node loop integrates and its scatter adds (about 83 % of the loaded pairs' nodes in the wall of
+    // k25_N100_quick.toml on 2 threads). A dynamic schedule balanced the blocks but sent each to either core; the
+    // contiguous shares measured faster (RESULTS.md §41). Which thread evaluates a pair does not change its result.
+    block_share_.assign(team + 1, n_blocks);
+    if (block_cost_.size() != static_cast<std::size_t>(n_blocks)) block_cost_.assign(n_blocks, 1);
+    {
+        long long total = 0, acc = 0;
+        for (int b = 0; b < n_blocks; ++b) total += block_cost_[b];
+        block_share_[0] = 0;
+        int t = 1;
+        for (int b = 0; b < n_blocks && t < team; ++b) {
+            acc += block_cost_[b];
+            while (t < team && acc * team >= total * t) block_share_[t++] = b + 1;
+        }
     }
 #pragma omp parallel if (parallel)
     {
@@ -599,14 +624,18 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f,
                 book(p, r.energy_normal, r.dissipation);
             }
         };
-        // Blocks of kPairBlock pairs, each evaluated by one thread: the first stage of every pair in the block, the
-        // edge integrals of its pending pairs side by side (PairBatch), their loads; then the block's pairs that have
-        // something to add are listed in pair order (on_idx_, on_cnt_): the scatter and sums below walk those lists
-        // instead of every pair.
+        // Blocks of kPairBlock pairs, each evaluated by one thread (its share, above): the first stage of every pair
+        // in the block, the edge integrals of its pending pairs side by side (PairBatch), their loads; then the
+        // block's pairs that have something to add are listed in pair order (on_idx_, on_cnt_): the scatter and sums
+        // below walk those lists instead of every pair.
         PairScratch& scratch = scratch_[omp_get_thread_num()];
-#pragma omp for schedule(dynamic, 1)
-        for (int blk = 0; blk < n_blocks; ++blk) {
+        // (a smaller team than asked for: equal shares of blocks)
+        const int nt = omp_get_num_threads(), tn = omp_get_thread_num();
+        const int b0 = nt == team ? block_share_[tn] : static_cast<int>(static_cast<long long>(n_blocks) * tn / nt);
+        const int b1 = nt == team ? block_share_[tn + 1] : static_cast<int>(static_cast<long long>(n_blocks) * (tn + 1) / nt);
+        for (int blk = b0; blk < b1; ++blk) {
             const int p0 = blk * kPairBlock, p1 = std::min(np, p0 + kPairBlock);
+            int queued = 0;
             for (int c0 = p0; c0 < p1; c0 += kBatchPairs) {
                 scratch.batch.clear(kBatchPairs);
                 scratch.pending.clear();
@@ -623,13 +652,16 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f,
                     begin_pair(p, scratch.batch, scratch.pending);
                 }
                 scratch.batch.integrate();
+                queued += static_cast<int>(scratch.pending.size());
                 for (int p : scratch.pending) end_pair(p, scratch.batch);
             }
             int cnt = 0;
             for (int p = p0; p < p1; ++p)
                 if (pair_on_[p]) on_idx_[p0 + cnt++] = p;
             on_cnt_[blk] = cnt;
+            block_cost_[blk] = (p1 - p0) + kQueuedCost * queued;
         }
+#pragma omp barrier
         // Scatter in pair order (the blocks in order, each block's listed pairs in order), each thread adding the
         // forces of the nodes it owns (set_node_owner: the nodes it integrates next) and thread 0 the energy sums:
         // every node's sum is that of a serial walk over every pair, the same bits for any thread count.
@@ -704,7 +736,7 @@ double ContactSystem::normal_energy_at(const double* x) const {
 // add the field to save_state and load_state if it carries from one step to the next, then update the size.
 void ContactSystem::save_state(StateWriter& w) const {
 #if defined(__x86_64__) && defined(__GLIBCXX__)
-    static_assert(sizeof(ContactSystem) == 1416, "ContactSystem changed: update save_state/load_state and this size");
+    static_assert(sizeof(ContactSystem) == 1464, "ContactSystem changed: update save_state/load_state and this size");
 #endif
     w.section("contact");
     w.pod(static_cast<std::int32_t>(kHistPerPair));

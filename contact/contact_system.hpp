@@ -192,6 +192,9 @@ private:
     std::vector<double> pair_e_;   // 4 per pair: normal energy, tangential energy, friction dissipation, dashpot work
     std::vector<char> pair_on_;
     std::vector<int> on_idx_, on_cnt_;  // per block of pairs: its pairs with pair_on_ set, in order, and how many
+    // Per block of pairs, its cost in the last step (pairs, and queued pairs weighted), and per thread the first block
+    // of its share (then the end): which core evaluates which pairs, not what they give (not saved by save_state).
+    std::vector<int> block_cost_, block_share_;
     std::vector<unsigned char> owner_;  // per node: the thread that adds its forces (set_node_owner), for owner_parts_
     int owner_parts_ = 0;
     // Per pair, for the scatter: its six nodes (A's, then B's), and per thread t the bits of those that t adds

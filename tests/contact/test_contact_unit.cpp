@@ -700,6 +700,13 @@ TEST_CASE("Contact forces have the same bits for 1, 2 and 4 threads on a 10k-tri
         CHECK(run(2, beta, 2).first == h1.first);  // each node added by the thread the map names
         CHECK(run(4, beta, 4).first == h1.first);
         CHECK(run(4, beta, 2).first == h1.first);  // a map for 2 threads on 4: the scatter's own shares
+        // Called from inside another parallel region (no nesting: a team of 1 where 2 were asked for), the pair
+        // loop's shares, cut for 2, are not used: every pair is still evaluated.
+        std::pair<uint64_t, int> nested;
+#pragma omp parallel num_threads(2)
+#pragma omp single
+        nested = run(2, beta, 2);
+        CHECK(nested.first == h1.first);
         first[i] = h1.first;
     }
     CHECK(first[0] != first[1]);  // the dashpots did act
