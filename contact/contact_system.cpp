@@ -429,8 +429,6 @@ void ContactSystem::detect(const double* x) {
     pair_f_.resize(12 * static_cast<size_t>(np));
     pair_e_.resize(4 * static_cast<size_t>(np));
     pair_on_.resize(np);
-    on_idx_.resize(np);
-    on_cnt_.resize((np + kPairBlock - 1) / kPairBlock);
     block_cost_.assign((np + kPairBlock - 1) / kPairBlock, 1);  // (equal shares of blocks until the first step)
     box_.resize(8 * static_cast<size_t>(n_tri_));
     geom_.resize(n_tri_);
@@ -494,7 +492,7 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f,
     // and ran serially in the wall cases).
     const int n_blocks = (np + kPairBlock - 1) / kPairBlock;
     double t1 = t0;
-    double en = 0.0, et = 0.0, ed = 0.0, ec = 0.0;  // the sums in pair order (thread 0)
+    double en = 0.0, et = 0.0, ed = 0.0, ec = 0.0;  // the sums of the blocks' sums, in block order
     int active = 0;
     if (scratch_.size() < static_cast<std::size_t>(omp_get_max_threads())) scratch_.resize(omp_get_max_threads());
     const bool parallel = np > kParallelMin || n_items > kParallelMin;
@@ -530,6 +528,10 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f,
             while (t < team && acc * team >= total * t) block_share_[t++] = b + 1;
         }
     }
+    list_idx_.resize(static_cast<std::size_t>(team) * np);
+    list_cnt_.resize(static_cast<std::size_t>(team) * n_blocks);
+    block_e_.resize(4 * static_cast<std::size_t>(n_blocks));
+    block_active_.resize(n_blocks);
 #pragma omp parallel if (parallel)
     {
 #pragma omp for schedule(static)
@@ -625,12 +627,18 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f,
             }
         };
         // Blocks of kPairBlock pairs, each evaluated by one thread (its share, above): the first stage of every pair
-        // in the block, the edge integrals of its pending pairs side by side (PairBatch), their loads; then the
-        // block's pairs that have something to add are listed in pair order (on_idx_, on_cnt_): the scatter and sums
-        // below walk those lists instead of every pair.
+        // in the block, the edge integrals of its pending pairs side by side (PairBatch), their loads; then, on the
+        // same thread, the block's energy sums in pair order and each thread's scatter list of the block's loaded
+        // pairs with some of its nodes. The scatter below walks its own lists; the energies are the blocks' sums
+        // added in block order: both independent of the number of threads.
         PairScratch& scratch = scratch_[omp_get_thread_num()];
         // (a smaller team than asked for: equal shares of blocks)
         const int nt = omp_get_num_threads(), tn = omp_get_thread_num();
+        // each pair's nodes' threads: the masks when they are for this team, else looked up node by node
+        const bool masks = own_threads_ == nt;
+        const unsigned char* own_map =
+            owner_parts_ == nt && owner_.size() == static_cast<std::size_t>(n_nodes_) ? owner_.data() : nullptr;
+        scratch.listed.resize(nt);
         const int b0 = nt == team ? block_share_[tn] : static_cast<int>(static_cast<long long>(n_blocks) * tn / nt);
         const int b1 = nt == team ? block_share_[tn + 1] : static_cast<int>(static_cast<long long>(n_blocks) * (tn + 1) / nt);
         for (int blk = b0; blk < b1; ++blk) {
@@ -655,54 +663,65 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f,
                 queued += static_cast<int>(scratch.pending.size());
                 for (int p : scratch.pending) end_pair(p, scratch.batch);
             }
-            int cnt = 0;
-            for (int p = p0; p < p1; ++p)
-                if (pair_on_[p]) on_idx_[p0 + cnt++] = p;
-            on_cnt_[blk] = cnt;
+            double be[4] = {0.0, 0.0, 0.0, 0.0};
+            int loaded = 0;
+            std::fill(scratch.listed.begin(), scratch.listed.end(), 0);
+            for (int p = p0; p < p1; ++p) {
+                const char on = pair_on_[p];
+                if (!on) continue;
+                const double* pe = &pair_e_[4 * static_cast<size_t>(p)];
+                if (on == 2) {  // energy to book, no forces
+                    be[0] += pe[0], be[2] += pe[2];
+                    continue;
+                }
+                ++loaded;
+                be[0] += pe[0], be[1] += pe[1], be[2] += pe[2], be[3] += pe[3];
+                for (int t = 0; t < nt; ++t) {
+                    bool any = false;
+                    if (masks) any = pair_mask_[static_cast<std::size_t>(t) * np + p] != 0;
+                    else
+                        for (int s = 0; s < 6 && !any; ++s)
+                            any = thread_of(pair_nodes_[6 * static_cast<size_t>(p) + s], nt, own_map, n_nodes_) == t;
+                    if (any) list_idx_[static_cast<std::size_t>(t) * np + p0 + scratch.listed[t]++] = p;
+                }
+            }
+            for (int t = 0; t < nt; ++t) list_cnt_[static_cast<std::size_t>(t) * n_blocks + blk] = scratch.listed[t];
+            for (int k = 0; k < 4; ++k) block_e_[4 * static_cast<size_t>(blk) + k] = be[k];
+            block_active_[blk] = loaded;
             block_cost_[blk] = (p1 - p0) + kQueuedCost * queued;
         }
 #pragma omp barrier
-        // Scatter in pair order (the blocks in order, each block's listed pairs in order), each thread adding the
-        // forces of the nodes it owns (set_node_owner: the nodes it integrates next) and thread 0 the energy sums:
-        // every node's sum is that of a serial walk over every pair, the same bits for any thread count.
-        const int T = omp_get_num_threads(), me = omp_get_thread_num();
+        // Scatter in pair order (the blocks in order, each block's list in order), each thread adding the forces of
+        // the nodes it owns (set_node_owner: the nodes it integrates next): every node's sum is that of a serial walk
+        // over every pair, the same bits for any thread count. A thread reads only the pairs on its lists: its own
+        // blocks' loaded pairs on its nodes, and the few of the other threads' blocks that reach its nodes.
+        const int me = tn;
         if (me == 0) t1 = omp_get_wtime();
-        const unsigned char* own =
-            owner_parts_ == T && owner_.size() == static_cast<std::size_t>(n_nodes_) ? owner_.data() : nullptr;
-        auto mine = [&](int k) { return thread_of(k, T, own, n_nodes_) == me; };
-        // this thread's bits of each pair's nodes (a team of another size than the masks': looked up node by node)
-        const unsigned char* mask = own_threads_ == T ? &pair_mask_[static_cast<std::size_t>(me) * np] : nullptr;
+        const unsigned char* mask = masks ? &pair_mask_[static_cast<std::size_t>(me) * np] : nullptr;
+        const int* list = &list_idx_[static_cast<std::size_t>(me) * np];
+        const int* count = &list_cnt_[static_cast<std::size_t>(me) * n_blocks];
         for (int blk = 0; blk < n_blocks; ++blk) {
-            for (int i = 0; i < on_cnt_[blk]; ++i) {
-                const int p = on_idx_[blk * kPairBlock + i];
-                const double* pe = &pair_e_[4 * static_cast<size_t>(p)];
-                if (pair_on_[p] == 2) {
-                    if (me == 0) en += pe[0], ed += pe[2];
-                    continue;
-                }
+            for (int i = 0; i < count[blk]; ++i) {
+                const int p = list[blk * kPairBlock + i];
                 const int* nd = &pair_nodes_[6 * static_cast<size_t>(p)];
                 unsigned m = 0;
                 if (mask) m = mask[p];
                 else
-                    for (int s = 0; s < 6; ++s) m |= mine(nd[s]) ? 1u << s : 0u;
-                if (m) {
-                    const double* pf = &pair_f_[12 * static_cast<size_t>(p)];
-                    for (int k = 0; k < 3; ++k) {
-                        if ((m >> k) & 1u) f[2 * nd[k]] += pf[2 * k], f[2 * nd[k] + 1] += pf[2 * k + 1];
-                        if ((m >> (3 + k)) & 1u)
-                            f[2 * nd[3 + k]] += pf[6 + 2 * k], f[2 * nd[3 + k] + 1] += pf[6 + 2 * k + 1];
-                    }
-                }
-                if (me == 0) {
-                    ++active;
-                    en += pe[0];
-                    et += pe[1];
-                    ed += pe[2];
-                    ec += pe[3];
+                    for (int s = 0; s < 6; ++s) m |= thread_of(nd[s], nt, own_map, n_nodes_) == me ? 1u << s : 0u;
+                const double* pf = &pair_f_[12 * static_cast<size_t>(p)];
+                for (int k = 0; k < 3; ++k) {
+                    if ((m >> k) & 1u) f[2 * nd[k]] += pf[2 * k], f[2 * nd[k] + 1] += pf[2 * k + 1];
+                    if ((m >> (3 + k)) & 1u)
+                        f[2 * nd[3 + k]] += pf[6 + 2 * k], f[2 * nd[3 + k] + 1] += pf[6 + 2 * k + 1];
                 }
             }
         }
     }  // omp parallel
+    for (int blk = 0; blk < n_blocks; ++blk) {
+        const double* be = &block_e_[4 * static_cast<size_t>(blk)];
+        en += be[0], et += be[1], ed += be[2], ec += be[3];
+        active += block_active_[blk];
+    }
     energy_normal_ = en;
     energy_tangential_ = et;
     energy_current_ = want_energy;
@@ -736,7 +755,7 @@ double ContactSystem::normal_energy_at(const double* x) const {
 // add the field to save_state and load_state if it carries from one step to the next, then update the size.
 void ContactSystem::save_state(StateWriter& w) const {
 #if defined(__x86_64__) && defined(__GLIBCXX__)
-    static_assert(sizeof(ContactSystem) == 1464, "ContactSystem changed: update save_state/load_state and this size");
+    static_assert(sizeof(ContactSystem) == 1512, "ContactSystem changed: update save_state/load_state and this size");
 #endif
     w.section("contact");
     w.pod(static_cast<std::int32_t>(kHistPerPair));
@@ -789,8 +808,6 @@ void ContactSystem::load_state(StateReader& r) {
     pair_f_.assign(12 * np, 0.0);
     pair_e_.assign(4 * np, 0.0);
     pair_on_.assign(np, 0);
-    on_idx_.assign(np, 0);
-    on_cnt_.assign((np + kPairBlock - 1) / kPairBlock, 0);
     box_.assign(8 * static_cast<std::size_t>(n_tri_), 0.0);
     geom_.resize(static_cast<std::size_t>(n_tri_));
     faces_dirty_ = true;

@@ -191,7 +191,12 @@ private:
     std::vector<double> pair_f_;   // 12 per pair
     std::vector<double> pair_e_;   // 4 per pair: normal energy, tangential energy, friction dissipation, dashpot work
     std::vector<char> pair_on_;
-    std::vector<int> on_idx_, on_cnt_;  // per block of pairs: its pairs with pair_on_ set, in order, and how many
+    // Per thread t, its scatter lists: for each block of pairs the loaded pairs with some of the nodes t adds, in pair
+    // order (list_idx_[t * n_pairs + first pair of the block + i]; list_cnt_[t * n_blocks + block] of them).
+    std::vector<int> list_idx_, list_cnt_;
+    // Per block of pairs, its energy sums in pair order (normal, tangential, friction, dashpots) and its loaded pairs.
+    std::vector<double> block_e_;
+    std::vector<int> block_active_;
     // Per block of pairs, its cost in the last step (pairs, and queued pairs weighted), and per thread the first block
     // of its share (then the end): which core evaluates which pairs, not what they give (not saved by save_state).
     std::vector<int> block_cost_, block_share_;
@@ -210,6 +215,7 @@ private:
     struct alignas(128) PairScratch {
         PairBatch batch;
         std::vector<int> pending;
+        std::vector<int> listed;  // per thread of the team: how many pairs of the block are on its scatter list
     };
     std::vector<PairScratch> scratch_;
 
