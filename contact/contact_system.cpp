@@ -665,27 +665,43 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f,
             }
             double be[4] = {0.0, 0.0, 0.0, 0.0};
             int loaded = 0;
-            std::fill(scratch.listed.begin(), scratch.listed.end(), 0);
-            for (int p = p0; p < p1; ++p) {
-                const char on = pair_on_[p];
-                if (!on) continue;
-                const double* pe = &pair_e_[4 * static_cast<size_t>(p)];
-                if (on == 2) {  // energy to book, no forces
-                    be[0] += pe[0], be[2] += pe[2];
-                    continue;
+            if (nt == 1) {  // (one thread: its list is every loaded pair)
+                int* list = &list_idx_[p0];
+                for (int p = p0; p < p1; ++p) {
+                    const char on = pair_on_[p];
+                    if (!on) continue;
+                    const double* pe = &pair_e_[4 * static_cast<size_t>(p)];
+                    if (on == 2) {  // energy to book, no forces
+                        be[0] += pe[0], be[2] += pe[2];
+                        continue;
+                    }
+                    be[0] += pe[0], be[1] += pe[1], be[2] += pe[2], be[3] += pe[3];
+                    list[loaded++] = p;
                 }
-                ++loaded;
-                be[0] += pe[0], be[1] += pe[1], be[2] += pe[2], be[3] += pe[3];
-                for (int t = 0; t < nt; ++t) {
-                    bool any = false;
-                    if (masks) any = pair_mask_[static_cast<std::size_t>(t) * np + p] != 0;
-                    else
-                        for (int s = 0; s < 6 && !any; ++s)
-                            any = thread_of(pair_nodes_[6 * static_cast<size_t>(p) + s], nt, own_map, n_nodes_) == t;
-                    if (any) list_idx_[static_cast<std::size_t>(t) * np + p0 + scratch.listed[t]++] = p;
+                list_cnt_[blk] = loaded;
+            } else {
+                std::fill(scratch.listed.begin(), scratch.listed.end(), 0);
+                for (int p = p0; p < p1; ++p) {
+                    const char on = pair_on_[p];
+                    if (!on) continue;
+                    const double* pe = &pair_e_[4 * static_cast<size_t>(p)];
+                    if (on == 2) {
+                        be[0] += pe[0], be[2] += pe[2];
+                        continue;
+                    }
+                    ++loaded;
+                    be[0] += pe[0], be[1] += pe[1], be[2] += pe[2], be[3] += pe[3];
+                    for (int t = 0; t < nt; ++t) {
+                        bool any = false;
+                        if (masks) any = pair_mask_[static_cast<std::size_t>(t) * np + p] != 0;
+                        else
+                            for (int s = 0; s < 6 && !any; ++s)
+                                any = thread_of(pair_nodes_[6 * static_cast<size_t>(p) + s], nt, own_map, n_nodes_) == t;
+                        if (any) list_idx_[static_cast<std::size_t>(t) * np + p0 + scratch.listed[t]++] = p;
+                    }
                 }
+                for (int t = 0; t < nt; ++t) list_cnt_[static_cast<std::size_t>(t) * n_blocks + blk] = scratch.listed[t];
             }
-            for (int t = 0; t < nt; ++t) list_cnt_[static_cast<std::size_t>(t) * n_blocks + blk] = scratch.listed[t];
             for (int k = 0; k < 4; ++k) block_e_[4 * static_cast<size_t>(blk) + k] = be[k];
             block_active_[blk] = loaded;
             block_cost_[blk] = (p1 - p0) + kQueuedCost * queued;
