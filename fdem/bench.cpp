@@ -5,9 +5,18 @@
 // triangles. With --case FILE: the first steps of that case's first stage (contact, joints and all), so that the
 // thread scaling of a real scene is measured; --set key=value as for `fdem run`.
 //   fdem_bench [--triangles N | --case FILE [--set k=v ...]] [--steps S] [--repeats R] [--threads 1,2] [--csv FILE]
+// fdem_bench --probe [--csv FILE]: what the machine gives each thread, to read the figures above by (Linux): per CPU
+// of the process's set, the latency of a dependent load over 256 KB and 4 MB and a core-bound loop's time, and the
+// round trip of a cache line between the first CPU and each other one. A shared or virtual machine can give its
+// CPUs different cache latencies and a slow path between them (BENCHMARKS.md, "How to measure").
+#ifdef __linux__
+#include <pthread.h>
+#include <sched.h>
+#endif
 #include <omp.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -16,8 +25,11 @@
 #include <ctime>
 #include <fstream>
 #include <iostream>
+#include <limits>
 #include <sstream>
 #include <string>
+#include <random>
+#include <thread>
 #include <vector>
 
 #include "fdem/case.hpp"
@@ -27,14 +39,148 @@
 #include "fdem/simulation.hpp"
 #include "mesh/gmsh_source.hpp"
 
+namespace {
+
+#ifdef __linux__
+// Pins the calling thread to one CPU; false when the system refuses.
+bool pin_to(int cpu) {
+    cpu_set_t set;
+    CPU_ZERO(&set);
+    CPU_SET(cpu, &set);
+    return pthread_setaffinity_np(pthread_self(), sizeof set, &set) == 0;
+}
+
+// Nanoseconds per load of a chain of dependent loads through a random cycle over `bytes` (Sattolo's shuffle, fixed
+// seed): the latency of the cache level that holds that many bytes. Best of three passes.
+double chase_ns(std::size_t bytes) {
+    const std::size_t n = bytes / sizeof(std::size_t);
+    std::vector<std::size_t> next(n);
+    for (std::size_t i = 0; i < n; ++i) next[i] = i;
+    std::mt19937_64 rng(12345);
+    for (std::size_t i = n - 1; i > 0; --i) std::swap(next[i], next[rng() % i]);  // one cycle through all
+    std::size_t k = 0;
+    for (std::size_t i = 0; i < n; ++i) k = next[k];  // warm
+    const long loads = 4000000;
+    double best = 1e30;
+    for (int pass = 0; pass < 3; ++pass) {
+        const auto t0 = std::chrono::steady_clock::now();
+        for (long i = 0; i < loads; ++i) k = next[k];
+        const double ns = std::chrono::duration<double, std::nano>(std::chrono::steady_clock::now() - t0).count();
+        best = std::min(best, ns / loads);
+    }
+    if (k == n) std::printf(" ");  // (k is used: the chain is not optimised away)
+    return best;
+}
+
+// Nanoseconds per iteration of eight independent multiply-add chains: the core's speed without memory.
+double core_ns() {
+    volatile double seed = 0.9999999;
+    double a[8] = {1, 2, 3, 4, 5, 6, 7, 8};
+    const double c = seed;
+    const long iters = 20000000;
+    const auto t0 = std::chrono::steady_clock::now();
+    for (long i = 0; i < iters; ++i)
+        for (double& q : a) q = q * c + 1e-7;
+    const double ns = std::chrono::duration<double, std::nano>(std::chrono::steady_clock::now() - t0).count();
+    volatile double sink = a[0] + a[7];
+    (void)sink;
+    return ns / iters;
+}
+
+// Nanoseconds for a cache line to go from CPU a to CPU b and back (two threads taking turns on one counter).
+double round_trip_ns(int a, int b) {
+    alignas(64) std::atomic<long> turn{0};
+    const long trips = 100000;
+    std::atomic<bool> pinned_ok{true};
+    std::thread other([&] {
+        if (!pin_to(b)) pinned_ok = false;
+        for (long i = 1; i < 2 * trips; i += 2) {
+            while (turn.load(std::memory_order_acquire) != i) {
+            }
+            turn.store(i + 1, std::memory_order_release);
+        }
+    });
+    pin_to(a);
+    const auto t0 = std::chrono::steady_clock::now();
+    for (long i = 0; i < 2 * trips; i += 2) {
+        turn.store(i + 1, std::memory_order_release);
+        while (turn.load(std::memory_order_acquire) != i + 2) {
+        }
+    }
+    const double ns = std::chrono::duration<double, std::nano>(std::chrono::steady_clock::now() - t0).count();
+    other.join();
+    return pinned_ok ? ns / trips : std::numeric_limits<double>::quiet_NaN();
+}
+#endif
+
+int probe(const std::string& csv) {
+#ifdef __linux__
+    cpu_set_t set;
+    CPU_ZERO(&set);
+    if (sched_getaffinity(0, sizeof set, &set) != 0) {
+        std::cerr << "fdem_bench --probe: cannot read the CPUs this process may run on\n";
+        return 1;
+    }
+    std::vector<int> cpus;
+    for (int c = 0; c < CPU_SETSIZE; ++c)
+        if (CPU_ISSET(c, &set)) cpus.push_back(c);
+    std::ofstream out(csv);
+    if (!out) {
+        std::cerr << "error: cannot write the CSV file '" << csv << "'\n";
+        return 1;
+    }
+    out << "cpu,load_256k_ns,load_4m_ns,core_loop_ns,round_trip_with_first_ns\n";
+    std::printf("cpu  load 256 KB (ns)  load 4 MB (ns)  core loop (ns)  round trip with cpu %d (ns)\n", cpus[0]);
+    for (const int c : cpus) {
+        const double nan = std::numeric_limits<double>::quiet_NaN();
+        double l1 = nan, l2 = nan, cl = nan;  // (NaN: the system would not run a thread on that CPU)
+        std::thread t([&] {
+            if (!pin_to(c)) return;
+            l1 = chase_ns(256 * 1024);
+            l2 = chase_ns(4 * 1024 * 1024);
+            cl = core_ns();
+        });
+        t.join();
+        const double rt = c == cpus[0] ? nan : round_trip_ns(cpus[0], c);  // (NaN: itself, or not allowed)
+        std::printf("%3d  %17.2f  %14.2f  %14.3f  %26.0f\n", c, l1, l2, cl, rt);
+        out << c << "," << l1 << "," << l2 << "," << cl << "," << rt << "\n";
+    }
+    std::printf("CSV: %s\n", csv.c_str());
+    return 0;
+#else
+    (void)csv;
+    std::cerr << "fdem_bench --probe: only on Linux\n";
+    return 1;
+#endif
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
+    // --probe [--csv FILE]: the machine, not a model
+    for (int i = 1; i < argc; ++i)
+        if (std::strcmp(argv[i], "--probe") == 0) {
+            std::string csv = "probe.csv";
+            for (int j = 1; j < argc; ++j) {
+                if (j == i) continue;
+                if (std::strcmp(argv[j], "--csv") == 0 && j + 1 < argc) {
+                    csv = argv[++j];
+                } else {
+                    std::cerr << "fdem_bench --probe: takes only --csv FILE (got '" << argv[j] << "')\n";
+                    return 1;
+                }
+            }
+            return probe(csv);
+        }
     fdem::ensure_wait_policy(argv);
     long triangles = 120000, steps = 200, repeats = 5;
     std::string csv = "bench.csv", threads_list = "1,2", case_file;
     std::vector<std::string> sets;
     const char* usage =
         "usage: fdem_bench [--triangles N | --case FILE [--set k=v ...]] [--steps S] [--repeats R] [--threads 1,2] "
-        "[--csv FILE]\n";
+        "[--csv FILE]\n"
+        "       fdem_bench --probe [--csv FILE]   (per CPU: load latency over 256 KB and 4 MB, a core-bound loop, and\n"
+        "                                        the round trip of a cache line with the first CPU)\n";
     for (int i = 1; i < argc; ++i)
         if (std::strcmp(argv[i], "--help") == 0 || std::strcmp(argv[i], "-h") == 0) {
             std::cout << usage;
