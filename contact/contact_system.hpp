@@ -9,8 +9,9 @@
 //   resolved law table, hist[kHistPerPair p] friction state (slots as in potential.hpp), pair_hist_on[p] bit s
 //   set when slot s of hist may hold something (0: all zero, nothing to forget or read). Per law: law_prm[l], the pair kernel's parameters
 //   resolved once per step (they depend on the law, dt and the dashpot only). Per-pair scratch
-//   (forces 12 p, energies) is written by one thread per pair in parallel and then added in pair order, each node's
-//   forces by one thread (set_node_owner), so the result has the same bits for any thread count.
+//   (forces 12 p, energies) is written by one thread per pair in parallel (each thread a contiguous share of the
+//   blocks of pairs); the forces are then added in pair order, each node's by one thread (set_node_owner), and the
+//   energies summed per block in pair order, then over the blocks in order: the same bits for any thread count.
 //   "No index" is -1.
 //
 // HOW THE ENGINE USES IT
