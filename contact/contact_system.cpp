@@ -24,7 +24,7 @@ namespace {
 constexpr int kParallelMin = 4096;
 // Pairs per block of the pair loop (the unit of its threads' shares and of the lists of pairs with something to add):
 // four batches, so that shares of a wall's 5662 pairs (22 blocks) are cut to a few per cent (64 and 128 measured
-// alike on two threads and 1 % slower on one: RESULTS.md §41).
+// alike on two threads and 1 % slower on one: lourenco2005/RESULTS.md §41).
 constexpr int kPairBlock = 256;
 // Pairs per batch of edge integrals (PairBatch): its queued edges (about one per pair, 160 bytes each) and the pairs'
 // geometry and history stay in the core's first-level cache from the first stage to the loads.
@@ -513,9 +513,9 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f,
     // Each thread's share of the pair blocks: a contiguous run of about equal cost in the last step. Contiguous and
     // nearly the same every step, a pair's friction history, forces and triangles stay in the cache of the core that
     // evaluated it the step before, and in the list's order (NBS cells) a thread's pairs are mostly on the nodes its
-    // node loop integrates and its scatter adds (about 83 % of the loaded pairs' nodes in the wall of
-    // k25_N100_quick.toml on 2 threads). A dynamic schedule balanced the blocks but sent each to either core; the
-    // contiguous shares measured faster (RESULTS.md §41). Which thread evaluates a pair does not change its result.
+    // node loop integrates and its scatter adds (93 % of its pairs' nodes in the wall of k25_N100_quick.toml on 2
+    // threads). A dynamic schedule balanced the blocks but sent each to either core; the contiguous shares measured
+    // faster (lourenco2005/RESULTS.md §41). Which thread evaluates a pair does not change its result.
     block_share_.assign(team + 1, n_blocks);
     if (block_cost_.size() != static_cast<std::size_t>(n_blocks)) block_cost_.assign(n_blocks, 1);
     {
