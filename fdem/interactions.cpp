@@ -449,6 +449,7 @@ void Interactions::load_state(StateReader& r) {
     if (has_c != (contact_ != nullptr) || has_j != (joints_ != nullptr)) throw StateError("interactions: another set of modules");
     if (contact_) contact_->load_state(r);
     if (joints_) joints_->load_state(r);
+    dormant_listed_ = false;  // (the joints' dormant set is the saved one: listed again by the next insertion check)
 }
 
 }  // namespace fdem

@@ -371,6 +371,54 @@ TEST_CASE("the whole state after a save and load and the rest of the run equals 
     CHECK(state_of(c) == end_a);
 }
 
+TEST_CASE("a state loaded into a simulation that has run on past it (extrinsic elements inserted since) goes on as a fresh load does",
+          "[engine][regression]") {
+    // The extrinsic wall of check_extrinsic_restart: the insertion check lists the dormant elements once and again
+    // after each insertion; a load must have them listed anew from the loaded state, or the elements inserted after the
+    // saved step are never checked again.
+    std::string wall = kWall;
+    for (const auto& [from, to] : std::vector<std::pair<std::string, std::string>>{
+             {"  penalty = 5e10\n", "  penalty = 5e10\n  insertion = \"extrinsic\"\n"},
+             {"tensile_strength = 1.0e6\n  cohesion = 1.4e6", "tensile_strength = 2.0e5\n  cohesion = 3.0e5"}}) {
+        const auto p = wall.find(from);
+        REQUIRE(p != std::string::npos);
+        wall.replace(p, from.size(), to);
+    }
+    auto a = testing::make_simulation(wall, "reload_used_a");
+    run_on(a, 0, true);
+    const std::string end_a = state_of(a);
+    const long inserted_a = a.interactions().joints()->extrinsic_count() - a.interactions().joints()->dormant_count();
+    REQUIRE(inserted_a >= 2);
+    // b: saved where some are inserted and not all, then run to the end (the rest inserted), then the saved state
+    // loaded into b itself and run on again
+    auto b = testing::make_simulation(wall, "reload_used_b");
+    const int dormant0 = b.interactions().joints()->dormant_count();
+    long half = 0;
+    std::string mid;
+    int stage_at_mid = 0;
+    for (int s = 0; s < static_cast<int>(b.spec().stages.size()) && mid.empty(); ++s) {
+        b.begin_stage(s);
+        while (!b.stage_finished()) {
+            b.step();
+            const int inserted = dormant0 - b.interactions().joints()->dormant_count();
+            if (inserted > 0 && inserted < inserted_a) {
+                half = b.steps(), mid = state_of(b), stage_at_mid = s;
+                break;
+            }
+        }
+    }
+    REQUIRE(!mid.empty());
+    run_on(b, stage_at_mid, false);
+    CHECK(b.interactions().joints()->dormant_count() == dormant0 - inserted_a);
+    fdem::StateReader r(mid.data(), mid.size());
+    b.load_state(r);
+    CHECK(b.steps() == half);
+    run_on(b, static_cast<int>(b.stage_results().size()), false);
+    CHECK(b.steps() == a.steps());
+    CHECK(b.interactions().joints()->dormant_count() == dormant0 - inserted_a);
+    CHECK(state_of(b) == end_a);
+}
+
 TEST_CASE("a run killed with SIGKILL leaves history.csv whole and continues from its last checkpoint", "[engine]") {
     const auto dir = testing::tmp_dir("restart_sigkill");
     const std::string case_file = testing::write_text(dir / "wall.toml", kWall);
