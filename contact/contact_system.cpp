@@ -43,6 +43,21 @@ inline int thread_of(int k, int T, const unsigned char* own, int n_nodes) {
     return own ? own[k] : static_cast<int>(static_cast<long long>(k) * T / n_nodes);
 }
 
+// Cuts n = cost.size() blocks into T contiguous shares of about equal total cost: thread t takes blocks
+// [first[t], first[t + 1]) (first has T + 1 entries; a share may be empty).
+inline void cut_shares(const std::vector<int>& cost, int T, std::vector<int>& first) {
+    const int n = static_cast<int>(cost.size());
+    first.assign(T + 1, n);
+    first[0] = 0;
+    long long total = 0, acc = 0;
+    for (int c : cost) total += c;
+    int t = 1;
+    for (int b = 0; b < n && t < T; ++b) {
+        acc += cost[b];
+        while (t < T && acc * T >= total * t) first[t++] = b + 1;
+    }
+}
+
 // Asks for the cache lines of bytes [p, p + n) ahead of their use (write: for a store).
 inline void prefetch_bytes(const void* p, std::size_t n, bool write = false) {
     const char* c = static_cast<const char*>(p);
@@ -516,18 +531,8 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f,
     // node loop integrates and its scatter adds (93 % of its pairs' nodes in the wall of k25_N100_quick.toml on 2
     // threads). A dynamic schedule balanced the blocks but sent each to either core; the contiguous shares measured
     // faster (lourenco2005/RESULTS.md §41). Which thread evaluates a pair does not change its result.
-    block_share_.assign(team + 1, n_blocks);
     if (block_cost_.size() != static_cast<std::size_t>(n_blocks)) block_cost_.assign(n_blocks, 1);
-    {
-        long long total = 0, acc = 0;
-        for (int b = 0; b < n_blocks; ++b) total += block_cost_[b];
-        block_share_[0] = 0;
-        int t = 1;
-        for (int b = 0; b < n_blocks && t < team; ++b) {
-            acc += block_cost_[b];
-            while (t < team && acc * team >= total * t) block_share_[t++] = b + 1;
-        }
-    }
+    cut_shares(block_cost_, team, block_share_);
     list_idx_.resize(static_cast<std::size_t>(team) * np);
     list_cnt_.resize(static_cast<std::size_t>(team) * n_blocks);
     block_e_.resize(4 * static_cast<std::size_t>(n_blocks));

@@ -26,9 +26,9 @@
 #include <fstream>
 #include <iostream>
 #include <limits>
+#include <random>
 #include <sstream>
 #include <string>
-#include <random>
 #include <thread>
 #include <vector>
 
