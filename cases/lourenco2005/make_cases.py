@@ -339,7 +339,7 @@ def k25_case(r, quick=False):
 #   the physical mass): every inertial mass x {s['mass_scale']}, the time step {s['safety']} of the triangles' limit at that, and the
 #   nodes whose contact springs (the joint penalty) would need a smaller step made heavier until they do not (total
 #   inertial mass x 2.4 over x {s['mass_scale']}): 23,480 steps. Against this wall's converged curve (uniform mass scaling 10 at
-#   half the rate, RESULTS.md §29, §33, recomputed in §34; this build §35): peak +0.99 %, K_e -3.2 %, P_y +0.2 %, ductility -3.8 %, whole
+#   half the rate, RESULTS.md §29, §33, recomputed in §34, §42; this build §42): peak +0.70 %, K_e -3.2 %, P_y +0.2 %, ductility -3.4 %, whole
 #   curve 0-10 mm RMS 1.3 % of the peak; uniform mass scaling 100, the setting before §33, took 21,779 steps for
 #   +2.3 %, -7.1 % and 2.3 %. The family report is the validation; this is its fast preview."""
     else:
