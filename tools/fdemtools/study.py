@@ -23,7 +23,10 @@ study speed: a grid of mesh sizes x loading rates x damping values. Error of a r
   smallest reach of the runs and the reference; u_from: --curve-from, default 5 % of u_to, the 0.5 mm of a 10 mm
   pushover, so that the first rows, where any two curves differ by their start-up, do not decide it). K_e, P_y,
   ductility (EEEP as `eeep` computes them) and the peak are compared with the reference curve's: signed relative
-  differences. --error picks which error the Pareto front and the figure use (peak, curve_max or curve_rms).
+  differences. --curve-smooth MM adds curve_max_smoothed: curve_max with both loading branches first averaged over
+  MM mm of travel (validate's --smooth), which tells a curve whose short load drops (slip events) sit a little
+  elsewhere from one whose level differs. --error picks which error the Pareto front and the figure use (peak,
+  curve_max, curve_rms or curve_max_smoothed).
 """
 from __future__ import annotations
 
@@ -155,14 +158,17 @@ def loading_branch(x, y):
     return x[keep], y[keep]
 
 
-def curve_errors(x, y, xr, yr, u_to, u_from) -> dict:
+def curve_errors(x, y, xr, yr, u_to, u_from, smooth: float = 0.0) -> dict:
     """Whole-curve difference of H(u) = (x, y) from the reference (xr, yr), as shares of the reference peak:
     curve_rms over [0, u_to], curve_max over [u_from, u_to] (module doc). Either is None, with a reason, when a
-    curve does not reach u_to."""
+    curve does not reach u_to. With smooth > 0 (m of travel) also curve_max_smoothed: curve_max of the two loading
+    branches each averaged over smooth of travel first (validate.smooth_curve)."""
     xb, yb = loading_branch(x, y)
     xrb, yrb = loading_branch(xr, yr)
     p_ref = float(np.max(yrb)) if len(yrb) else 0.0
     out = {"curve_rms": None, "curve_max": None, "curve_note": ""}
+    if smooth > 0:
+        out["curve_max_smoothed"] = None
     if p_ref <= 0:
         out["curve_note"] = "the reference curve has no positive load"
         return out
@@ -175,6 +181,10 @@ def curve_errors(x, y, xr, yr, u_to, u_from) -> dict:
     d = (np.interp(g, xb, yb) - np.interp(g, xrb, yrb)) / p_ref
     out["curve_rms"] = float(np.sqrt(np.mean(d * d)))
     out["curve_max"] = float(np.max(np.abs(d[g >= u_from])))
+    if smooth > 0:
+        from .validate import smooth_curve
+        ds = (np.interp(g, xb, smooth_curve(xb, yb, smooth)) - np.interp(g, xrb, smooth_curve(xrb, yrb, smooth))) / p_ref
+        out["curve_max_smoothed"] = float(np.max(np.abs(ds[g >= u_from])))
     return out
 
 
@@ -398,17 +408,24 @@ def cmd_speed(args):
     u_from = args.curve_from if args.curve_from is not None else (0.05 * u_to if u_to else None)
     if u_from is not None and u_to is not None and not 0 <= u_from < u_to:
         raise ToolError(f"--curve-from must be in [0, {u_to:g}) m, got {u_from:g}")
+    smooth = getattr(args, "curve_smooth", 0.0) or 0.0
+    if not smooth >= 0:
+        raise ToolError(f"--curve-smooth must be a window >= 0 mm, got {smooth}")
+    smooth *= 1e-3
+    if args.error == "curve_max_smoothed" and not smooth > 0:
+        raise ToolError("--error curve_max_smoothed needs --curve-smooth MM (the window of travel, mm)")
     rows = []
     for r in recs:
         err = abs(r["peak_load_N"] - ref) / abs(ref) if r in ok else None
         row = {**r["params"], "status": r["status"], "wall_time_s": r.get("wall_time_s"),
                "cpu_time_s": r.get("cpu_time_s"), "steps": r.get("steps"),
                "peak_load_kN": r["peak_load_N"] / 1e3 if r.get("peak_load_N") is not None else None,
-               "error": err, "curve_rms": None, "curve_max": None, "K_e_error": None, "P_y_error": None,
+               "error": err, "curve_rms": None, "curve_max": None,
+               **({"curve_max_smoothed": None} if smooth > 0 else {}), "K_e_error": None, "P_y_error": None,
                "ductility_error": None, "peak_error": None, "curve_note": "", "pareto": False, "run": r["name"]}
         c = curves.get(r["name"])
         if c is not None and cref is not None:
-            row.update(curve_errors(c["x"], c["y"], cref["x"], cref["y"], u_to, u_from))
+            row.update(curve_errors(c["x"], c["y"], cref["x"], cref["y"], u_to, u_from, smooth))
             for k in ("K_e", "P_y", "ductility"):
                 row[k + "_error"] = _signed_rel(c[k], cref[k])
             row["peak_error"] = _signed_rel(c["peak"], cref["peak"])
@@ -436,12 +453,14 @@ def cmd_speed(args):
     files = plot_speed(rows, dims, ref_src if args.error == "peak" else cref_src, os.path.join(out, "speed_study"),
                        measure, args.error, tkey)
     print(format_rows(rows, [k for k, _, _ in dims] + ["status", "wall_time_s", "cpu_time_s", "peak_load_kN", "error", "curve_rms",
-                                                       "curve_max", "K_e_error", "ductility_error", "pareto"]))
+                                                       "curve_max"] + (["curve_max_smoothed"] if smooth > 0 else [])
+                      + ["K_e_error", "ductility_error", "pareto"]))
     print(f"reference peak load {ref / 1e3:.5g} kN: {ref_src}" + (f" ({ref_run})" if ref_run else ""))
     if cref_src:
         print(f"reference curve: {cref_src}; curve_rms over 0-{u_to * 1e3:.4g} mm, curve_max over "
-              f"{u_from * 1e3:.4g}-{u_to * 1e3:.4g} mm, shares of its peak {cref['peak'] / 1e3:.5g} kN; "
-              f"Pareto front on the {args.error} error")
+              f"{u_from * 1e3:.4g}-{u_to * 1e3:.4g} mm, shares of its peak {cref['peak'] / 1e3:.5g} kN"
+              + (f"; curve_max_smoothed: the same on both curves averaged over {smooth * 1e3:g} mm of travel"
+                 if smooth > 0 else "") + f"; Pareto front on the {args.error} error")
     print("wrote " + ", ".join([os.path.join(out, "speed_study.csv"), os.path.join(out, "speed_study.json")] + files))
     return 0 if len(ok) == len(recs) else 2
 
@@ -480,7 +499,9 @@ def plot_speed(rows, dims, ref_src, prefix, measure="error", label="peak", tkey=
     ax.set_yscale("log")
     ax.set_xlabel("CPU time (s)" if tkey == "cpu_time_s" else "wall time (s)")
     ax.set_ylabel({"peak": "peak-load error (%)", "curve_max": "largest curve difference (% of the reference peak)",
-                   "curve_rms": "RMS curve difference (% of the reference peak)"}[label])
+                   "curve_rms": "RMS curve difference (% of the reference peak)",
+                   "curve_max_smoothed": "largest difference of the curves averaged over travel (% of the "
+                                         "reference peak)"}[label])
     ax.legend(handles=handles, fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0),
               title=f"error against: {ref_src}", title_fontsize=7)
     if any(r["error"] == 0 for r in valid):
@@ -541,7 +562,11 @@ def add_parser(sub):
                                                               "smallest reach of the runs and the reference)")
     s.add_argument("--curve-from", type=float, metavar="M", help="start of the largest-difference range, m "
                                                                 "(default 5 %% of --curve-to)")
-    s.add_argument("--error", choices=("peak", "curve_max", "curve_rms"), default="peak",
+    s.add_argument("--curve-smooth", type=float, default=0.0, metavar="MM",
+                   help="also curve_max_smoothed: curve_max of the run's and the reference's curves each averaged "
+                        "over MM mm of travel first, as validate --smooth (default 0: not computed); it separates a "
+                        "short load drop's position (a slip event's) from the curve's level")
+    s.add_argument("--error", choices=("peak", "curve_max", "curve_rms", "curve_max_smoothed"), default="peak",
                    help="error of the Pareto front and the figure (default peak)")
     s.add_argument("--timing", choices=("wall", "cpu"), default="wall",
                    help="time of the Pareto front and the figure: the runs' wall time (default) or their CPU time "

@@ -240,6 +240,42 @@ def test_speed_study_whole_curve_errors_with_fake_fdem(tmp_path, cli):
     rc, o, err = cli("study", "speed", case, "--sizes", "0.2,0.1", "--fdem", FAKE, "--out-dir", out,
                      "--curve-to", "0.002", "--error", "curve_rms")
     assert rc == 1 and "ends at 1 mm, before 2 mm" in err
+    # averaged over 0.2 mm of travel: the difference q g(u) averages to q on the plateau (0.5-1 mm, which holds a
+    # whole window up to the end), so the largest smoothed difference is the raw one
+    rc, o, err = cli("study", "speed", case, "--sizes", "0.2,0.1", "--rates", "0.5,0", "--rate-key", "rate",
+                     "--fdem", FAKE, "--out-dir", out, "--curve-smooth", "0.2", "--error", "curve_max_smoothed")
+    assert rc == 0, err
+    j = json.loads((out / "speed_study.json").read_text())
+    assert j["front_error"] == "curve_max_smoothed" and "averaged over 0.2 mm of travel" in o
+    for r in j["runs"]:
+        q = (1 + float(r["geometry.mesh_size"])) * (1 + float(r["rate"])) / 1.1 - 1
+        assert r["curve_max_smoothed"] == pytest.approx(abs(q), rel=1e-9, abs=1e-12)
+    assert list(read_csv(out / "speed_study.csv")[0]).index("curve_max_smoothed") == \
+        list(read_csv(out / "speed_study.csv")[0]).index("curve_max") + 1
+    rc, o, err = cli("study", "speed", case, "--sizes", "0.2,0.1", "--fdem", FAKE, "--out-dir", out,
+                     "--error", "curve_max_smoothed")
+    assert rc == 1 and "needs --curve-smooth" in err
+    rc, o, err = cli("study", "speed", case, "--sizes", "0.2,0.1", "--fdem", FAKE, "--out-dir", out,
+                     "--curve-smooth", "-1")
+    assert rc == 1 and "--curve-smooth must be a window >= 0 mm" in err
+
+
+def test_curve_errors_smoothed_slip_event():
+    """A plateau of 4 with a drop of depth 1 over 0.1 of travel, at 5 in the run and at 6 in the reference: the raw
+    largest difference is the drop, 1 / 4; each averaged over a window of 1 (the drops a window apart), the largest
+    difference is the drop's area over the window, 0.1 / 4 (rows every 0.001: the window holds 1001 rows, the
+    drop 100, so 0.1 / 4 x 1000 / 1001). A constant offset stays what it was."""
+    x = np.linspace(0.0, 10.0, 10001)
+    def plateau(at):
+        y = np.full_like(x, 4.0)
+        y[(x >= at - 1e-9) & (x < at + 0.1 - 1e-9)] = 3.0
+        return y
+    e = study.curve_errors(x, plateau(5.0), x, plateau(6.0), 10.0, 0.5, smooth=1.0)
+    assert e["curve_max"] == pytest.approx(0.25, rel=1e-12)
+    assert e["curve_max_smoothed"] == pytest.approx(0.025 * 1000 / 1001, rel=2e-3)
+    e = study.curve_errors(x, plateau(5.0) + 0.2, x, plateau(5.0), 10.0, 0.5, smooth=1.0)
+    assert e["curve_max_smoothed"] == pytest.approx(0.05, rel=1e-12) and e["curve_max"] == pytest.approx(0.05, rel=1e-12)
+    assert "curve_max_smoothed" not in study.curve_errors(x, plateau(5.0), x, plateau(6.0), 10.0, 0.5)
 
 
 def test_loading_branch_and_curve_errors():
