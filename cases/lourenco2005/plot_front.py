@@ -9,10 +9,11 @@ against the peak's difference, and tabulated.
 study_front_k25_N100_quick.csv, whose study folders are gone); each LABEL=STUDY adds the runs of a folder written by
 `fdem-tools study speed ... --reference-run REF --error curve_rms` (its speed_study.csv: steps, wall and CPU times,
 errors) as the front LABEL (a label already in the table is replaced). Writes PREFIX.csv and PREFIX.png (default
-study_front_k25_N100_quick) and prints a markdown table and, for every front after the first, the least time it
-takes to reach each curve RMS and peak error of the front before it and of the first front.
+study_front_k25_N100_quick beside this script) and prints a markdown table and, for every front after the first,
+the least time it takes to reach each curve RMS and peak error of the front before it and of the first front.
 
-The fronts so far (lourenco2005/RESULTS.md): before (§32), after (§29, §32), per node (§33), faces (§34), engine (§42).
+The fronts so far (lourenco2005/RESULTS.md): before (§32), after (§29, §32), per node (§33), faces (§34),
+engine (§42).
 """
 import argparse
 import csv
@@ -83,7 +84,8 @@ def main():
     ap.add_argument("studies", nargs="*", metavar="LABEL=STUDY")
     ap.add_argument("--table", default=os.path.join(HERE, "study_front_k25_N100_quick.csv"),
                     help="fronts measured before (a CSV this script wrote); '' for none")
-    ap.add_argument("--out", default="study_front_k25_N100_quick")
+    ap.add_argument("--out", default=os.path.join(HERE, "study_front_k25_N100_quick"),
+                    help="prefix of the table and figure written (default: the committed ones beside this script)")
     a = ap.parse_args()
     global TIME
     fronts = load_table(a.table) if a.table else {}
