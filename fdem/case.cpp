@@ -1048,6 +1048,33 @@ CaseSpec load_case(const std::string& path, const std::vector<std::string>& over
             if (s.until_monitor && !spec.find_monitor(*s.until_monitor))
                 ctx.error(p + ".until.monitor", ur.line(), "no monitor named '" + *s.until_monitor + "' in [[monitors]]");
         }
+        if (const toml::table* u = r.table("past_peak", false,
+                                           "a table { load = NAME, displacement = NAME, drop = FRACTION, travel = D[, smooth = L] }")) {
+            Reader pr(ctx, *u, p + ".past_peak");
+            StageSpec::PastPeak pp;
+            pp.line = pr.line();
+            pp.load = pr.string("load", true, "the name of the load monitor (a reaction or load)").value_or("");
+            pp.displacement = pr.string("displacement", true, "the name of the displacement monitor").value_or("");
+            pp.drop = pr.number("drop", true, "a fraction of the largest load in (0, 1)", [](double v) { return v > 0 && v < 1; })
+                          .value_or(0.2);
+            pp.travel = pr.number("travel", true, "a travel > 0 of the displacement monitor, in its unit", positive).value_or(0);
+            pp.smooth = pr.number("smooth", false, "an averaging length > 0 of the displacement monitor, in its unit", positive)
+                            .value_or(pp.travel / 4);
+            pr.finish();
+            const MonitorSpec* ml = pp.load.empty() ? nullptr : spec.find_monitor(pp.load);
+            const MonitorSpec* md = pp.displacement.empty() ? nullptr : spec.find_monitor(pp.displacement);
+            if (!pp.load.empty() && !ml)
+                ctx.error(p + ".past_peak.load", pp.line, "no monitor named '" + pp.load + "' in [[monitors]]");
+            else if (ml && ml->type != "reaction" && ml->type != "load")
+                ctx.error(p + ".past_peak.load", pp.line, "monitor '" + pp.load + "' is a " + ml->type +
+                                                              " monitor; expected a reaction or load monitor");
+            if (!pp.displacement.empty() && !md)
+                ctx.error(p + ".past_peak.displacement", pp.line, "no monitor named '" + pp.displacement + "' in [[monitors]]");
+            else if (md && md->type != "displacement" && md->type != "rotation" && md->type != "tilt")
+                ctx.error(p + ".past_peak.displacement", pp.line, "monitor '" + pp.displacement + "' is a " + md->type +
+                                                                      " monitor; expected a displacement, rotation or tilt monitor");
+            s.past_peak = pp;
+        }
         s.gravity = r.vec2("gravity", false, "[gx, gy] in m/s^2");
         s.gravity_ramp = r.number("gravity_ramp", false, "a ramp time >= 0 in s", [](double v) { return v >= 0; }).value_or(0);
         s.tilt_rate = r.number("tilt_rate", false, "a rotation rate of gravity in deg/s").value_or(0);

@@ -203,6 +203,18 @@ struct StageSpec {
     double until_value = 0;              // in the monitor's unit
     std::optional<double> equilibrium;   // unbalanced-force ratio, -
     std::optional<double> max_duration;  // s, bound for until / equilibrium
+    // past_peak = { load, displacement, drop, travel, smooth }: the stage also ends once the load monitor's
+    // magnitude, averaged over `smooth` of displacement, has stayed below (1 - drop) times the largest value that
+    // average reached in this stage while the displacement monitor moved by at least `travel` (both in the
+    // displacement monitor's unit; smooth defaults to travel / 4): a pushover run to its peak and a stated length
+    // of its descending branch. It never ends a stage alone: the stage still needs duration, until (the largest
+    // displacement) or max_duration.
+    struct PastPeak {
+        std::string load, displacement;
+        double drop = 0, travel = 0, smooth = 0;
+        int line = 0;
+    };
+    std::optional<PastPeak> past_peak;
     // gravity: vector (m/s^2), ramp (s), and a slow counter-clockwise rotation of the vector (deg/s, tilting tests)
     std::optional<std::array<double, 2>> gravity;
     double gravity_ramp = 0;

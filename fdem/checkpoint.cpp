@@ -136,7 +136,7 @@ void Simulation::save_state(StateWriter& w) const {
 #if defined(__x86_64__) && defined(__GLIBCXX__)
     // (not saved: the energy audit's sums, a diagnostic of one process; after a restart it starts over; the node
     // loop's speeds block_v2_ and v2max_, which load_state marks unknown)
-    static_assert(sizeof(Simulation) == 5040, "Simulation changed: update save_state/load_state (fdem/checkpoint.cpp) and this size");
+    static_assert(sizeof(Simulation) == 5088, "Simulation changed: update save_state/load_state (fdem/checkpoint.cpp) and this size");
     static_assert(sizeof(ActiveSupport) == 376, "ActiveSupport changed: update save_state/load_state and this size");
     static_assert(sizeof(ActiveLoad) == 296, "ActiveLoad changed: update save_state/load_state and this size");
 #endif
@@ -189,6 +189,7 @@ void Simulation::save_state(StateWriter& w) const {
 
     w.section("stage");
     w.pod(until_start_), w.pod(until_monitor_), w.pod(stage_ramp_end_);
+    w.pod(peak_load_monitor_), w.pod(peak_disp_monitor_), w.pod(peak_mean_), w.pod(peak_u_prev_), w.pod(peak_load_), w.pod(peak_disp_), w.pod(below_since_);
     w.pod(static_cast<std::uint64_t>(stage_results_.size()));
     for (const StageResult& r : stage_results_) {
         w.str(r.name), w.str(r.ended_by);
@@ -289,6 +290,9 @@ void Simulation::load_state(StateReader& r) {
     r.section("stage");
     r.pod(until_start_), r.pod(until_monitor_), r.pod(stage_ramp_end_);
     check_index(until_monitor_, static_cast<int>(spec_.monitors.size()), "until monitor");
+    r.pod(peak_load_monitor_), r.pod(peak_disp_monitor_), r.pod(peak_mean_), r.pod(peak_u_prev_), r.pod(peak_load_), r.pod(peak_disp_), r.pod(below_since_);
+    check_index(peak_load_monitor_, static_cast<int>(spec_.monitors.size()), "past_peak load monitor");
+    check_index(peak_disp_monitor_, static_cast<int>(spec_.monitors.size()), "past_peak displacement monitor");
     stage_results_.assign(static_cast<std::size_t>(r.get<std::uint64_t>()), StageResult{});
     for (StageResult& s : stage_results_) {
         r.str(s.name), r.str(s.ended_by);

@@ -296,11 +296,19 @@ int run_case(const std::string& case_file, const std::vector<std::string>& overr
             if (spec.monitors[i].name != ref.monitor) continue;
             const double got = sim.reference_value(static_cast<int>(i));
             const double err = ref.value != 0 ? (std::abs(got) - std::abs(ref.value)) / std::abs(ref.value) : 0.0;
+            // Compared by magnitude: a reaction carries the opposite sign of the load it resists, so a value whose
+            // sign differs from the reference's is printed as its magnitude, |H|.
+            const bool flip = got * ref.value < 0;
+            const std::string name = flip ? "|" + ref.monitor + "|" : ref.monitor;
             char b[512];
             std::snprintf(b, sizeof b, "result: %s %s = %.5g %s; reference %.5g %s (%s); error %+.2f %%; run time %.2f s",
-                          ref.quantity.c_str(), ref.monitor.c_str(), got, spec.monitors[i].unit().c_str(), ref.value,
-                          spec.monitors[i].unit().c_str(), ref.source.c_str(), 100 * err, sim.wall_time());
+                          ref.quantity.c_str(), name.c_str(), flip ? -got : got, spec.monitors[i].unit().c_str(),
+                          ref.value, spec.monitors[i].unit().c_str(), ref.source.c_str(), 100 * err, sim.wall_time());
             std::cout << b << std::endl;
+            if (!sim.reference_past_peak(static_cast<int>(i)))
+                std::cout << "note: " << ref.monitor << " ended within " << 100 * Simulation::kPastPeakDrop
+                          << " % of its largest value (not past the peak): the peak above is the largest value reached, "
+                             "a lower bound; run further (a larger until, or [[stages]] past_peak)" << std::endl;
             if (ref.tolerance > 0)
                 std::cout << (std::abs(err) <= ref.tolerance ? "within" : "OUTSIDE") << " the stated tolerance of "
                           << 100 * ref.tolerance << " %" << std::endl;

@@ -510,6 +510,14 @@ double Simulation::reference_value(int i) const {
     return std::abs(ext[0]) > std::abs(ext[1]) ? ext[0] : ext[1];
 }
 
+bool Simulation::reference_past_peak(int i) const {
+    if (spec_.reference.quantity != "peak") return true;
+    if (!stage_results_.empty() && stage_results_.back().ended_by == "past_peak") return true;
+    const auto& ext = mon_ext_[static_cast<std::size_t>(i)];
+    const double peak = std::max(std::abs(ext[0]), std::abs(ext[1]));
+    return peak > 0 && std::abs(ext[2]) < (1.0 - kPastPeakDrop) * peak;
+}
+
 double Simulation::history_interval() const {
     const StageSpec& st = spec_.stages[stage_];
     return st.history_interval ? *st.history_interval : spec_.history_interval;
@@ -668,6 +676,7 @@ void Simulation::write_summary(const std::string& status, const std::string& mes
             if (spec_.monitors[i].name == ref.monitor) {
                 const double got = reference_value(static_cast<int>(i));
                 r["computed"] = got;
+                r["past_peak"] = reference_past_peak(static_cast<int>(i));
                 r["relative_error"] = ref.value != 0 ? (std::abs(got) - std::abs(ref.value)) / std::abs(ref.value) : 0.0;
             }
         j["reference"] = r;

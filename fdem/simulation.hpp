@@ -5,6 +5,7 @@
 #include <array>
 #include <cstdint>
 #include <fstream>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -107,6 +108,11 @@ public:
     // Largest |value| and final value of each monitor over the history rows written.
     std::vector<std::array<double, 3>> monitor_extrema() const { return mon_ext_; }  // min, max, final
     double reference_value(int monitor) const;  // the quantity [reference] names, of monitor `monitor`
+    // For a "peak" reference: false when the run ended with the monitor still within kPastPeakDrop of its largest
+    // magnitude and its last stage did not end by past_peak (the largest value is then a lower bound of the peak);
+    // true otherwise
+    bool reference_past_peak(int monitor) const;
+    static constexpr double kPastPeakDrop = 0.05;
 
     // Checkpoint and restart (fdem/checkpoint.cpp). save_state/load_state write and read everything that carries from
     // one step to the next (model state, stage, supports and loads, damping filters, energy books, monitors, output
@@ -288,6 +294,13 @@ private:
     double until_start_ = 0;
     int until_monitor_ = -1;
     double stage_ramp_end_ = 0;
+    bool past_peak_reached(const StageSpec::PastPeak& pp);  // updates the state below; true: end the stage
+    // past_peak (StageSpec::PastPeak): the monitors, the load magnitude's running mean over displacement and the
+    // displacement of its last update (NaN before the first), the mean's largest value and where it was reached,
+    // and the displacement at which the mean last fell below (1 - drop) of it (NaN while it is above)
+    int peak_load_monitor_ = -1, peak_disp_monitor_ = -1;
+    double peak_mean_ = 0, peak_u_prev_ = std::numeric_limits<double>::quiet_NaN();
+    double peak_load_ = 0, peak_disp_ = 0, below_since_ = std::numeric_limits<double>::quiet_NaN();
 
     // outputs
     std::string history_;          // header, until append_history writes it

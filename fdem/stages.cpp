@@ -256,6 +256,15 @@ void Simulation::begin_stage(int s) {
                                      sci(until_start_) + " and the prescribed velocity moves it away from " +
                                      sci(st.until_value));
     }
+    peak_load_monitor_ = peak_disp_monitor_ = -1;
+    peak_load_ = peak_disp_ = peak_mean_ = 0;
+    below_since_ = peak_u_prev_ = std::numeric_limits<double>::quiet_NaN();
+    if (st.past_peak) {
+        for (std::size_t i = 0; i < spec_.monitors.size(); ++i) {
+            if (spec_.monitors[i].name == st.past_peak->load) peak_load_monitor_ = static_cast<int>(i);
+            if (spec_.monitors[i].name == st.past_peak->displacement) peak_disp_monitor_ = static_cast<int>(i);
+        }
+    }
     check_ties();
     const double hi = history_interval();
     next_history_ = hi > 0 ? time_ : 0;
@@ -383,10 +392,42 @@ bool Simulation::stage_finished() {
         const double dir = st.until_value >= until_start_ ? 1.0 : -1.0;
         if (dir * (m - st.until_value) >= 0) return finish("until");
     }
+    if (st.past_peak && past_peak_reached(*st.past_peak)) return finish("past_peak");
     if (st.equilibrium && time_ >= stage_ramp_end_ && steps_ - stage_steps0_ > 10 && unbalanced_ratio_ <= *st.equilibrium)
         return finish("equilibrium");
     if (st.max_duration && ts + 0.5 * dt_ >= *st.max_duration) return finish("max_duration");
     return false;
+}
+
+// The past-peak end of a pushover stage (StageSpec::PastPeak). The load magnitude |F| is averaged over displacement
+// by a running mean, Fbar += w (|F| - Fbar) with w = min(1, |du| / smooth) (explicit runs carry oscillations of the
+// whole wall on top of the quasi-static load, of a few per cent of it: a raw crest is not the peak); the largest
+// Fbar of the stage is the peak, and u_b is the displacement at which Fbar last fell below (1 - drop) of it. The
+// stage ends when Fbar has stayed below since u_b and |u - u_b| >= travel. Read every step at the monitors' time t^n
+// (monitor_value).
+bool Simulation::past_peak_reached(const StageSpec::PastPeak& pp) {
+    if (peak_load_monitor_ < 0 || peak_disp_monitor_ < 0) return false;
+    const double f = std::abs(monitor_value(peak_load_monitor_));
+    const double u = monitor_value(peak_disp_monitor_);
+    if (std::isnan(peak_u_prev_)) {
+        peak_mean_ = f, peak_u_prev_ = u;
+    } else {
+        const double w = std::min(1.0, std::abs(u - peak_u_prev_) / pp.smooth);
+        peak_mean_ += w * (f - peak_mean_);
+        peak_u_prev_ = u;
+    }
+    if (peak_mean_ > peak_load_) peak_load_ = peak_mean_, peak_disp_ = u;
+    if (!(peak_mean_ < (1.0 - pp.drop) * peak_load_)) {
+        below_since_ = std::numeric_limits<double>::quiet_NaN();
+        return false;
+    }
+    if (std::isnan(below_since_)) below_since_ = u;
+    if (std::abs(u - below_since_) < pp.travel) return false;
+    log("stage " + std::to_string(stage_ + 1) + ": past its peak: |" + pp.load + "| averaged over " + sci(pp.smooth) +
+        " of " + pp.displacement + " has stayed below " + sci(1.0 - pp.drop, 3) + " of its largest value " +
+        sci(peak_load_) + " (at " + pp.displacement + " = " + sci(peak_disp_) + ") over " +
+        sci(std::abs(u - below_since_)) + " of " + pp.displacement);
+    return true;
 }
 
 }  // namespace fdem
