@@ -118,3 +118,29 @@ TEST_CASE("past_peak: bad keys are exit 1 naming the key and what was expected",
         CHECK(r.err.find(c.expect) != std::string::npos);
     }
 }
+
+TEST_CASE("past_peak: a 'peak' result that ended while still rising is reported as a lower bound; one past its peak "
+          "is not",
+          "[unit][stages]") {
+    const std::string ref = "\n[reference]\nmonitor = \"R\"\nquantity = \"peak\"\nvalue = 74.0e3\nsource = \"f_t A\"\n";
+    struct Run {
+        double until;
+        std::string extra;
+        bool past;
+    };
+    const Run runs[] = {{5.9e-5, "", false},
+                        {1e-3, "past_peak = { load = \"R\", displacement = \"ux\", drop = 0.5, travel = 2e-5, smooth = 2e-6 }\n",
+                         true}};
+    int i = 0;
+    for (const Run& c : runs) {
+        Bar b = bar_case("past_peak_cli_" + std::to_string(i++), c.until, c.extra);
+        testing::write_text(b.case_path, testing::read_text(b.case_path) + ref);
+        const auto out = b.dir / "run";
+        const auto r = testing::run_fdem("run \"" + b.case_path + "\" --threads 1 --out \"" + out.string() + "\"", b.dir);
+        INFO(r.out << r.err);
+        REQUIRE(r.code == 0);
+        CHECK((r.out.find("not past the peak") == std::string::npos) == c.past);
+        const std::string summary = testing::read_text(out / "summary.json");
+        CHECK(summary.find(std::string("\"past_peak\": ") + (c.past ? "true" : "false")) != std::string::npos);
+    }
+}
