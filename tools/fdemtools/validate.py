@@ -296,6 +296,7 @@ def curve_metrics(run_dir: str, smooth_m: float = 0.0, rule: str = "largest", up
            "peak_raw_N": float(np.max(raw)), "oscillation_N": oscillation(x, raw, y, smooth_m),
            "load_sign": sign, "load_sign_rule": sign_rule}
     out.update(damping_work_shares(run, last, c, n))
+    out.update(crack_counts(run, last, n, i))
     # EEEP ductility of the same curve ([K25] Eq. 14, tools/README.md 'eeep': K_e by regression to 70 % of the peak,
     # Delta_u = displacement at the peak, the [K25] choice); None when the curve has no elastic branch to fit. With
     # --peak first the curve ends at the first peak, so that peak is eeep's.
@@ -308,6 +309,29 @@ def curve_metrics(run_dir: str, smooth_m: float = 0.0, rule: str = "largest", up
     except (ToolError, ValueError, ZeroDivisionError, FloatingPointError):
         out["ductility"] = None
         out["eeep_K_e_N_m"] = None
+    return out
+
+
+UNIT_CRACK_COLUMNS = ("broken_unit_I", "broken_unit_II", "broken_unit_mixed")
+
+
+def crack_counts(run, stage, n: int, i_peak: int) -> dict:
+    """Cracks through the units (stones, bricks) in the loading stage, for reading the failure mode: the broken
+    unit-interior cohesive elements (history columns broken_unit_*, cumulative) at the peak row and at the last row
+    of the (cut) curve, counted from the stage's start; and how the run's last stage ended (summary.json stage
+    endings: until, past_peak, duration, ...). None where the run has no such columns."""
+    out = {"unit_cracks_at_peak": None, "unit_cracks_at_end": None, "ended_by": None}
+    h = run.history
+    if h is not None and stage is not None and all(h.has(k) for k in UNIT_CRACK_COLUMNS):
+        keep = h.numeric("stage") == stage
+        tot = sum(h.numeric(k)[keep] for k in UNIT_CRACK_COLUMNS)
+        if len(tot):
+            tot = tot[:n] - tot[0]
+            out["unit_cracks_at_peak"] = int(tot[min(i_peak, len(tot) - 1)])
+            out["unit_cracks_at_end"] = int(tot[-1])
+    ends = (run.summary or {}).get("stages") or []
+    if isinstance(ends, list) and ends and isinstance(ends[-1], dict):
+        out["ended_by"] = ends[-1].get("ended_by")
     return out
 
 
@@ -593,6 +617,8 @@ def run_family(args) -> int:
                "initial_stiffness_kN_mm": m["initial_stiffness_N_m"] / 1e6 if "initial_stiffness_N_m" in m else None,
                "load_at_end_kN": kn(m.get("load_at_end_N")), "drop_after_peak": m.get("drop_after_peak"),
                "past_peak": past_peak(m.get("past_peak")),
+               "stage_ended_by": m.get("ended_by"),
+               "unit_cracks_at_peak": m.get("unit_cracks_at_peak"), "unit_cracks_at_end": m.get("unit_cracks_at_end"),
                "largest_load_kN": kn(m.get("largest_load_N")), "largest_at_mm": mm(m.get("largest_at_m")),
                "peak_rule": args.peak, "peak_up_to_mm": args.peak_up_to,
                "experiment_kN": exp_N / 1e3 if exp_N else None, "error_vs_experiment": rel(peak, exp_N),
@@ -641,14 +667,16 @@ def report_markdown(family, rows, qs_rows, trend, fixed, args, elapsed) -> str:
              + f"; {args.threads} thread(s) per run; published FDEM column `{args.published_column}`.")
     L.append("")
     L.append("| case | status | peak (kN) | disp. at peak (mm) | K0 (kN/mm) | load at end (kN) | drop after peak "
-             "| past peak | experiment (kN) | error | published FDEM (kN) | error vs FDEM | triangles | steps "
-             "| wall time (s) |")
-    L.append("|---" * 15 + "|")
+             "| past peak | stage ended by | unit cracks at peak / end | experiment (kN) | error | published FDEM (kN) "
+             "| error vs FDEM | triangles | steps | wall time (s) |")
+    L.append("|---" * 17 + "|")
     for r in rows:
         drop = "-" if r["drop_after_peak"] is None else f"{100 * r['drop_after_peak']:.1f} %"
         L.append(f"| {r['case']} | {r['status']} | {fmt(r['peak_load_kN'])} | {fmt(r['disp_at_peak_mm'])} | "
                  f"{fmt(r['initial_stiffness_kN_mm'])} | {fmt(r['load_at_end_kN'])} | {drop} | "
-                 f"{fmt(r['past_peak'])} | {fmt(r['experiment_kN'])} | {pct(r['error_vs_experiment'])} | "
+                 f"{fmt(r['past_peak'])} | {fmt(r['stage_ended_by'])} | "
+                 f"{fmt(r['unit_cracks_at_peak'])} / {fmt(r['unit_cracks_at_end'])} | "
+                 f"{fmt(r['experiment_kN'])} | {pct(r['error_vs_experiment'])} | "
                  f"{fmt(r['published_fdem_kN'])} | {pct(r['error_vs_published_fdem'])} | {fmt(r['triangles'])} | "
                  f"{fmt(r['steps'])} | {fmt(r['wall_time_s'], 3)} |")
     if args.smooth > 0:
@@ -675,6 +703,10 @@ def report_markdown(family, rows, qs_rows, trend, fixed, args, elapsed) -> str:
                   f"history row; past peak = yes when the load at the end is at least {100 * PAST_PEAK_DROP:g} % "
                   "below the peak (PAST_PEAK_DROP), otherwise the curve is still rising or flat and the peak is only "
                   "the largest load reached so far."]
+    L += ["", "Stage ended by: how the loading stage ended (until: its largest displacement; past_peak: the "
+              "[[stages]] past_peak criterion). Unit cracks: broken cohesive elements inside the units (stones, "
+              "bricks) since the start of the loading stage, at the peak row and at the end (history columns "
+              "broken_unit_*)."]
     not_past = [r["case"] for r in rows if r["past_peak"] is not None and r["past_peak"] != "yes"]
     if not_past:
         L += ["", f"Not past the peak: {', '.join(not_past)}."]

@@ -185,3 +185,23 @@ def test_damping_work_shares_of_the_loading_stage(tmp_path):
     (run / "history.csv").write_text("\n".join(",".join(l.split(",")[i] for i in keep) for l in lines) + "\n")
     m = validate.curve_metrics(str(run))
     assert m["local_damping_work_share"] is None and m["viscous_work_share"] is None
+
+
+def test_unit_crack_counts_at_the_peak_and_end_of_the_loading_stage(tmp_path):
+    """The synthetic run (synth.make_run): unit cracks ramp = floor(clip((u - 2 mm) / 8 mm, 0, 1) x 12), broken_unit_I
+    + _II + _mixed = ramp // 3 + ramp // 4 + ramp // 6; counted from the loading stage's first row (u = 1/59 x 10 mm
+    < 2 mm: 0) to the peak row and to the last row (ramp 12: 4 + 3 + 2 = 9)."""
+    import json
+    from synth import make_run
+    run = make_run(str(tmp_path / "run"))
+    with open(os.path.join(run, "summary.json")) as f:
+        s = json.load(f)
+    s["stages"] = [{"name": "pre", "ended_by": "duration"}, {"name": "shear", "ended_by": "past_peak"}]
+    with open(os.path.join(run, "summary.json"), "w") as f:
+        json.dump(s, f)
+    m = validate.curve_metrics(run)
+    u_peak = m["disp_at_peak_m"] + 10e-3 / 59 * 6  # the stage starts at t = 6/59 (u from the stage's start)
+    ramp = np.floor(np.clip((u_peak - 2e-3) / 8e-3, 0, 1) * 12)
+    assert m["unit_cracks_at_peak"] == ramp // 3 + ramp // 4 + ramp // 6
+    assert m["unit_cracks_at_end"] == 9
+    assert m["ended_by"] == "past_peak"
