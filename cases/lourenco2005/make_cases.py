@@ -103,9 +103,9 @@ DEC = dict(mesh=0.05, rate=0.01, until=UNTIL_PAST_PEAK, past_peak=True, damping=
 SETUP_NODE = dict(
     base="""the wall stands on a concrete base slab (fixed at base_bottom) through a dry joint, so it can
 #   rock and slide""",
-    groups="""[groups.actuator]        # one node at the beam's left end, at the top of the wall (h = {load_height} m): the beam stays
-nearest = [0.0, {load_height}]    # free to rotate
-within = "beam_left"
+    groups="""[groups.actuator]        # the beam's left end at the top of the wall (h = {load_height} m): one point, so the beam stays
+box = [-0.001, {load_low}, 0.001, {load_high}]   # free to rotate; a box takes every node there (the beam's corner and the
+                         # tied copies of the top-left stone's corner, which move as one node until a crack is inserted)
 
 [groups.stopper]         # bottom-left corner node of the bottom-left block: restrained against sliding (fix x); one
 nearest = [0.0, 0.0]     # node, so that the block can still lift and rotate with the wall (a box of nodes on its left
@@ -292,7 +292,8 @@ local_damping = {damping}{ldf}{contact}
 
 
 def setup_text(setup, s):
-    return dict(setup_groups=setup["groups"].format(load_height=LOAD_HEIGHT), toe_support=setup["toe"],
+    return dict(setup_groups=setup["groups"].format(load_height=LOAD_HEIGHT, load_low=f"{LOAD_HEIGHT - 0.001:g}",
+                                                    load_high=f"{LOAD_HEIGHT + 0.001:g}"), toe_support=setup["toe"],
                 drive=setup["drive"].format(rate=s["rate"], ramp=s.get("drive_ramp", 0.005)))
 
 
