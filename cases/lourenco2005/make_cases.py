@@ -118,7 +118,7 @@ group = "actuator"
 component = "x"
 
 [[monitors]]
-name = "H"               # N, actuator reaction (negative while pushing in +x)
+name = "H"               # N, actuator reaction: the force it applies (positive while pushing in +x)
 type = "reaction"
 group = "actuator"
 component = "x"
