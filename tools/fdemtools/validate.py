@@ -8,8 +8,9 @@ overrides applied (mesh size, loading rate, local, contact and mass damping, pen
 step).
 
 Is the peak a peak: the load at the last history row of the same curve and drop_after_peak = (peak - load at
-end) / peak; past_peak = "yes" when the drop is at least PAST_PEAK_DROP (5 %), else the curve is still rising or
-flat and the "peak" is only the largest load reached so far.
+end) / peak; past_peak = "yes" when the drop is at least PAST_PEAK_DROP (5 %); "plateau" when it is less but the
+peak lies at or before PLATEAU_REACH (3/4) of the travel and the curve ends below it (an inner maximum, then a slow
+fall); else the curve is still rising or flat and the "peak" is only the largest load reached so far.
 
 Quasi-static check (README.md 'Physics'): the cases named by --rate-case (repeatable; `all` = every case; default the
 first case) are run again with their loading rate halved, each as its own run; per checked case the report gives
@@ -72,6 +73,7 @@ from .common import SIGN_CHOICES, ToolError, load_curve, load_run, stage_curve, 
 
 QS_LIMIT = 0.02  # the peak may change by less than this when the rate is halved
 PAST_PEAK_DROP = 0.05  # the load at the end must be this far below the peak (fraction of it) to call it a peak
+PLATEAU_REACH = 0.75  # a curve with less drop whose largest load lies before this fraction of its travel: a plateau
 FIRST_PEAK_DROP = 0.05  # --peak first: the load must fall this far below the largest value so far (fraction)
 FIRST_PEAK_FLOOR = 0.5  # --peak first: only a maximum of at least this fraction of the largest load is a peak
 PEAK_RULES = ("largest", "first")
@@ -246,6 +248,15 @@ def peak_index(y: np.ndarray, rule: str = "largest") -> tuple:
     return i, (None if not y[i] > 0 else bool((y[i] - y[-1]) / y[i] >= PAST_PEAK_DROP))
 
 
+def plateau_or(past, x: np.ndarray, y: np.ndarray, i: int):
+    """"plateau" for a curve not past its peak (past False) whose largest load y[i] lies well inside the run (at or
+    before PLATEAU_REACH of its travel) and that ends below it, by less than PAST_PEAK_DROP: an inner maximum followed
+    by a slow fall (a rigid mechanism losing load to the P-delta of its weights); otherwise `past` unchanged."""
+    if past is False and len(x) and float(x[i]) <= PLATEAU_REACH * float(np.max(x)) and float(y[-1]) < float(y[i]):
+        return "plateau"
+    return past
+
+
 def cut_at(x: np.ndarray, d: float) -> int:
     """Number of rows of a curve up to and including the first row whose control displacement reaches d (m)."""
     hit = np.nonzero(np.asarray(x) >= d * (1 - 1e-12))[0]
@@ -279,6 +290,7 @@ def curve_metrics(run_dir: str, smooth_m: float = 0.0, rule: str = "largest", up
     i, past = peak_index(y, rule)
     peak = float(y[i])
     d_peak = float(x[i])
+    past = plateau_or(past, x, y, i)
     # initial stiffness: least-squares line through the origin of the ascending branch up to 40 % of the peak
     j = i
     for k in range(i + 1):
@@ -370,6 +382,8 @@ def oscillation(x: np.ndarray, raw: np.ndarray, smooth: np.ndarray, window: floa
 def past_peak(past) -> str | None:
     if past is None:
         return None
+    if past == "plateau":
+        return "plateau (an inner maximum, then falling less than 5 %)"
     return "yes" if past else "no (still rising / flat)"
 
 
@@ -701,13 +715,14 @@ def report_markdown(family, rows, qs_rows, trend, fixed, args, elapsed) -> str:
     else:
         L += ["", f"Peak = largest |load| of the case's curve in its last stage{window}; load at end = its last "
                   f"history row; past peak = yes when the load at the end is at least {100 * PAST_PEAK_DROP:g} % "
-                  "below the peak (PAST_PEAK_DROP), otherwise the curve is still rising or flat and the peak is only "
-                  "the largest load reached so far."]
+                  "below the peak (PAST_PEAK_DROP); plateau when it is less far below but the peak lies before "
+                  f"{100 * PLATEAU_REACH:g} % of the travel (PLATEAU_REACH: an inner maximum, then a slow fall); "
+                  "otherwise the curve is still rising or flat and the peak is only the largest load reached so far."]
     L += ["", "Stage ended by: how the loading stage ended (until: its largest displacement; past_peak: the "
               "[[stages]] past_peak criterion). Unit cracks: broken cohesive elements inside the units (stones, "
               "bricks) since the start of the loading stage, at the peak row and at the end (history columns "
               "broken_unit_*)."]
-    not_past = [r["case"] for r in rows if r["past_peak"] is not None and r["past_peak"] != "yes"]
+    not_past = [r["case"] for r in rows if r["past_peak"] is not None and r["past_peak"].startswith("no")]
     if not_past:
         L += ["", f"Not past the peak: {', '.join(not_past)}."]
     errs = [abs(r["error_vs_experiment"]) for r in rows if r["error_vs_experiment"] is not None]

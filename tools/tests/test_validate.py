@@ -205,3 +205,17 @@ def test_unit_crack_counts_at_the_peak_and_end_of_the_loading_stage(tmp_path):
     assert m["unit_cracks_at_peak"] == ramp // 3 + ramp // 4 + ramp // 6
     assert m["unit_cracks_at_end"] == 9
     assert m["ended_by"] == "past_peak"
+
+
+def test_plateau_rising_and_falling_curves_are_told_apart():
+    """past_peak: 'yes' 5 % below the peak at the end; a plateau whose maximum lies at 0.4 of the travel and that ends
+    2 % below it: 'plateau'; the same maximum at 0.9 of the travel: not past; a curve rising to its end: not past."""
+    x = np.linspace(0, 1, 101)
+    plateau = 1 - np.exp(-x / 0.05) - 0.02 * np.clip(x - 0.4, 0, None) / 0.6
+    late = 1 - np.exp(-x / 0.05) - 0.02 * np.clip(x - 0.9, 0, None) / 0.1
+    falling = 1 - np.exp(-x / 0.05) - 0.10 * np.clip(x - 0.4, 0, None) / 0.6
+    rising = x
+    for y, expect in ((plateau, "plateau"), (late, False), (falling, True), (rising, False)):
+        i, past = validate.peak_index(y)
+        assert validate.plateau_or(past, x, y, i) == expect
+    assert validate.past_peak("plateau").startswith("plateau")
