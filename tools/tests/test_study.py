@@ -287,3 +287,22 @@ def test_loading_branch_and_curve_errors():
     assert e["curve_max"] == pytest.approx(0.05, rel=1e-12) and e["curve_rms"] == pytest.approx(0.05, rel=1e-12)
     e = study.curve_errors(xb[:3], yb[:3], xb, yb, 4.0, 1.0)
     assert e["curve_max"] is None and "the run's curve ends at" in e["curve_note"]
+
+
+def test_mesh_study_reruns_when_a_fixed_setting_changes(tmp_path, cli):
+    """Issue 51 (1), the study repro: the same sizes with a new --set numerics.dt ran nothing ("2 already completed,
+    skipped") and rewrote batch.json with the new setting. Now every run is redone with it."""
+    case = tmp_path / "case.toml"
+    case.write_text("# fake\n")
+    out = tmp_path / "m"
+    log = str(tmp_path / "calls.log")
+    rc, o, err = cli("study", "mesh", case, "--sizes", "0.1,0.05", "--fdem", FAKE, "--out-dir", out,
+                     env={"FAKE_FDEM_LOG": log})
+    assert rc == 0, err
+    rc, o, err = cli("study", "mesh", case, "--sizes", "0.1,0.05", "--fdem", FAKE, "--out-dir", out,
+                     "--set", "numerics.dt=8e-7", env={"FAKE_FDEM_LOG": log})
+    assert rc == 0, err
+    with open(log) as f:
+        got = [json.loads(line) for line in f]
+    assert len(got) == 4 and all(c.get("numerics.dt") == "8e-7" for c in got[2:])
+    assert "already completed, skipped" not in o and o.count("numerics.dt: (not set) -> 8e-7") == 2
