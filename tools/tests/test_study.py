@@ -184,6 +184,17 @@ def test_real_fdem_cyclic_hysteresis(tmp_path, cli):
         assert cyc[col["P_minus_kN"]] == pytest.approx(-cyc[col["P_plus_kN"]], rel=0.05)
         assert cyc[col["k_d"]] == pytest.approx(1.0, abs=0.05)
     assert (tmp_path / "h.png").exists()
+    # eeep on the same cyclic run reads the envelope of each direction (issue 51, 2): an elastic block, so the
+    # same stiffness both ways and no post-peak branch (a lower bound); before, the record went into the monotonic
+    # fit (ductility below 1, Delta_y > Delta_u)
+    rc, o, err = cli("eeep", run, "--out", tmp_path / "e")
+    assert rc == 0, err
+    e = json.loads((tmp_path / "e.json").read_text())
+    assert e["cyclic"] is True and e["ductility"] is None
+    pos, neg = e["envelope"]["positive"], e["envelope"]["negative"]
+    assert pos["K_e"] == pytest.approx(neg["K_e"], rel=0.1)
+    assert pos["Delta_u"] == pytest.approx(1.0, rel=0.05) and neg["Delta_u"] == pytest.approx(1.0, rel=0.05)
+    assert pos["ductility_is_lower_bound"] and neg["ductility_is_lower_bound"]
 
 
 @needs_fdem
