@@ -271,17 +271,30 @@ def cmd_hysteresis(args):
               "k_el": res["k_el"] * fx / fy, "k_el_rule": res["k_el_rule"], "E_h_J": res["E_h"],
               "E_h_rule": res["E_h_rule"], "E_total_J": res["E_total"], "n_cycles": res["n_cycles"],
               "peak_rule": res["peak_rule"], "sign_y": res["sign_y"], "load_sign_rule": sign_rule,
-              "warnings": list(c.warnings) + res["warnings"], "columns": header, "cycles": rows}
+              "warnings": list(c.warnings) + res["warnings"], "columns": header, "cycles": rows,
+              "partial_cycles": [{"cycle": q["cycle"], "d_plus": q["d_plus"] / fx, "P_plus": q["P_plus"] / fy,
+                                  "d_minus": q["d_minus"] / fx, "P_minus": q["P_minus"] / fy, "W_J": q["W_i"],
+                                  "d_end": q["d_end"] / fx} for q in res["partial"]],
+              "partial_note": "partial cycles (the record ends inside them) are kept out of the cycle table, k_el, "
+                              "k_d, E_i, E_d and E_h"}
     files = [write_json(prefix + ".json", report), write_csv(prefix + ".csv", header, rows)]
     if not args.no_plot:
         files += hysteresis.plot(c.x, c.y, res, prefix, c.label, (xu, fx), (yu, fy))
-    print(f"{c.label}: {res['n_cycles']} cycles, k_el = {report['k_el']:.5g} {yu}/{xu}, "
-          f"E_total = {res['E_total']:.5g} J; load sign {sign:+g} ({sign_rule}); peaks at the loop tips")
+    print(f"{c.label}: {res['n_cycles']} complete cycles"
+          + (f" (+ {res['n_partial']} partial, not counted)" if res["n_partial"] else "")
+          + f", k_el = {report['k_el']:.5g} {yu}/{xu}, E_total = {res['E_total']:.5g} J; load sign {sign:+g} "
+            f"({sign_rule}); peaks at the loop tips")
     for r in rows:
-        print("  cycle {:3d}{}: d+ {:8.4g} P+ {:9.4g}  d- {:8.4g} P- {:9.4g} {}  k_i {:9.4g}  k_d {:6.3f}  "
-              "W_i {:9.4g} J{} E_i {:9.4g} J  E_d {:6.3f}".format(r[0], " " if r[1] else "*", r[2], r[3], r[4], r[5],
+        print("  cycle {:3d}: d+ {:8.4g} P+ {:9.4g}  d- {:8.4g} P- {:9.4g} {}  k_i {:9.4g}  k_d {:6.3f}  "
+              "W_i {:9.4g} J{} E_i {:9.4g} J  E_d {:6.3f}".format(r[0], r[2], r[3], r[4], r[5],
                                                                  yu, r[6], r[7], r[8], " (NEGATIVE)" if r[11] else "",
                                                                  r[9], r[10]))
+    for q in report["partial_cycles"]:
+        print("  cycle {:3d}*: d+ {:8.4g} P+ {:9.4g}  d- {:8.4g} P- {:9.4g} {}  W {:9.4g} J, ends at d = {:.4g} {}"
+              .format(q["cycle"], q["d_plus"], q["P_plus"], q["d_minus"], q["P_minus"], yu, q["W_J"], q["d_end"], xu))
+    if report["partial_cycles"]:
+        print("  * partial cycle: the record ends before the cycle returns to zero from the negative side; its "
+              "tips are where the record stopped, so it is kept out of the table, k_el, k_d, E_i, E_d and E_h")
     print("wrote " + ", ".join(files))
 
 
