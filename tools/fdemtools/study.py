@@ -47,20 +47,61 @@ def _num(v: str):
         return None
 
 
+# How a reference quantity is shown: the unit of its monitor (summary.json columns) -> (shown unit, factor from it)
+SHOWN_UNITS = {"N": ("kN", 1e-3), "m": ("mm", 1e3), "J": ("J", 1.0), "s": ("s", 1.0)}
+
+
+def reference_shown(run, ref: dict) -> dict:
+    """The case's reference quantity as study mesh tabulates and draws it: in kN (forces) or mm (lengths), and a force
+    with the tools' one load sign rule (common.resolve_sign: the case's output.curve.sign for the curve's load, else
+    the sign whose loading work along the curve's displacement is positive), as plot, eeep and validate draw it. The
+    reference value is compared by magnitude (the engine's relative_error is (|computed| - |value|) / |value|), so
+    it is shown as |value|. Before, a reaction's -74 kN was drawn against +74 kN on an axis of +-80,000 (N)."""
+    mon = ref.get("monitor")
+    unit = run.unit(mon) if mon else ""
+    shown, factor = SHOWN_UNITS.get(unit, (unit or "as recorded", 1.0))
+    sign, rule = 1.0, "as recorded"
+    if unit == "N":
+        from .common import Curve, load_curve, loading_work_sign, resolve_sign
+        try:
+            c = load_curve(run.path, partial=True)
+            if mon == c.y_name:
+                sign, rule = resolve_sign(c)
+            elif run.history is not None and run.history.has(mon):
+                sign = loading_work_sign(c.x, run.history.numeric(mon))
+                rule = "loading work along the curve's displacement"
+        except ToolError:
+            pass
+    out = {"reference_unit": shown, "reference_sign": sign, "reference_sign_rule": rule,
+           "reference_value_shown": None, "reference_computed_shown": None}
+    try:
+        if ref.get("value") is not None:
+            out["reference_value_shown"] = abs(float(ref["value"])) * factor
+        if ref.get("computed") is not None:
+            out["reference_computed_shown"] = sign * float(ref["computed"]) * factor
+    except (TypeError, ValueError):
+        pass
+    return out
+
+
 def run_quantities(rec: dict) -> dict:
-    """Quantities of interest of a finished run (None where the run does not record them)."""
-    peak = rec.get("peak_load_N")
+    """Quantities of interest of a finished run (None where the run does not record them, and for a run that did
+    not complete: its values are not results, the row says why)."""
+    done = rec.get("status") == "completed"
+    peak = rec.get("peak_load_N") if done else None
     q = {"peak_load_kN": peak / 1e3 if peak is not None else None, "wall_time_s": rec.get("wall_time_s"),
          "n_triangles": rec.get("n_triangles"), "D_frac_J": None, "W_ext_J": None}
     ref = (rec.get("summary") or {}).get("reference")
     if isinstance(ref, dict) and ref.get("monitor"):
         q["reference"] = f"{ref.get('monitor')} {ref.get('quantity', 'peak')}"
         q["reference_value"] = ref.get("value")
-        q["reference_computed"] = ref.get("computed")
-        q["reference_error"] = ref.get("relative_error")
-    if rec.get("status") != "completed":
+        q["reference_computed"] = ref.get("computed") if done else None
+        q["reference_error"] = ref.get("relative_error") if done else None
+    if not done:
         return q
     run = load_run(rec["run_dir"])
+    if isinstance(ref, dict) and ref.get("monitor"):
+        q.update(reference_shown(run, ref))
     h = run.history
     for col, key in (("D_frac", "D_frac_J"), ("W_ext", "W_ext_J")):
         if h.has(col) and len(h):
@@ -248,7 +289,8 @@ def cmd_mesh(args):
         why = "" if r["status"] == "completed" else failure_reason(r)
         rows.append({var: h, "status": r["status"], **q, "why": why, "run": r["name"]})
     for r in rows:
-        for k in ("reference", "reference_value", "reference_computed", "reference_error"):
+        for k in ("reference", "reference_value", "reference_computed", "reference_error", "reference_unit",
+                  "reference_sign", "reference_sign_rule", "reference_value_shown", "reference_computed_shown"):
             r.setdefault(k, None)
     ok = [r for r in rows if r["status"] == "completed"]
     for r in rows:
@@ -259,8 +301,9 @@ def cmd_mesh(args):
                         + "; ".join(f"{r[var]:g}: {r['why']}" for r in rows))
     finest = min(ok, key=lambda r: r[var])
     ref_name = next((r["reference"] for r in ok if r["reference"]), None)
+    ref_unit = next((r["reference_unit"] for r in ok if r["reference_unit"]), None)
     qty = [("peak_load_kN", "peak load", 1.0, "kN"),
-           ("reference_computed", f"reference: {ref_name}", 1.0, "as the case"),
+           ("reference_computed_shown", f"reference: {ref_name}", 1.0, ref_unit),
            ("D_frac_J", "fracture dissipation", 1.0, "J"), ("W_ext_J", "external work", 1.0, "J")]
     qty = [t for t in qty if any(r[t[0]] is not None for r in ok)]
     orders = {}
@@ -277,36 +320,17 @@ def cmd_mesh(args):
     write_json(os.path.join(out, "mesh_study.json"), {"case": os.path.abspath(args.case), "key": args.key,
                                                      "variable": var, "finest": finest[var],
                                                      "convergence_order": orders, "runs": rows})
-    from .figures import new_figure, save
-    n = len(qty) + 1
-    fig, axs = new_figure(1, n, figsize=(4.2 * n, 4.0), squeeze=False)
-    h_ok = np.array([r[var] for r in ok]) * var_scale
-    for ax, (key, name, scale, unit) in zip(axs[0], qty):
-        v = [r[key] for r in ok]
-        sel = [i for i, x in enumerate(v) if x is not None]
-        ax.plot(h_ok[sel], np.array([v[i] for i in sel]) * scale, "o-", color="#1f77b4")
-        if key == "reference_computed" and finest.get("reference_value") is not None:
-            ax.axhline(finest["reference_value"], color="k", lw=1.0, ls="--", label="reference value")
-            ax.legend(fontsize=7)
-        _mesh_axis(ax, h_ok, var_label, size_key)
-        ax.set_ylabel(f"{name} ({unit})")
-        o = orders.get(key)
-        ax.set_title(name + (f"\nobserved order {o['order']:.2f}" if o and o["order"] is not None else ""),
-                     fontsize=9)
-    ax = axs[0, -1]
-    t = [r["wall_time_s"] for r in ok]
-    ax.loglog(h_ok, t, "s-", color="#d62728")
-    for x, y, r in zip(h_ok, t, ok):
-        if r["n_triangles"]:
-            ax.annotate(f"{r['n_triangles']} tri", (x, y), xytext=(4, 4), textcoords="offset points", fontsize=7)
-    _mesh_axis(ax, h_ok, var_label, size_key)
-    ax.set_ylabel("wall time (s)")
-    ax.set_title("run time", fontsize=9)
+    from .figures import save
+    fig, _ = mesh_figure(ok, qty, orders, var, var_label, var_scale, size_key, finest)
     files = save(fig, os.path.join(out, "mesh_study"))
-    print(format_rows(rows, [var, "status", "peak_load_kN", "reference_computed", "reference_error", "D_frac_J",
+    print(format_rows(rows, [var, "status", "peak_load_kN", "reference_computed_shown", "reference_error", "D_frac_J",
                              "wall_time_s", "n_triangles"]))
     if ref_name:
-        print(f"reference quantity of the case: {ref_name}, value {finest['reference_value']}")
+        val = finest["reference_value_shown"]
+        print(f"reference quantity of the case: {ref_name}, value "
+              + (f"{val:.6g} {finest['reference_unit']} (|value|, as the engine compares it)" if val is not None
+                 else "none") + "; reference_computed_shown in "
+              f"{finest['reference_unit']}, sign {finest['reference_sign']:+g} ({finest['reference_sign_rule']})")
     for key, o in orders.items():
         if o["order"] is not None:
             print(f"{key}: observed convergence order {o['order']:.3g} (three finest: {o['sizes']}), "
@@ -315,6 +339,42 @@ def cmd_mesh(args):
             print(f"{key}: no convergence order: {o['note']}")
     print("wrote " + ", ".join([os.path.join(out, "mesh_study.csv"), os.path.join(out, "mesh_study.json")] + files))
     return 0 if len(ok) == len(rows) else 2
+
+
+def mesh_figure(ok, qty, orders, var, var_label, var_scale, size_key, finest):
+    """One panel per quantity and one of the run time, at most three panels a row (figure and axes, not saved)."""
+    from .figures import new_figure
+    n = len(qty) + 1
+    ncol = min(3, n)
+    nrow = (n + ncol - 1) // ncol
+    fig, axs = new_figure(nrow, ncol, figsize=(4.4 * ncol, 3.9 * nrow), squeeze=False)
+    flat = list(axs.ravel())
+    for ax in flat[n:]:
+        ax.set_visible(False)
+    h_ok = np.array([r[var] for r in ok]) * var_scale
+    for ax, (key, name, scale, unit) in zip(flat, qty):
+        v = [r[key] for r in ok]
+        sel = [i for i, x in enumerate(v) if x is not None]
+        ax.plot(h_ok[sel], np.array([v[i] for i in sel]) * scale, "o-", color="#1f77b4", label="runs")
+        if key == "reference_computed_shown" and finest.get("reference_value_shown") is not None:
+            ax.axhline(finest["reference_value_shown"], color="k", lw=1.0, ls="--", label="reference value")
+            ax.legend(fontsize=7)
+        _mesh_axis(ax, h_ok, var_label, size_key)
+        ax.set_ylabel(f"{name} ({unit})")
+        ax.ticklabel_format(axis="y", style="plain", useOffset=False)
+        o = orders.get(key)
+        ax.set_title(name + (f"\nobserved order {o['order']:.2f}" if o and o["order"] is not None else ""),
+                     fontsize=9)
+    ax = flat[n - 1]
+    t = [r["wall_time_s"] for r in ok]
+    ax.loglog(h_ok, t, "s-", color="#d62728")
+    for x, y, r in zip(h_ok, t, ok):
+        if r["n_triangles"]:
+            ax.annotate(f"{r['n_triangles']} tri", (x, y), xytext=(4, 4), textcoords="offset points", fontsize=7)
+    _mesh_axis(ax, h_ok, var_label, size_key)
+    ax.set_ylabel("wall time (s)")
+    ax.set_title("run time", fontsize=9)
+    return fig, axs
 
 
 def _mesh_axis(ax, h, label="mesh size (mm)", log=True):

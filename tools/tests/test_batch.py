@@ -198,3 +198,16 @@ def test_stale_run_that_fails_to_start_is_not_taken_as_completed(tmp_path, cli):
     rc, o, err = cli("batch", case, "--grid", "geometry.mesh_size=0.1", "--set", "die=bad key", "--out-dir", out,
                      "--fdem", FAKE)
     assert rc == 2 and "already completed, skipped" not in o and "0 already completed" in o
+
+
+def test_failed_run_has_no_peak_in_the_results(tmp_path, cli):
+    """Issue 51 (13): a failed run's largest load so far was tabulated as its peak load, as if it were a result."""
+    case = tmp_path / "case.toml"
+    case.write_text("# fake\n")
+    out = tmp_path / "b"
+    rc, o, err = cli("batch", case, "--grid", "fail=false,true", "--out-dir", out, "--fdem", FAKE)
+    assert rc == 2
+    rows = (out / "results.csv").read_text().splitlines()
+    head = rows[0].split(",")
+    got = {r.split(",")[head.index("status")]: r.split(",")[head.index("peak_load_kN")] for r in rows[1:]}
+    assert got == {"completed": "11.0", "failed": ""}

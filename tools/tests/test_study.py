@@ -317,3 +317,42 @@ def test_mesh_study_reruns_when_a_fixed_setting_changes(tmp_path, cli):
         got = [json.loads(line) for line in f]
     assert len(got) == 4 and all(c.get("numerics.dt") == "8e-7" for c in got[2:])
     assert "already completed, skipped" not in o and o.count("numerics.dt: (not set) -> 8e-7") == 2
+
+
+def test_mesh_study_signs_units_grid_and_failed_runs(tmp_path, cli):
+    """Issue 51 (6, 13): the case's reference is a reaction (the engine writes computed = -peak): the panel drew
+    -10 kN-ish values in N against a +10,000 line, 'as the case'. Now it is in kN with the tools' one load sign rule
+    (+10 (1 + h) kN against the |value| 10 kN); the panels sit at most three a row; a failed run's peak is left
+    empty (it was tabulated as a result)."""
+    case = tmp_path / "case.toml"
+    case.write_text("# fake\n")
+    out = tmp_path / "m"
+    rc, o, err = cli("study", "mesh", case, "--sizes", "0.4,0.2,0.1,0.05", "--fdem", FAKE, "--out-dir", out,
+                     "--set", "ref=1", "--set", "reaction=1", "--set", "fail_below=0.07")
+    assert rc == 2, err
+    j = json.loads((out / "mesh_study.json").read_text())
+    for r in j["runs"]:
+        h = r["mesh_size_m"]
+        if h < 0.07:
+            assert r["status"] == "failed" and r["peak_load_kN"] is None and r["reference_computed_shown"] is None
+            continue
+        assert r["reference_unit"] == "kN" and r["reference_sign"] == -1
+        assert r["reference_computed_shown"] == pytest.approx(10 * (1 + h), rel=1e-12)
+        assert r["reference_value_shown"] == pytest.approx(10.0, rel=1e-12)
+        assert r["reference_computed"] == pytest.approx(-1e4 * (1 + h), rel=1e-12)  # the engine's value, kept
+    rows = read_csv(out / "mesh_study.csv")
+    assert [r["peak_load_kN"] for r in rows if r["status"] == "failed"] == [""]
+    svg = (out / "mesh_study.svg").read_text()
+    assert "reference: F peak (kN)" in svg and "as the case" not in svg
+    import matplotlib.image as mpimg
+    hpx, wpx = mpimg.imread(str(out / "mesh_study.png")).shape[:2]
+    assert wpx <= 2200 and wpx / hpx < 2.5  # 5 panels: two rows of at most three (was 1 x 5, 3131 x 583 px)
+    # the reference panel draws what the table says: positive values and the reference line at +10 kN
+    ok = [r for r in j["runs"] if r["status"] == "completed"]
+    fig, axs = study.mesh_figure(ok, [("reference_computed_shown", "reference", 1.0, "kN")], {}, "mesh_size_m",
+                                 "mesh size (mm)", 1e3, True, min(ok, key=lambda r: r["mesh_size_m"]))
+    lines = axs[0, 0].get_lines()
+    assert sorted(lines[0].get_ydata()) == pytest.approx(sorted(10 * (1 + r["mesh_size_m"]) for r in ok), rel=1e-12)
+    assert list(lines[1].get_ydata()) == pytest.approx([10.0, 10.0], rel=1e-12)
+    import matplotlib.pyplot as plt
+    plt.close(fig)
