@@ -11,8 +11,11 @@ study mesh: the case at a list of values of a mesh key (default geometry.mesh_si
   / ((h2/h3)^p - 1)). Differences of opposite sign (oscillating) or a zero difference give no order. A run that did
   not complete is reported with why: its summary's message, else the last error and warning lines of its log.
 study speed: a grid of mesh sizes x loading rates x damping values. Error of a run: |P - P_ref| / |P_ref| of its
-  peak load, with P_ref given (--reference, kN), else the case's reference peak, else the peak of the most
-  accurate run of the grid (smallest mesh size, slowest rate, least damping). A run is on the Pareto front when
+  peak load, with P_ref given (--reference, kN); else, when the case has a [reference] (monitor, quantity peak,
+  first_peak or final, value), | |q| - |value| | / |value| of that quantity q as the run computed it (its
+  summary.json reference.computed; the engine's comparison); else the peak of the most accurate run of the grid
+  (smallest mesh size, slowest rate, least damping). The output, the JSON (reference, reference_quantity) and the
+  figure say which. A run is on the Pareto front when
   no other run is at the same time both faster and more accurate.
   Whole-curve errors (curve_errors): every completed run's loading curve H(u) (the last stage, the tools' load sign
   rule, as `validate` and `eeep` read it) against a reference curve: a run folder given (--reference-run, e.g. a
@@ -433,10 +436,20 @@ def cmd_speed(args):
         raise ToolError(f"no run of the speed study completed (see {os.path.join(out, 'logs')})")
     # reference peak load
     ref_run = None
+    case_ref = case_reference(ok)
+    value_of = lambda r: r["peak_load_N"]  # noqa: E731  (the quantity each run's error is taken on)
+    ref_qty = "peak load"
     if args.reference is not None:
         ref, ref_src = args.reference * 1e3, "given (--reference)"
+    elif case_ref is not None:
+        # the case's own [reference]: its monitor and quantity (peak, first_peak or final) as each run computed it,
+        # against |value| (the engine's comparison: magnitudes)
+        ref = abs(float(case_ref["value"]))
+        ref_qty = f"{case_ref['monitor']} {case_ref.get('quantity', 'peak')}"
+        ref_src = f"case reference ({ref_qty} = {_show(ref, case_ref['unit'])})"
+        value_of = lambda r: _ref_computed(r)  # noqa: E731
     elif ok[0].get("reference_peak_N"):
-        ref, ref_src = ok[0]["reference_peak_N"], "case reference"
+        ref, ref_src = ok[0]["reference_peak_N"], "case reference (peak_load_N)"
     else:
         best = min(ok, key=_accuracy_key(dims))
         ref, ref_src = best["peak_load_N"], "most accurate run"
@@ -476,11 +489,12 @@ def cmd_speed(args):
         raise ToolError("--error curve_max_smoothed needs --curve-smooth MM (the window of travel, mm)")
     rows = []
     for r in recs:
-        err = abs(r["peak_load_N"] - ref) / abs(ref) if r in ok else None
+        v = value_of(r) if r in ok else None
+        err = abs(v - ref) / abs(ref) if v is not None else None
         row = {**r["params"], "status": r["status"], "wall_time_s": r.get("wall_time_s"),
                "cpu_time_s": r.get("cpu_time_s"), "steps": r.get("steps"),
                "peak_load_kN": r["peak_load_N"] / 1e3 if r.get("peak_load_N") is not None else None,
-               "error": err, "curve_rms": None, "curve_max": None,
+               "error": err, "error_quantity": ref_qty, "curve_rms": None, "curve_max": None,
                **({"curve_max_smoothed": None} if smooth > 0 else {}), "K_e_error": None, "P_y_error": None,
                "ductility_error": None, "peak_error": None, "curve_note": "", "pareto": False, "run": r["name"]}
         c = curves.get(r["name"])
@@ -507,7 +521,7 @@ def cmd_speed(args):
     header = list(rows[0].keys())
     write_csv(os.path.join(out, "speed_study.csv"), header, [[r[k] for k in header] for r in rows])
     write_json(os.path.join(out, "speed_study.json"), {"case": os.path.abspath(args.case), "reference_peak_N": ref,
-                                                      "reference": ref_src, "reference_run": ref_run,
+                                                      "reference": ref_src, "reference_quantity": ref_qty, "reference_run": ref_run,
                                                       "reference_curve": cref_src, "curve_to_m": u_to,
                                                       "curve_from_m": u_from, "front_error": args.error, "runs": rows})
     files = plot_speed(rows, dims, ref_src if args.error == "peak" else cref_src, os.path.join(out, "speed_study"),
@@ -515,7 +529,11 @@ def cmd_speed(args):
     print(format_rows(rows, [k for k, _, _ in dims] + ["status", "wall_time_s", "cpu_time_s", "peak_load_kN", "error", "curve_rms",
                                                        "curve_max"] + (["curve_max_smoothed"] if smooth > 0 else [])
                       + ["K_e_error", "ductility_error", "pareto"]))
-    print(f"reference peak load {ref / 1e3:.5g} kN: {ref_src}" + (f" ({ref_run})" if ref_run else ""))
+    if case_ref is not None and args.reference is None:
+        print(f"error against the {ref_src}: |computed| of each run (summary.json reference.computed) against "
+              "|value|")
+    else:
+        print(f"reference peak load {ref / 1e3:.5g} kN: {ref_src}" + (f" ({ref_run})" if ref_run else ""))
     if cref_src:
         print(f"reference curve: {cref_src}; curve_rms over 0-{u_to * 1e3:.4g} mm, curve_max over "
               f"{u_from * 1e3:.4g}-{u_to * 1e3:.4g} mm, shares of its peak {cref['peak'] / 1e3:.5g} kN"
@@ -523,6 +541,35 @@ def cmd_speed(args):
                  if smooth > 0 else "") + f"; Pareto front on the {args.error} error")
     print("wrote " + ", ".join([os.path.join(out, "speed_study.csv"), os.path.join(out, "speed_study.json")] + files))
     return 0 if len(ok) == len(recs) else 2
+
+
+def case_reference(recs) -> dict | None:
+    """The case's [reference] as the runs' summaries carry it (monitor, quantity, value, and the monitor's unit),
+    when it has a monitor and a non-zero value; else None."""
+    for r in recs:
+        s = r.get("summary") or {}
+        ref = s.get("reference")
+        if isinstance(ref, dict) and ref.get("monitor") and ref.get("value") not in (None, 0):
+            try:
+                float(ref["value"])
+            except (TypeError, ValueError):
+                continue
+            return {**ref, "unit": (s.get("columns") or {}).get(ref["monitor"], "")}
+    return None
+
+
+def _ref_computed(rec) -> float | None:
+    """|reference.computed| of a run (its value of the case's reference quantity), None if it has none."""
+    ref = (rec.get("summary") or {}).get("reference")
+    try:
+        return abs(float(ref["computed"]))
+    except (TypeError, KeyError, ValueError):
+        return None
+
+
+def _show(v: float, unit: str) -> str:
+    shown, factor = SHOWN_UNITS.get(unit, (unit, 1.0))
+    return f"{v * factor:.5g} {shown}".strip()
 
 
 def plot_speed(rows, dims, ref_src, prefix, measure="error", label="peak", tkey="wall_time_s"):

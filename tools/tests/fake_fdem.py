@@ -7,7 +7,8 @@ in a known way: peak = 10 kN * (1 + mesh_size) * (1 + rate) * (1 + damping); wal
 A setting `fail=true` (or `fail_below=H` with a mesh size below H) makes it exit 2 with a failed summary (its
 monitors written all the same); `slow=SECONDS` makes it sleep first; `die=TEXT` makes
 it print "error: TEXT" as the engine does for bad input and exit 1 before writing any summary. With `ref=1` the summary
-carries a [reference] result (monitor F, quantity peak, value 10 kN, computed = the peak). With `reaction=1` the load
+carries a [reference] result (monitor F, quantity peak, value 10 kN, computed = the peak). `ref_quantity=first_peak` makes it
+that quantity, computed = 0.9 x the peak (`final`: the peak). With `reaction=1` the load
 F is recorded as a reaction (negative: -peak), and so is the reference's computed value, as the engine writes it.
 Like fdem, SIGTERM stops it with status "interrupted" and exit 143; it then also writes a checkpoint file
 (checkpoint.bin). `run --help` lists `--restart RUN_DIR` only when $FAKE_FDEM_RESTART is 1; `--restart DIR` is
@@ -85,8 +86,10 @@ def main(argv):
                  "energy": {"balance_error": 0.001 * (1 + h)},
                  "settings": sets})
     if sets.get("ref") == "1":
-        summ["reference"] = {"monitor": "F", "quantity": "peak", "value": 10e3, "source": "fake", "computed": sgn * peak,
-                             "relative_error": (peak - 10e3) / 10e3}
+        q = sets.get("ref_quantity", "peak")
+        got = {"peak": peak, "first_peak": 0.9 * peak, "final": peak}[q]
+        summ["reference"] = {"monitor": "F", "quantity": q, "value": 10e3, "source": "fake", "computed": sgn * got,
+                             "relative_error": (got - 10e3) / 10e3}
     with open(os.path.join(out, "summary.json"), "w") as f:
         json.dump(summ, f)
     return 2 if failed else 0

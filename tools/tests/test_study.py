@@ -356,3 +356,25 @@ def test_mesh_study_signs_units_grid_and_failed_runs(tmp_path, cli):
     assert list(lines[1].get_ydata()) == pytest.approx([10.0, 10.0], rel=1e-12)
     import matplotlib.pyplot as plt
     plt.close(fig)
+
+
+def test_speed_study_uses_the_case_reference_quantity(tmp_path, cli):
+    """Issue 51 (11): a case whose [reference] is a first_peak (here computed = 0.9 x the peak, against 10 kN) was
+    measured against the grid's most accurate run without a word. Now each run's error is that of the case's
+    quantity, |0.9 P - 10 kN| / 10 kN, and the output says which reference is used."""
+    case = tmp_path / "case.toml"
+    case.write_text("# fake\n")
+    out = tmp_path / "s"
+    rc, o, err = cli("study", "speed", case, "--sizes", "0.2,0.1", "--rates", "0.5,0", "--rate-key", "rate",
+                     "--fdem", FAKE, "--out-dir", out, "--set", "ref=1", "--set", "ref_quantity=first_peak",
+                     "--set", "reaction=1")
+    assert rc == 0, err
+    j = json.loads((out / "speed_study.json").read_text())
+    assert j["reference"].startswith("case reference (F first_peak = 10 kN)") and j["reference_run"] is None
+    assert j["reference_quantity"] == "F first_peak" and j["reference_peak_N"] == pytest.approx(1e4, rel=1e-12)
+    for r in j["runs"]:
+        peak = 1e4 * (1 + float(r["geometry.mesh_size"])) * (1 + float(r["rate"]))
+        assert r["error"] == pytest.approx(abs(0.9 * peak - 1e4) / 1e4, rel=1e-9)
+        assert r["error_quantity"] == "F first_peak"
+    assert "error against the case reference (F first_peak = 10 kN)" in o
+    assert "F first_peak = 10 kN" in (out / "speed_study.svg").read_text()
