@@ -18,8 +18,10 @@ COMMAND_MODULES = ["plots", "cracks", "batch", "study", "validate"]  # modules w
 
 
 def _units_args(p, stage_help="keep only the rows of this stage (1-based; run folders)"):
-    p.add_argument("--x", help="displacement column (default: the run's curve, or the first CSV column)")
-    p.add_argument("--y", help="load column (default: the run's curve, or the second CSV column)")
+    p.add_argument("--x", help="displacement column (default: the run's curve; in a CSV the one column named as a "
+                               "displacement, d_*, u_*, disp*, else the first of exactly two columns)")
+    p.add_argument("--y", help="load column (default: the run's curve; in a CSV the one column named as a load, F_*, "
+                               "H*, P_*, load*, else the second of exactly two columns)")
     p.add_argument("--x-unit", choices=list(LENGTH_UNITS),
                    help=f"unit of the CSV displacement column (default: the unit its name ends in, as d_mm or "
                         f"'d [mm]', else {DEFAULT_X_UNIT}; run folders are SI)")
@@ -125,7 +127,7 @@ def cmd_eeep(args):
     opts = dict(fraction=args.limit, ultimate=args.ultimate, drop=args.drop, stiffness=args.stiffness, load_sign=1.0)
     report = {"source": c.source, "x_column": c.x_name, "y_column": c.y_name,
               "units": {"displacement": xu, "load": yu, "stiffness": f"{yu}/{xu}", "energy": "J"}}
-    common = {"load_sign_rule": sign_rule, "curve_rows": stage_note, "smooth_mm": args.smooth,
+    common = {"columns_rule": c.columns_rule, "load_sign_rule": sign_rule, "curve_rows": stage_note, "smooth_mm": args.smooth,
               "input_units": {"x": c.x_unit, "y": c.y_unit, "rules": list(c.unit_rules)},
               "warnings": list(c.warnings)}
     if eeep.is_reversing(signed_x):
@@ -167,7 +169,8 @@ def cmd_eeep(args):
             print("  " + _eeep_line(f"{name} envelope", r, xu, yu))
             for ln in _eeep_flags(r, "    "):
                 print(ln)
-        print(f"  curve: {stage_note}; load sign {sign:+g} ({sign_rule})"
+        print(f"  curve: columns {c.x_name}, {c.y_name} ({c.columns_rule}); {stage_note}; load sign {sign:+g} "
+              f"({sign_rule})"
               + (f"; envelope load averaged over {args.smooth:g} mm" if args.smooth > 0 else ""))
         print("wrote " + ", ".join(files))
         return
@@ -180,7 +183,8 @@ def cmd_eeep(args):
     if not args.no_plot:
         files += eeep.plot(x, y, res, prefix, c.label, (xu, fx), (yu, fy))
     print(_eeep_line(c.label, report, xu, yu))
-    print(f"  curve: {stage_note}; load sign {sign:+g} ({sign_rule})"
+    print(f"  curve: columns {c.x_name}, {c.y_name} ({c.columns_rule}); {stage_note}; load sign {sign:+g} "
+          f"({sign_rule})"
           + (f"; load averaged over {args.smooth:g} mm" if args.smooth > 0 else ""))
     for ln in _eeep_flags(report):
         print(ln)
