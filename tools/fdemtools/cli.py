@@ -305,8 +305,24 @@ def cmd_hysteresis(args):
 # ----------------------------------------------------------------------------------------------
 
 
+class PercentFormatter(argparse.HelpFormatter):
+    """argparse %-formats help strings, so they write a percent sign as %%, but shows descriptions as written (only
+    one that holds %(prog) is formatted), which then showed a literal %%. Here every text is written the one way,
+    %% for %, and shown with one %."""
+
+    def _format_text(self, text):
+        if "%" in text and "%(prog)" not in text:
+            text = text.replace("%%", "%")
+        return super()._format_text(text)
+
+
 class OneLineParser(argparse.ArgumentParser):
-    """Usage errors as one line too (the usage itself is one --help away)."""
+    """Usage errors as one line too (the usage itself is one --help away); help texts through PercentFormatter
+    (sub-commands too: they are made with this class)."""
+
+    def __init__(self, *args, **kwargs):
+        kwargs.setdefault("formatter_class", PercentFormatter)
+        super().__init__(*args, **kwargs)
 
     def error(self, message):
         self.exit(1, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
