@@ -211,3 +211,28 @@ def test_failed_run_has_no_peak_in_the_results(tmp_path, cli):
     head = rows[0].split(",")
     got = {r.split(",")[head.index("status")]: r.split(",")[head.index("peak_load_kN")] for r in rows[1:]}
     assert got == {"completed": "11.0", "failed": ""}
+
+
+def test_slurm_tasks_see_stale_runs(tmp_path, cli):
+    """--scheduler slurm (batch, study, validate) asks batch.is_finished(run folder) which runs to submit: once the
+    batch has made the task, a completed run of another fingerprint is not finished, and the task's prepare step
+    (called before submission) clears its summary and checkpoint and writes the new fingerprint."""
+    case = tmp_path / "case.toml"
+    case.write_text("[materials.stone]\nE = 1.0e9\n")
+    out = tmp_path / "b"
+    rc, o, err = cli("batch", case, "--grid", "geometry.mesh_size=0.1", "--out-dir", out, "--fdem", FAKE)
+    assert rc == 0, err
+    name = batch.run_name({"geometry.mesh_size": "0.1"})
+    rd = out / "runs" / name
+    (rd / "checkpoint.bin").write_text("old\n")
+    b = batch.Batch(str(case), str(out), FAKE, log=lambda m: None)
+    t = b.task(name, {"geometry.mesh_size": "0.1"})
+    assert batch.is_finished(str(rd))  # same case, overrides and build
+    case.write_text("[materials.stone]\nE = 2.0e9\n")
+    said = []
+    b = batch.Batch(str(case), str(out), FAKE, log=said.append)
+    t = b.task(name, {"geometry.mesh_size": "0.1"})
+    assert not batch.is_finished(str(rd)) and "stale: case file" in said[0]
+    t.prepare()
+    assert not (rd / "summary.json").exists() and not (rd / "checkpoint.bin").exists()
+    assert json.loads((rd / "fingerprint.json").read_text()) == b.fingerprint({"geometry.mesh_size": "0.1"})
