@@ -91,10 +91,10 @@ def _eeep_line(name: str, r: dict, xu: str, yu: str) -> str:
             + (" (lower bound)" if r["ductility_is_lower_bound"] else ""))
 
 
-def _eeep_flags(r: dict, indent: str = "  ") -> list:
+def _eeep_flags(r: dict, indent: str = "  ", yu: str = "") -> list:
     out = []
     if not r["past_peak"]:
-        out.append(f"{indent}NOTE: {r['post_peak_note']} (the load at the end, {r['P_end']:.5g}, is less than "
+        out.append(f"{indent}NOTE: {r['post_peak_note']} (the load at the end, {r['P_end']:.5g} {yu}, is less than "
                    "5 % below the peak: the record stops before the capacity is shown to be passed)")
     if r["fallback"]:
         out.append(f"{indent}FALLBACK: {r['yield_note']} (no elastic-plastic line of stiffness K_e holds the area "
@@ -167,7 +167,7 @@ def cmd_eeep(args):
                 print(f"  {name} envelope: no fit ({r['error']})")
                 continue
             print("  " + _eeep_line(f"{name} envelope", r, xu, yu))
-            for ln in _eeep_flags(r, "    "):
+            for ln in _eeep_flags(r, "    ", yu):
                 print(ln)
         print(f"  curve: columns {c.x_name}, {c.y_name} ({c.columns_rule}); {stage_note}; load sign {sign:+g} "
               f"({sign_rule})"
@@ -186,7 +186,7 @@ def cmd_eeep(args):
     print(f"  curve: columns {c.x_name}, {c.y_name} ({c.columns_rule}); {stage_note}; load sign {sign:+g} "
           f"({sign_rule})"
           + (f"; load averaged over {args.smooth:g} mm" if args.smooth > 0 else ""))
-    for ln in _eeep_flags(report):
+    for ln in _eeep_flags(report, yu=yu):
         print(ln)
     print("wrote " + ", ".join(files))
 
