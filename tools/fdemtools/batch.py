@@ -101,9 +101,132 @@ def fdem_binary(given: str | None, must_exist: bool = True) -> str:
     return os.path.abspath(resolved)
 
 
+# ----------------------------------------------------------------------------------------------
+# Run fingerprints: what a run was made from. A completed run is reused only when its fingerprint matches the one
+# the batch would give it now (README "batch": Resumable).
+
+FINGERPRINT = "fingerprint.json"
+FINGERPRINT_VERSION = 1
+_FILE_HASHES: dict = {}  # (path, size, mtime_ns) -> sha256, so a large binary is read once per process
+_EXPECTED: dict = {}     # run folder -> the fingerprint the current batch gives it (is_finished checks it)
+
+
+def _sha256_file(path: str) -> str:
+    st = os.stat(path)
+    key = (os.path.abspath(path), st.st_size, st.st_mtime_ns)
+    if key not in _FILE_HASHES:
+        h = hashlib.sha256()
+        with open(path, "rb") as f:
+            for block in iter(lambda: f.read(1 << 20), b""):
+                h.update(block)
+        _FILE_HASHES[key] = h.hexdigest()
+    return _FILE_HASHES[key]
+
+
+def _strings(tree):
+    """Every string value of a parsed TOML tree."""
+    if isinstance(tree, dict):
+        for v in tree.values():
+            yield from _strings(v)
+    elif isinstance(tree, list):
+        for v in tree:
+            yield from _strings(v)
+    elif isinstance(tree, str):
+        yield tree
+
+
+def _toml_string(value: str):
+    """The string a --set value stands for when it is a TOML string ("x.geo" or 'x.geo'), else None."""
+    import tomllib
+    try:
+        v = tomllib.loads(f"v = {value}")["v"]
+    except (tomllib.TOMLDecodeError, ValueError):
+        return None
+    return v if isinstance(v, str) else None
+
+
+def case_fingerprint(case: str, overrides: list) -> dict:
+    """The case's part of a run fingerprint: its parsed contents (so a comment or layout edit does not count; a file
+    that does not parse is taken byte for byte) and every file it or an override names that exists beside it (the
+    .geo script or .msh mesh of geometry.file, relative to the case's folder as the engine reads it)."""
+    import tomllib
+    with open(case, "rb") as f:
+        raw = f.read()
+    try:
+        tree = tomllib.loads(raw.decode("utf-8"))
+        text = json.dumps(tree, sort_keys=True, default=str)
+        digest, how = hashlib.sha256(text.encode()).hexdigest(), "parsed"
+    except (UnicodeDecodeError, tomllib.TOMLDecodeError):
+        tree, digest, how = {}, hashlib.sha256(raw).hexdigest(), "bytes"
+    here = os.path.dirname(os.path.abspath(case))
+    names = set(_strings(tree)) | {s for _, v in overrides if (s := _toml_string(v)) is not None}
+    files = {}
+    for s in sorted(names):
+        if not s or "\n" in s or len(s) > 4096:
+            continue
+        p = s if os.path.isabs(s) else os.path.join(here, s)
+        if os.path.isfile(p):
+            files[s] = _sha256_file(p)
+    return {"sha256": digest, "hashed": how, "files": files}
+
+
+def build_fingerprint(fdem: str) -> dict:
+    """The engine's part: the sha256 of the fdem executable (a rebuild that changes it changes the fingerprint)."""
+    try:
+        return {"path": fdem, "sha256": _sha256_file(fdem)}
+    except OSError:
+        return {"path": fdem, "sha256": None}
+
+
+def fingerprint_changes(old: dict | None, new: dict) -> list:
+    """What differs between a run's recorded fingerprint and the current one, as short phrases (empty: the same).
+    None (no fingerprint recorded) is a difference: such a run cannot be checked."""
+    if not isinstance(old, dict) or old.get("version") != new.get("version"):
+        return ["no fingerprint recorded (a run made before fdem-tools recorded them, or by another tool)"]
+    out = []
+    oc, nc = old.get("case") or {}, new["case"]
+    if oc.get("sha256") != nc["sha256"]:
+        out.append(f"case file ({new['case_file']} changed)")
+    of, nf = oc.get("files") or {}, nc["files"]
+    for name in sorted(set(of) | set(nf)):
+        if of.get(name) != nf.get(name):
+            out.append(f"file {name} " + ("changed" if name in of and name in nf else
+                                          "now referenced" if name in nf else "no longer referenced"))
+    oo, no = dict(map(tuple, old.get("overrides") or [])), dict(map(tuple, new["overrides"]))
+    diffs = []
+    for k in sorted(set(oo) | set(no)):
+        if oo.get(k) != no.get(k):
+            diffs.append(f"{k}: {oo.get(k, '(not set)')} -> {no.get(k, '(not set)')}")
+    if diffs:
+        out.append("overrides (--set " + "; ".join(diffs) + ")")
+    if (old.get("build") or {}).get("sha256") != new["build"]["sha256"]:
+        out.append(f"build (the fdem executable {new['build']['path']} differs)")
+    return out
+
+
+def read_fingerprint(run_dir: str) -> dict | None:
+    try:
+        with open(os.path.join(run_dir, FINGERPRINT), encoding="utf-8") as f:
+            v = json.load(f)
+    except (OSError, ValueError):
+        return None
+    return v if isinstance(v, dict) else None
+
+
+def stale_reason(run_dir: str) -> list:
+    """Why a completed run folder does not match what its batch would run now (empty when it matches, or when no
+    batch has registered it)."""
+    want = _EXPECTED.get(os.path.abspath(run_dir))
+    if want is None:
+        return []
+    return fingerprint_changes(read_fingerprint(run_dir), want)
+
+
 def is_finished(run_dir: str) -> bool:
+    """The run completed and, when a batch has registered what it would run there, from the same case, overrides and
+    fdem build (its fingerprint)."""
     s = read_summary(run_dir)
-    return bool(s) and s.get("status") == "completed"
+    return bool(s) and s.get("status") == "completed" and not stale_reason(run_dir)
 
 
 def reference_peak(summary: dict) -> float | None:
@@ -147,9 +270,45 @@ class Batch:
         self.fixed = fixed or []
         self.log = log
         self.timeout = timeout
+        self._build = None  # build_fingerprint(fdem), computed when first needed
         self._procs = {}
         self._lock = threading.Lock()
         self._stopping = False
+
+    def fingerprint(self, params: dict) -> dict:
+        """What a run of this grid point is made from: the case (parsed contents and the files it names), every
+        --set (fixed, then the point's, as passed) and the fdem build (module section "Run fingerprints")."""
+        overrides = [[k, v] for k, v in list(self.fixed) + list(params.items())]
+        if self._build is None:
+            self._build = build_fingerprint(self.fdem)
+        return {"version": FINGERPRINT_VERSION, "case_file": self.case,
+                "case": case_fingerprint(self.case, overrides), "overrides": overrides, "build": self._build}
+
+    def register(self, name: str, params: dict, label: str | None = None, say: bool = True) -> tuple:
+        """(run folder, fingerprint) of a grid point; from now on is_finished(run folder) also asks that the
+        completed run there has this fingerprint. A completed run that does not is logged with what changed."""
+        run_dir = os.path.join(self.out, "runs", name)
+        fp = self.fingerprint(params)
+        _EXPECTED[os.path.abspath(run_dir)] = fp
+        s = read_summary(run_dir)
+        if s and s.get("status") == "completed":
+            changes = fingerprint_changes(read_fingerprint(run_dir), fp)
+            if changes and say:
+                self.log(f"  {label or name}: completed, but stale: " + "; ".join(changes) + "; run again")
+        return run_dir, fp
+
+    @staticmethod
+    def prepare(run_dir: str, fp: dict) -> None:
+        """Before a run starts in run_dir: when the folder holds a run of another fingerprint (or of none), its
+        summary and checkpoints go (a failed start must not leave the old 'completed' summary behind, and a restart
+        must not pick up the old checkpoint); then the new fingerprint is written."""
+        os.makedirs(run_dir, exist_ok=True)
+        if fingerprint_changes(read_fingerprint(run_dir), fp):
+            import glob
+            for f in [os.path.join(run_dir, "summary.json")] + glob.glob(os.path.join(run_dir, "checkpoint*")):
+                if os.path.isfile(f):
+                    os.remove(f)
+        write_json(os.path.join(run_dir, FINGERPRINT), fp)
 
     def command(self, params: dict, run_dir: str) -> list:
         cmd = [self.fdem, "run", self.case, "--out", run_dir, "--threads", str(self.threads), "--quiet"]
@@ -160,7 +319,7 @@ class Batch:
     def _one(self, name: str, params: dict, label: str | None = None) -> dict:
         """Runs one grid point; label names it in the progress lines (default: its run name)."""
         label = label or name
-        run_dir = os.path.join(self.out, "runs", name)
+        run_dir, fp = self.register(name, params, label)
         rec = {"name": name, "params": params, "run_dir": run_dir, "resumed": False}
         if is_finished(run_dir):
             rec.update(resumed=True, exit_code=0)
@@ -171,6 +330,7 @@ class Batch:
             return rec
         os.makedirs(os.path.join(self.out, "logs"), exist_ok=True)
         log_path = os.path.join(self.out, "logs", name + ".log")
+        self.prepare(run_dir, fp)
         cmd = self.command(params, run_dir)
         t0 = time.monotonic()
         with open(log_path, "w") as lf:
@@ -215,10 +375,10 @@ class Batch:
     def task(self, name: str, params: dict, label: str | None = None):
         """The run of one grid point as a Slurm array task (same command, run folder and log as _one)."""
         from .slurm import Task
-        run_dir = os.path.join(self.out, "runs", name)
+        run_dir, fp = self.register(name, params, label)
         return Task(name=name, label=label or name, run_dir=run_dir,
                     log=os.path.join(self.out, "logs", name + ".log"), cmd=self.command(params, run_dir),
-                    params=params)
+                    params=params, prepare=lambda: self.prepare(run_dir, fp))
 
     def run(self, points: list, jobs: int = 1, grid: list | None = None, slurm=None) -> list | None:
         """Runs the grid on the local pool, or with slurm (slurm.Options) as a job array: then None when the
@@ -233,15 +393,19 @@ class Batch:
         os.makedirs(self.out, exist_ok=True)
         manifest = {"case": self.case, "fdem": self.fdem, "threads": self.threads,
                     "fixed": [f"{k}={v}" for k, v in self.fixed], "grid": grid or [],
-                    "runs": [{"name": n, "params": p} for n, p in zip(names, points)]}
+                    "runs": [{"name": n, "params": p, "fingerprint": self.fingerprint(p)}
+                             for n, p in zip(names, points)]}
         write_json(os.path.join(self.out, "batch.json"), manifest)
         if slurm is not None:
             from .slurm import run_tasks
             recs = run_tasks([self.task(n, p) for n, p in zip(names, points)], slurm,
                              os.path.join(self.out, "slurm"), is_finished, self.log)
             return None if recs is None else [collect(r) for r in recs]
+        for n, p in zip(names, points):
+            self.register(n, p, say=False)
         todo = sum(not is_finished(os.path.join(self.out, "runs", n)) for n in names)
-        self.log(f"batch: {len(points)} runs, {len(points) - todo} already completed, {todo} to run "
+        self.log(f"batch: {len(points)} runs, {len(points) - todo} already completed (same case, overrides and "
+                 f"build), {todo} to run "
                  f"({jobs} at a time, {self.threads} thread(s) each) in {self.out}")
         ex = ThreadPoolExecutor(max_workers=max(1, jobs))
         try:
@@ -262,7 +426,8 @@ def collect(rec: dict) -> dict:
     rec["message"] = s.get("message", "")
     for k in ("wall_time_s", "cpu_time_s", "n_triangles", "n_nodes", "dt", "steps", "threads"):
         rec[k] = s.get(k)
-    rec["peak_load_N"] = curve_peak(s)
+    # a run that did not complete has no result: its peak so far is not tabulated as one (the status says why)
+    rec["peak_load_N"] = curve_peak(s) if rec["status"] == "completed" else None
     ref = reference_peak(s)
     rec["reference_peak_N"] = ref
     rec["reference_error"] = (abs(rec["peak_load_N"] - ref) / abs(ref)

@@ -18,8 +18,10 @@ COMMAND_MODULES = ["plots", "cracks", "batch", "study", "validate"]  # modules w
 
 
 def _units_args(p, stage_help="keep only the rows of this stage (1-based; run folders)"):
-    p.add_argument("--x", help="displacement column (default: the run's curve, or the first CSV column)")
-    p.add_argument("--y", help="load column (default: the run's curve, or the second CSV column)")
+    p.add_argument("--x", help="displacement column (default: the run's curve; in a CSV the one column named as a "
+                               "displacement, d_*, u_*, disp*, else the first of exactly two columns)")
+    p.add_argument("--y", help="load column (default: the run's curve; in a CSV the one column named as a load, F_*, "
+                               "H*, P_*, load*, else the second of exactly two columns)")
     p.add_argument("--x-unit", choices=list(LENGTH_UNITS),
                    help=f"unit of the CSV displacement column (default: the unit its name ends in, as d_mm or "
                         f"'d [mm]', else {DEFAULT_X_UNIT}; run folders are SI)")
@@ -63,6 +65,43 @@ def last_stage(source: str, partial: bool) -> int | None:
     return None
 
 
+def _eeep_fields(res: dict, fx: float, fy: float) -> dict:
+    """An eeep result in report units (displacements / fx, loads / fy, stiffness fy/fx), with its rules and flags."""
+    return {
+        "K_e": res["K_e"] * fx / fy,
+        "P_peak": res["P_peak"] / fy, "Delta_peak": res["Delta_peak"] / fx,
+        "Delta_u": res["Delta_u"] / fx, "P_u": res["P_u"] / fy,
+        "P_y": res["P_y"] / fy, "Delta_y": res["Delta_y"] / fx,
+        "ductility": res["ductility"], "P_end": res["P_end"] / fy,
+        "past_peak": res["past_peak"], "ductility_is_lower_bound": res["ductility_is_lower_bound"],
+        "post_peak_note": res["post_peak_note"],
+        "area_J": res["area"], "eeep_area_J": res["eeep_area"],
+        "regression_limit": res["regression_limit"], "regression_points": res["regression_points"],
+        "stiffness_rule": res["stiffness_rule"], "ultimate_rule": res["ultimate_rule"],
+        "ultimate_note": res["ultimate_note"], "yield_note": res["yield_note"],
+        "origin_added": res["origin_added"], "fallback": res["fallback"],
+        "si": {k: res[k] for k in ("K_e", "P_peak", "Delta_peak", "Delta_u", "P_y", "Delta_y", "area")},
+    }
+
+
+def _eeep_line(name: str, r: dict, xu: str, yu: str) -> str:
+    return (f"{name}: K_e = {r['K_e']:.5g} {yu}/{xu}, P_peak = {r['P_peak']:.5g} {yu}, "
+            f"P_y = {r['P_y']:.5g} {yu}, Delta_y = {r['Delta_y']:.5g} {xu}, "
+            f"Delta_u = {r['Delta_u']:.5g} {xu}, ductility = {r['ductility']:.4g}"
+            + (" (lower bound)" if r["ductility_is_lower_bound"] else ""))
+
+
+def _eeep_flags(r: dict, indent: str = "  ", yu: str = "") -> list:
+    out = []
+    if not r["past_peak"]:
+        out.append(f"{indent}NOTE: {r['post_peak_note']} (the load at the end, {r['P_end']:.5g} {yu}, is less than "
+                   "5 % below the peak: the record stops before the capacity is shown to be passed)")
+    if r["fallback"]:
+        out.append(f"{indent}FALLBACK: {r['yield_note']} (no elastic-plastic line of stiffness K_e holds the area "
+                   f"{r['area_J']:.4g} J up to Delta_u)")
+    return out
+
+
 def cmd_eeep(args):
     from . import eeep
     from .validate import smooth_curve
@@ -75,47 +114,80 @@ def cmd_eeep(args):
         c = load_curve(args.source, args.x, args.y, args.x_unit, args.y_unit, args.stage, args.partial)
         check_finite(c)
         x, y, sign, sign_rule = stage_curve(c, args.load_sign)
+        signed_x = c.x - c.x[0]
         stage_note = f"stage {args.stage} (the last), displacement from its start" if args.stage else "all rows"
     else:
         c = _curve(args)
         sign, sign_rule = resolve_sign(c, args.load_sign)
         x, y = c.x, sign * c.y
+        signed_x = c.x
         stage_note = f"stage {args.stage}" if args.stage is not None else "all rows"
-    if args.smooth > 0:
-        y = smooth_curve(abs(x - x[0]), y, args.smooth * 1e-3)
-    res = eeep.eeep(x, y, fraction=args.limit, ultimate=args.ultimate, drop=args.drop, stiffness=args.stiffness,
-                    source=c.source, load_sign=1.0)
     (xu, fx), (yu, fy) = _ru(args)
     prefix = output_prefix(args.source, "eeep", args.out)
-    report = {
-        "source": c.source, "x_column": c.x_name, "y_column": c.y_name,
-        "units": {"displacement": xu, "load": yu, "stiffness": f"{yu}/{xu}", "energy": "J"},
-        "K_e": res["K_e"] * fx / fy,
-        "P_peak": res["P_peak"] / fy, "Delta_peak": res["Delta_peak"] / fx,
-        "Delta_u": res["Delta_u"] / fx, "P_u": res["P_u"] / fy,
-        "P_y": res["P_y"] / fy, "Delta_y": res["Delta_y"] / fx,
-        "ductility": res["ductility"],
-        "area_J": res["area"], "eeep_area_J": res["eeep_area"],
-        "regression_limit": res["regression_limit"], "regression_points": res["regression_points"],
-        "stiffness_rule": res["stiffness_rule"], "ultimate_rule": res["ultimate_rule"],
-        "ultimate_note": res["ultimate_note"], "yield_note": res["yield_note"],
-        "sign_x": res["sign_x"], "sign_y": res["sign_y"] * sign, "load_sign_rule": sign_rule,
-        "origin_added": res["origin_added"], "fallback": res["fallback"], "curve_rows": stage_note,
-        "smooth_mm": args.smooth, "input_units": {"x": c.x_unit, "y": c.y_unit, "rules": list(c.unit_rules)},
-        "warnings": list(c.warnings),
-        "si": {k: res[k] for k in ("K_e", "P_peak", "Delta_peak", "Delta_u", "P_y", "Delta_y", "area")},
-    }
+    opts = dict(fraction=args.limit, ultimate=args.ultimate, drop=args.drop, stiffness=args.stiffness, load_sign=1.0)
+    report = {"source": c.source, "x_column": c.x_name, "y_column": c.y_name,
+              "units": {"displacement": xu, "load": yu, "stiffness": f"{yu}/{xu}", "energy": "J"}}
+    common = {"columns_rule": c.columns_rule, "load_sign_rule": sign_rule, "curve_rows": stage_note, "smooth_mm": args.smooth,
+              "input_units": {"x": c.x_unit, "y": c.y_unit, "rules": list(c.unit_rules)},
+              "warnings": list(c.warnings)}
+    if eeep.is_reversing(signed_x):
+        # a cyclic record: ASTM E2126 fits the envelope of each direction, never the record itself
+        fits, per = {}, {}
+        for name, s in (("positive", 1.0), ("negative", -1.0)):
+            xe, ye = eeep.envelope(signed_x, y, s)
+            if args.smooth > 0 and len(xe) > 1:
+                ye = smooth_curve(xe, ye, args.smooth * 1e-3)
+            if len(xe) < 3:
+                per[name] = {"error": "the record does not go this way"}
+                continue
+            try:
+                res = eeep.eeep(xe, ye, source=f"{c.source} ({name} envelope)", **opts)
+            except ToolError as e:
+                per[name] = {"error": str(e)}
+                fits[name] = (xe, ye, None)
+                continue
+            fits[name] = (xe, ye, res)
+            per[name] = _eeep_fields(res, fx, fy)
+        if not any(r is not None for _, _, r in fits.values()):
+            raise ToolError(f"{c.source}: a reversing (cyclic) record whose envelope gives no EEEP fit in either "
+                            "direction (" + "; ".join(f"{k}: {v['error']}" for k, v in per.items()) + ")")
+        report.update({"cyclic": True, "reversal": eeep.reversal(signed_x),
+                       "envelope_rule": "ASTM E2126: EEEP of the envelope of each direction (rows where the "
+                                        "displacement exceeds every earlier one that way)",
+                       "ductility": None, "ductility_note": "cyclic record: see envelope.positive and "
+                                                            "envelope.negative",
+                       "envelope": per, "sign_y": sign, **common})
+        files = [write_json(prefix + ".json", report)]
+        if not args.no_plot:
+            files += eeep.plot_cyclic(signed_x, y, fits, prefix, c.label, (xu, fx), (yu, fy))
+        print(f"{c.label}: cyclic record (the displacement reverses by {100 * report['reversal']:.0f} % of its "
+              "largest value): EEEP of the envelope of each direction (ASTM E2126)")
+        for name, r in per.items():
+            if "error" in r:
+                print(f"  {name} envelope: no fit ({r['error']})")
+                continue
+            print("  " + _eeep_line(f"{name} envelope", r, xu, yu))
+            for ln in _eeep_flags(r, "    ", yu):
+                print(ln)
+        print(f"  curve: columns {c.x_name}, {c.y_name} ({c.columns_rule}); {stage_note}; load sign {sign:+g} "
+              f"({sign_rule})"
+              + (f"; envelope load averaged over {args.smooth:g} mm" if args.smooth > 0 else ""))
+        print("wrote " + ", ".join(files))
+        return
+    if args.smooth > 0:
+        y = smooth_curve(abs(x - x[0]), y, args.smooth * 1e-3)
+    res = eeep.eeep(x, y, source=c.source, **opts)
+    report.update({"cyclic": False, **_eeep_fields(res, fx, fy), "sign_x": res["sign_x"],
+                   "sign_y": res["sign_y"] * sign, **common})
     files = [write_json(prefix + ".json", report)]
     if not args.no_plot:
         files += eeep.plot(x, y, res, prefix, c.label, (xu, fx), (yu, fy))
-    print(f"{c.label}: K_e = {report['K_e']:.5g} {yu}/{xu}, P_peak = {report['P_peak']:.5g} {yu}, "
-          f"P_y = {report['P_y']:.5g} {yu}, Delta_y = {report['Delta_y']:.5g} {xu}, "
-          f"Delta_u = {report['Delta_u']:.5g} {xu}, ductility = {report['ductility']:.4g}")
-    print(f"  curve: {stage_note}; load sign {sign:+g} ({sign_rule})"
+    print(_eeep_line(c.label, report, xu, yu))
+    print(f"  curve: columns {c.x_name}, {c.y_name} ({c.columns_rule}); {stage_note}; load sign {sign:+g} "
+          f"({sign_rule})"
           + (f"; load averaged over {args.smooth:g} mm" if args.smooth > 0 else ""))
-    if res["fallback"]:
-        print(f"  FALLBACK: {res['yield_note']} (no elastic-plastic line of stiffness K_e holds the area "
-              f"{res['area']:.4g} J up to Delta_u)")
+    for ln in _eeep_flags(report, yu=yu):
+        print(ln)
     print("wrote " + ", ".join(files))
 
 
@@ -134,7 +206,11 @@ def _eeep_points(specs):
             raise ToolError(f"--point '{spec}': '{a}' is not a number") from None
         try:
             with open(path, encoding="utf-8") as f:
-                ys.append(float(json.load(f)["ductility"]))
+                res = json.load(f)
+            if res.get("cyclic"):
+                raise ToolError(f"{path}: the eeep result of a cyclic record has a ductility per direction "
+                                "(envelope.positive, envelope.negative), not one")
+            ys.append(float(res["ductility"]))
         except OSError:
             raise ToolError(f"{path}: cannot read") from None
         except (ValueError, KeyError, TypeError):
@@ -199,25 +275,54 @@ def cmd_hysteresis(args):
               "k_el": res["k_el"] * fx / fy, "k_el_rule": res["k_el_rule"], "E_h_J": res["E_h"],
               "E_h_rule": res["E_h_rule"], "E_total_J": res["E_total"], "n_cycles": res["n_cycles"],
               "peak_rule": res["peak_rule"], "sign_y": res["sign_y"], "load_sign_rule": sign_rule,
-              "warnings": list(c.warnings) + res["warnings"], "columns": header, "cycles": rows}
+              "warnings": list(c.warnings) + res["warnings"], "columns": header, "cycles": rows,
+              "partial_cycles": [{"cycle": q["cycle"], "d_plus": q["d_plus"] / fx, "P_plus": q["P_plus"] / fy,
+                                  "d_minus": q["d_minus"] / fx, "P_minus": q["P_minus"] / fy, "W_J": q["W_i"],
+                                  "d_end": q["d_end"] / fx} for q in res["partial"]],
+              "partial_note": "partial cycles (the record ends inside them) are kept out of the cycle table, k_el, "
+                              "k_d, E_i, E_d and E_h"}
     files = [write_json(prefix + ".json", report), write_csv(prefix + ".csv", header, rows)]
     if not args.no_plot:
         files += hysteresis.plot(c.x, c.y, res, prefix, c.label, (xu, fx), (yu, fy))
-    print(f"{c.label}: {res['n_cycles']} cycles, k_el = {report['k_el']:.5g} {yu}/{xu}, "
-          f"E_total = {res['E_total']:.5g} J; load sign {sign:+g} ({sign_rule}); peaks at the loop tips")
+    print(f"{c.label}: {res['n_cycles']} complete cycles"
+          + (f" (+ {res['n_partial']} partial, not counted)" if res["n_partial"] else "")
+          + f", k_el = {report['k_el']:.5g} {yu}/{xu}, E_total = {res['E_total']:.5g} J; load sign {sign:+g} "
+            f"({sign_rule}); peaks at the loop tips")
     for r in rows:
-        print("  cycle {:3d}{}: d+ {:8.4g} P+ {:9.4g}  d- {:8.4g} P- {:9.4g} {}  k_i {:9.4g}  k_d {:6.3f}  "
-              "W_i {:9.4g} J{} E_i {:9.4g} J  E_d {:6.3f}".format(r[0], " " if r[1] else "*", r[2], r[3], r[4], r[5],
+        print("  cycle {:3d}: d+ {:8.4g} P+ {:9.4g}  d- {:8.4g} P- {:9.4g} {}  k_i {:9.4g}  k_d {:6.3f}  "
+              "W_i {:9.4g} J{} E_i {:9.4g} J  E_d {:6.3f}".format(r[0], r[2], r[3], r[4], r[5],
                                                                  yu, r[6], r[7], r[8], " (NEGATIVE)" if r[11] else "",
                                                                  r[9], r[10]))
+    for q in report["partial_cycles"]:
+        print("  cycle {:3d}*: d+ {:8.4g} P+ {:9.4g}  d- {:8.4g} P- {:9.4g} {}  W {:9.4g} J, ends at d = {:.4g} {}"
+              .format(q["cycle"], q["d_plus"], q["P_plus"], q["d_minus"], q["P_minus"], yu, q["W_J"], q["d_end"], xu))
+    if report["partial_cycles"]:
+        print("  * partial cycle: the record ends before the cycle returns to zero from the negative side; its "
+              "tips are where the record stopped, so it is kept out of the table, k_el, k_d, E_i, E_d and E_h")
     print("wrote " + ", ".join(files))
 
 
 # ----------------------------------------------------------------------------------------------
 
 
+class PercentFormatter(argparse.HelpFormatter):
+    """argparse %-formats help strings, so they write a percent sign as %%, but shows descriptions as written (only
+    one that holds %(prog) is formatted), which then showed a literal %%. Here every text is written the one way,
+    %% for %, and shown with one %."""
+
+    def _format_text(self, text):
+        if "%" in text and "%(prog)" not in text:
+            text = text.replace("%%", "%")
+        return super()._format_text(text)
+
+
 class OneLineParser(argparse.ArgumentParser):
-    """Usage errors as one line too (the usage itself is one --help away)."""
+    """Usage errors as one line too (the usage itself is one --help away); help texts through PercentFormatter
+    (sub-commands too: they are made with this class)."""
+
+    def __init__(self, *args, **kwargs):
+        kwargs.setdefault("formatter_class", PercentFormatter)
+        super().__init__(*args, **kwargs)
 
     def error(self, message):
         self.exit(1, f"{self.prog}: error: {message} (see {self.prog} --help)\n")

@@ -204,6 +204,7 @@ class Curve:
     y_unit: str = "N"            # unit the load column was read in
     unit_rules: tuple = ("SI run folder", "SI run folder")  # how each unit was found (given, column name, default)
     warnings: list = field(default_factory=list)  # unit warnings printed while reading
+    columns_rule: str = "named by the run"     # how the columns were chosen (CSV: given, by name, the only two)
 
 
 # ----------------------------------------------------------------------------------------------
@@ -313,6 +314,68 @@ def column_unit(name: str, given: str | None, table: dict, default: str, what: s
     return default, "default"
 
 
+def name_without_unit(name: str) -> str:
+    """A column name without the unit it ends in ('d_mm' -> 'd', 'F (kN)' -> 'F', 'H' -> 'H'), any known unit."""
+    import re
+    n = name.strip()
+    for table in (LENGTH_UNITS, FORCE_UNITS, STRESS_UNITS, ENERGY_UNITS):
+        if unit_from_name(n, table):
+            m = re.search(r"\s*[\[(]\s*[A-Za-z*]+\s*[\])]\s*$", n) or re.search(r"[_.\s-][A-Za-z*]+$", n)
+            return n[:m.start()] if m else n
+    return n
+
+
+def renamed(name: str, unit: str) -> str:
+    """The name a column would need to say `unit`: its name without its unit, then _unit ('F_N' -> 'F_kN')."""
+    return f"{name_without_unit(name)}_{unit}"
+
+
+def _is_named(name: str, letters: tuple, words: tuple) -> bool:
+    import re
+    stem = name_without_unit(name).strip().lower()
+    if any(re.fullmatch(rf"{c}([_\s.\-(\[].*)?", stem) for c in letters):
+        return True
+    return any(stem.startswith(w) for w in words)
+
+
+def is_displacement_name(name: str) -> bool:
+    """d, u, d_*, u_*, disp*, displacement*, delta* (after the unit is taken off the name)."""
+    return _is_named(name, ("d", "u"), ("disp", "delta"))
+
+
+def is_load_name(name: str) -> bool:
+    """F, H, P, F_*, H_*, P_*, load*, force* (after the unit is taken off the name)."""
+    return _is_named(name, ("f", "h", "p"), ("load", "force"))
+
+
+def pick_columns(names: list, x: str | None, y: str | None, source: str) -> tuple:
+    """(x, y, rule) of a CSV curve: the columns given; else the one column whose name says displacement (d_*, u_*,
+    disp*) and the one whose name says load (F_*, H*, P_*, load*); else, in a file of exactly two columns, those two
+    in order. Anything else needs --x and --y (was: the first two columns, whatever they hold: `time,d_mm,F_kN`
+    read the time as the displacement and d_mm as the load)."""
+    if x and y:
+        return x, y, "given"
+    given = x or y
+    if x is None:
+        c = [n for n in names if is_displacement_name(n) and n != y]
+        x = c[0] if len(c) == 1 else None
+    if y is None:
+        c = [n for n in names if is_load_name(n) and n != x]
+        y = c[0] if len(c) == 1 else None
+    if x and y:
+        return x, y, "given and by name" if given else "by name"
+    if len(names) == 2:
+        rest = [n for n in names if n not in (x, y)]
+        x = x or rest.pop(0)
+        y = y or rest.pop(0)
+        return x, y, "the only two columns, in order"
+    dn = [n for n in names if is_displacement_name(n)]
+    ln = [n for n in names if is_load_name(n)]
+    raise ToolError(f"{source}: cannot tell the displacement and load columns from the names ({', '.join(names)}; "
+                    f"displacement-like: {', '.join(dn) or 'none'}, load-like: {', '.join(ln) or 'none'}): give "
+                    "--x DISPLACEMENT_COLUMN --y LOAD_COLUMN")
+
+
 # Magnitudes that suggest the other unit in a structural test: a displacement of 1 m or more, a load below 100 N.
 SUSPECT_X_M, SUSPECT_Y_N = 1.0, 100.0
 
@@ -325,15 +388,22 @@ def check_magnitudes(c: "Curve", rule_x: str = "", rule_y: str = "") -> list:
     ax = float(np.max(np.abs(c.x))) if len(c.x) else 0.0
     ay = float(np.max(np.abs(c.y))) if len(c.y) else 0.0
     src = f"{c.source}: column '{{}}' read in {{}} ({{}})"
+    def fix(name, unit, flag, other_table, what):
+        """The suggestion: another unit for this column, or another column when its name carries the other kind's
+        unit (a load column named d_mm is the displacement, not a load in the wrong unit)."""
+        theirs = unit_from_name(name, other_table)
+        if theirs:
+            return f"its name says {theirs}, a {what}: pick the right column with --{flag}"
+        return f"--{flag}-unit {unit} or name it '{renamed(name, unit)}'"
     if ax >= SUSPECT_X_M:
         out.append(src.format(c.x_name, c.x_unit, rule_x or "unit") +
-                   f" reaches {ax / LENGTH_UNITS[c.x_unit]:.4g} {c.x_unit} = {ax:.4g} m: mm? (--x-unit mm or name it "
-                   f"'{c.x_name}_mm')")
+                   f" reaches {ax / LENGTH_UNITS[c.x_unit]:.4g} {c.x_unit} = {ax:.4g} m: mm? ("
+                   + fix(c.x_name, "mm", "x", FORCE_UNITS, "force") + ")")
     elif 0 < ax < 1e-6:
         out.append(src.format(c.x_name, c.x_unit, rule_x or "unit") + f" reaches only {ax:.3g} m: m? (--x-unit m)")
     if 0 < ay < SUSPECT_Y_N:
-        out.append(src.format(c.y_name, c.y_unit, rule_y or "unit") + f" reaches only {ay:.3g} N: kN? (--y-unit kN "
-                   f"or name it '{c.y_name}_kN')")
+        out.append(src.format(c.y_name, c.y_unit, rule_y or "unit") + f" reaches only {ay:.3g} N: kN? ("
+                   + fix(c.y_name, "kN", "y", LENGTH_UNITS, "length") + ")")
     for w in out:
         warn(w)
     return out
@@ -381,10 +451,9 @@ def load_curve(source: str, x: str | None = None, y: str | None = None, x_unit: 
     if os.path.isdir(source):
         raise ToolError(f"{source}: a folder but not a run folder (no summary.json or history.csv)")
     tab = read_table(source)
-    if x is None or y is None:
-        if len(tab.names) < 2:
-            raise ToolError(f"{source}: needs at least two columns")
-        x, y = x or tab.names[0], y or tab.names[1]
+    if len(tab.names) < 2 and (x is None or y is None):
+        raise ToolError(f"{source}: needs at least two columns")
+    x, y, col_rule = pick_columns(tab.names, x, y, source)
     ux, rx = column_unit(x, x_unit, LENGTH_UNITS, DEFAULT_X_UNIT, "length", source)
     uy, ry = column_unit(y, y_unit, FORCE_UNITS, DEFAULT_Y_UNIT, "force", source)
     xs, ys = tab.numeric(x) * LENGTH_UNITS[ux], tab.numeric(y) * FORCE_UNITS[uy]
@@ -394,7 +463,7 @@ def load_curve(source: str, x: str | None = None, y: str | None = None, x_unit: 
         xs, ys = xs[keep], ys[keep]
         t = t[keep] if t is not None else None
     stem = os.path.splitext(os.path.basename(source))[0]
-    c = Curve(xs, ys, label or stem, source, x, y, t, x_unit=ux, y_unit=uy, unit_rules=(rx, ry))
+    c = Curve(xs, ys, label or stem, source, x, y, t, x_unit=ux, y_unit=uy, unit_rules=(rx, ry), columns_rule=col_rule)
     c.warnings = check_magnitudes(c, rx, ry)
     return c
 

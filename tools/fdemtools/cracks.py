@@ -434,8 +434,18 @@ def _threshold_text(run, key: str) -> str:
     return f" > {v * 1e3:.3g} mm"
 
 
+def default_name(time: float | None, displacement_mm: float | None) -> str:
+    """RUN/post/<name> of a crack map: cracks_t<T>s at a time, cracks_d<D>mm at a displacement, cracks at the end of
+    the run, so maps at different moments do not overwrite each other."""
+    if time is not None:
+        return f"cracks_t{time:g}s"
+    if displacement_mm is not None:
+        return f"cracks_d{displacement_mm:g}mm"
+    return "cracks"
+
+
 def cmd_cracks(args):
-    prefix = args.out or os.path.join(args.run, "post", "cracks")
+    prefix = args.out or os.path.join(args.run, "post", default_name(args.time, args.displacement))
     disp = args.displacement * 1e-3 if args.displacement is not None else None
     if args.joint_width is not None and not (args.joint_width > 0):
         raise ToolError(f"--joint-width: expected a width > 0 in mm, got {args.joint_width:g}")
@@ -470,5 +480,7 @@ def add_parser(sub):
                    help="also draw the cohesive elements that are not broken but open (the colour of mode I) or slip (of "
                         "mode II) by more than MM mm in the snapshot: the cracks of joints that never break (law = \"mohr_coulomb\"; "
                         "the M-DEM paper draws widths > 0.5 mm)")
-    p.add_argument("-o", "--out", help="output prefix (default RUN/post/cracks): writes PREFIX.png and PREFIX.svg")
+    p.add_argument("-o", "--out", help="output prefix: writes PREFIX.png and PREFIX.svg (default RUN/post/cracks_tTs "
+                                       "with --time T, RUN/post/cracks_dDmm with --displacement D, else "
+                                       "RUN/post/cracks: maps at different moments do not overwrite each other)")
     p.set_defaults(func=cmd_cracks)

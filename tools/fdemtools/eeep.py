@@ -21,12 +21,57 @@ Signs: the displacement is mirrored when its largest excursion is negative; the 
 (common.resolve_sign: given, else the case's, else the sign whose loading work is positive), so a softening curve is
 never turned and a reaction is.
 All quantities are in whatever consistent units the arrays carry (SI from the command line).
+Past the peak: the curve has a post-peak branch when its load at the end is at least PAST_PEAK_DROP (5 %) below its
+peak (validate's rule). Without one the record stops at (or near) its largest load, the capacity may not be reached
+and Delta_u is where the record ends, not where the structure fails: the ductility is then a lower bound
+(`past_peak` false, `ductility_is_lower_bound` true).
+Reversing records: the fit above is for a monotonic curve. A record whose displacement turns back (it retreats from
+its largest excursion, or goes the other way, by more than REVERSAL = 10 % of its largest |displacement|: a cyclic
+test, or a pushover unloaded at its end) is refused by `eeep`; `envelope` takes its backbone in one direction (the
+rows where the displacement exceeds every earlier one in that direction: the first-cycle loading branches and the
+tips of the loops, ASTM E2126's envelope), and the command line fits each direction's envelope apart.
 """
 from __future__ import annotations
 
 import numpy as np
 
 from .common import ToolError, loading_work_sign
+
+PAST_PEAK_DROP = 0.05  # the load at the end this far (fraction of the peak) below the peak: a post-peak branch
+REVERSAL = 0.10        # a retreat of the displacement beyond this fraction of its largest |value|: a reversing record
+NO_POST_PEAK = "no post-peak branch: ductility is a lower bound"
+
+
+def reversal(d) -> float:
+    """How far the displacement turns back, as a fraction of its largest |value|: the larger of its largest retreat
+    from the running extreme in the direction of its largest excursion and its largest excursion the other way."""
+    d = np.asarray(d, dtype=float)
+    if len(d) < 2:
+        return 0.0
+    s = -1.0 if abs(d.min()) > abs(d.max()) else 1.0
+    x = s * (d - d[0])
+    top = float(np.max(np.abs(x)))
+    if top <= 0:
+        return 0.0
+    back = float(np.max(np.maximum.accumulate(x) - x))
+    other = float(max(0.0, -x.min()))
+    return max(back, other) / top
+
+
+def is_reversing(d, tol: float = REVERSAL) -> bool:
+    return reversal(d) > tol
+
+
+def envelope(d, p, direction: float = 1.0) -> tuple:
+    """The backbone of a (cyclic) record in one direction (+1 or -1), in that direction's coordinates (x = direction
+    x d, y = direction x p, so both are positive on the envelope): the rows where x exceeds every earlier x, with x > 0,
+    the origin first. Empty arrays when the record never goes that way."""
+    from .study import loading_branch
+    d = np.asarray(d, dtype=float) * direction
+    p = np.asarray(p, dtype=float) * direction
+    xb, yb = loading_branch(d, p)
+    keep = xb > 0
+    return np.concatenate(([0.0], xb[keep])), np.concatenate(([0.0], yb[keep]))
 
 
 def _interp_x(x0, y0, x1, y1, y):
@@ -61,6 +106,10 @@ def eeep(d, p, fraction: float = 0.7, ultimate: str = "peak", drop: float = 0.8,
         raise ToolError(f"{source}: the curve needs at least two points")
     if not (np.isfinite(d).all() and np.isfinite(p).all()):
         raise ToolError(f"{source}: the curve contains non-finite values")
+    if is_reversing(d):
+        raise ToolError(f"{source}: the displacement reverses (it turns back by {100 * reversal(d):.0f} % of its "
+                        "largest value: a cyclic record); EEEP applies to a monotonic curve or to the envelope of "
+                        "each direction (eeep.envelope; the eeep command reads it)")
 
     # A curve loaded in the negative direction is analysed as its mirror image (both axes turned); a reaction
     # monitor's sign is turned on top of that by the one load sign rule.
@@ -83,6 +132,7 @@ def eeep(d, p, fraction: float = 0.7, ultimate: str = "peak", drop: float = 0.8,
     if d_peak <= 0:
         raise ToolError(f"{source}: the curve has no peak at positive displacement")
 
+    past_peak = bool(p[-1] <= (1.0 - PAST_PEAK_DROP) * p_peak)
     # Ultimate displacement.
     ultimate_note = "displacement at peak load ([K25])"
     n_u = i_peak  # last full point before the end of the integration
@@ -166,38 +216,104 @@ def eeep(d, p, fraction: float = 0.7, ultimate: str = "peak", drop: float = 0.8,
         "sign_x": sign_x,
         "sign_y": sign_y,
         "origin_added": origin_added,
+        "P_end": float(p[-1]),
+        "past_peak": past_peak,
+        "ductility_is_lower_bound": not past_peak,
+        "post_peak_note": "" if past_peak else NO_POST_PEAK,
         "bilinear": {"x": [0.0, float(d_y), float(d_u)], "y": [0.0, float(p_y), float(p_y)]},
     }
 
 
-def plot(curve_d, curve_p, res: dict, prefix: str, label: str, x_unit=("mm", 1e-3), y_unit=("kN", 1e3)) -> list:
-    """The curve, its EEEP bilinear idealisation and the markers of yield, peak and ultimate points."""
-    from .figures import new_figure, save
-    sx, sy = 1.0 / x_unit[1], 1.0 / y_unit[1]
-    fig, ax = new_figure()
-    ax.plot(res["sign_x"] * np.asarray(curve_d) * sx, res["sign_y"] * np.asarray(curve_p) * sy, color="0.2", lw=1.4,
-            label=label)
-    bx = np.array(res["bilinear"]["x"]) * sx
-    by = np.array(res["bilinear"]["y"]) * sy
-    ax.plot(bx, by, color="#d62728", lw=1.8, ls="--",
-            label=f"EEEP: $K_e$={res['K_e'] * sy / sx:.4g} {y_unit[0]}/{x_unit[0]}, "
-                  f"$P_y$={res['P_y'] * sy:.4g} {y_unit[0]}, $\\mu$={res['ductility']:.3g}")
-    ax.plot([res["Delta_y"] * sx], [res["P_y"] * sy], "o", color="#d62728", ms=5)
-    ax.plot([res["Delta_peak"] * sx], [res["P_peak"] * sy], "^", color="0.2", ms=6,
-            label=f"peak {res['P_peak'] * sy:.4g} {y_unit[0]}")
+def _draw_fit(ax, res: dict, sx: float, sy: float, x_unit, y_unit, direction: float = 1.0, colour="#d62728",
+              name: str = "EEEP") -> None:
+    """The bilinear EEEP line of res, its yield point, the peak and Delta_u on ax (direction -1: drawn turned, in
+    the negative quadrant)."""
+    s = direction
+    bx = s * np.array(res["bilinear"]["x"]) * sx
+    by = s * np.array(res["bilinear"]["y"]) * sy
+    ax.plot(bx, by, color=colour, lw=1.8, ls="--",
+            label=f"{name}: $K_e$={res['K_e'] * sy / sx:.4g} {y_unit[0]}/{x_unit[0]}, "
+                  f"$P_y$={res['P_y'] * sy:.4g} {y_unit[0]}, $\\mu$={res['ductility']:.3g}"
+                  + (" (lower bound)" if res.get("ductility_is_lower_bound") else ""))
+    ax.plot([s * res["Delta_y"] * sx], [s * res["P_y"] * sy], "o", color=colour, ms=5)
+    ax.plot([s * res["Delta_peak"] * sx], [s * res["P_peak"] * sy], "^", color="0.2", ms=6,
+            label=f"peak {res['P_peak'] * sy:.4g} {y_unit[0]} at {res['Delta_peak'] * sx:.4g} {x_unit[0]}")
     if res.get("fallback"):  # drawn, not only flagged in the JSON
-        ax.axhline(res["P_y"] * sy, color="#ff7f0e", lw=1.0, ls="-.",
+        ax.axhline(s * res["P_y"] * sy, color="#ff7f0e", lw=1.0, ls="-.",
                    label="ASTM E2126 fallback $P_y$ = 0.85 $P_{peak}$ (no equal-energy line: "
                          r"$\Delta_u^2 < 2A/K_e$)")
-        ax.text(0.5, 0.03, "FALLBACK: P_y = 0.85 P_peak, EEEP area differs from the curve's", color="#ff7f0e",
-                transform=ax.transAxes, ha="center", fontsize=8)
-    ax.axvline(res["Delta_u"] * sx, color="0.5", lw=0.8, ls=":")
-    ax.text(res["Delta_u"] * sx, 0.97, r" $\Delta_u$", transform=ax.get_xaxis_transform(), va="top", color="0.3")
+    ax.axvline(s * res["Delta_u"] * sx, color="0.5", lw=0.8, ls=":", label=r"$\Delta_u$" + (
+        f" ({name})" if name != "EEEP" else "") + f" = {res['Delta_u'] * sx:.4g} {x_unit[0]}")
+
+
+def _notes(results: list) -> list:
+    """The figure's warnings: the fallback and the missing post-peak branch, per fit."""
+    out = []
+    for name, res in results:
+        pre = f"{name}: " if name else ""
+        if res.get("fallback"):
+            out.append(pre + "FALLBACK: P_y = 0.85 P_peak, EEEP area differs from the curve's")
+        if res.get("ductility_is_lower_bound"):
+            out.append(pre + NO_POST_PEAK)
+    return out
+
+
+def _finish(fig, ax, title: str, notes: list):
+    """Title with the notes under it, legend below the axes (outside them: it never covers the curve or a label)."""
+    ax.set_title(title + "".join("\n" + n for n in notes), fontsize=9,
+                 color="#b22222" if notes else "black")
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.14), fontsize=8, ncol=1)
+
+
+def figure(curve_d, curve_p, res: dict, label: str, x_unit=("mm", 1e-3), y_unit=("kN", 1e3)):
+    """The figure of a monotonic fit (matplotlib figure and axes, not saved)."""
+    from .figures import new_figure
+    sx, sy = 1.0 / x_unit[1], 1.0 / y_unit[1]
+    fig, ax = new_figure(figsize=(6.4, 6.2))
+    ax.plot(res["sign_x"] * np.asarray(curve_d) * sx, res["sign_y"] * np.asarray(curve_p) * sy, color="0.2", lw=1.4,
+            label=label)
+    _draw_fit(ax, res, sx, sy, x_unit, y_unit)
     ax.set_xlabel(f"displacement ({x_unit[0]})" + (" [sign reversed]" if res["sign_x"] < 0 else ""))
     ax.set_ylabel(f"load ({y_unit[0]})" + (" [sign reversed]" if res["sign_y"] < 0 else ""))
-    ax.set_title(f"EEEP idealisation, ultimate: {res['ultimate_rule']}, regression to {res['regression_limit']:g} P_peak",
-                 fontsize=9)
     ax.set_xlim(left=0)
     ax.set_ylim(bottom=0)
-    ax.legend(loc="best", fontsize=8)
+    _finish(fig, ax, f"EEEP idealisation, ultimate: {res['ultimate_rule']}, regression to "
+                     f"{res['regression_limit']:g} P_peak", _notes([("", res)]))
+    return fig, ax
+
+
+def plot(curve_d, curve_p, res: dict, prefix: str, label: str, x_unit=("mm", 1e-3), y_unit=("kN", 1e3)) -> list:
+    """The curve, its EEEP bilinear idealisation and the markers of yield, peak and ultimate points."""
+    from .figures import save
+    fig, _ = figure(curve_d, curve_p, res, label, x_unit, y_unit)
+    return save(fig, prefix)
+
+
+def figure_cyclic(d, p, fits: dict, label: str, x_unit=("mm", 1e-3), y_unit=("kN", 1e3)):
+    """A reversing record (d signed, p with its load sign) in grey, the envelope of each direction and its EEEP fit
+    (fits: {"positive": (x_env, y_env, res or None), "negative": ...})."""
+    from .figures import new_figure
+    sx, sy = 1.0 / x_unit[1], 1.0 / y_unit[1]
+    fig, ax = new_figure(figsize=(7.0, 6.6))
+    ax.plot(np.asarray(d) * sx, np.asarray(p) * sy, color="0.7", lw=0.8, label=f"{label} (record)")
+    colours = {"positive": "#d62728", "negative": "#1f77b4"}
+    done = []
+    for name, (xe, ye, res) in fits.items():
+        s = 1.0 if name == "positive" else -1.0
+        ax.plot(s * np.asarray(xe) * sx, s * np.asarray(ye) * sy, color="0.15", lw=1.4,
+                label=f"{name} envelope" if name == "positive" else f"{name} envelope (drawn with its sign)")
+        if res is not None:
+            _draw_fit(ax, res, sx, sy, x_unit, y_unit, s, colours[name], f"EEEP {name}")
+            done.append((name, res))
+    ax.axhline(0, color="0.4", lw=0.6)
+    ax.axvline(0, color="0.4", lw=0.6)
+    ax.set_xlabel(f"displacement ({x_unit[0]})")
+    ax.set_ylabel(f"load ({y_unit[0]})")
+    _finish(fig, ax, "EEEP of the envelope of each direction (ASTM E2126), cyclic record", _notes(done))
+    return fig, ax
+
+
+def plot_cyclic(d, p, fits: dict, prefix: str, label: str, x_unit=("mm", 1e-3), y_unit=("kN", 1e3)) -> list:
+    from .figures import save
+    fig, _ = figure_cyclic(d, p, fits, label, x_unit, y_unit)
     return save(fig, prefix)

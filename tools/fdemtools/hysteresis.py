@@ -18,7 +18,9 @@ are reported beside the peaks (P_largest_plus/minus) for information.
 Cycles: the displacement history is cut where it crosses zero upwards (from negative to positive); a cycle
 runs from one such crossing to the next (the first starts with the record). A dead band of `deadband` x max|d|
 around zero keeps noise at zero displacement from creating cycles. A last cycle that does not return to zero
-from the negative side is marked incomplete.
+from the negative side is partial (the record ends inside it): it is kept apart, in `partial`, never in `cycles`,
+k_el, k_d, E_i, E_d or E_h, because its "peaks" are wherever the record stopped (a partial excursion of 0.2 mm gave
+k_d = 7.13 and a loop peak at d = 0). Its own energy is reported as `W_partial`.
 Energy of a cycle W_i = int_cycle P dd (for a closed loop, the area it encloses: dissipated; an applied load goes
 round the loop clockwise in the (d, P) plane); cumulative E_i = sum_{j<=i} W_j; E_h defaults to the final E_i.
 Discrete form: the record is a polyline, W_i = sum over its segments of (P_k + P_{k+1})/2 (d_{k+1} - d_k), exact for
@@ -78,6 +80,7 @@ def analyse(d, p, k_el: float | None = None, e_h: float | None = None, deadband:
     sign_y = loading_work_sign(d, p) if load_sign is None else float(load_sign)
     p = sign_y * p
     cycles = []
+    partial = []
     warnings = []
     e_cum = 0.0
     for s, e, complete in split_cycles(d, deadband):
@@ -94,13 +97,18 @@ def analyse(d, p, k_el: float | None = None, e_h: float | None = None, deadband:
         else:
             pn = float(cp[jn])
         w = float(np.sum(0.5 * (cp[1:] + cp[:-1]) * np.diff(cd)))
-        e_cum += w
         has_both = cd[jx] > 0 and cd[jn] < 0
         k = (abs(px) + abs(pn)) / (cd[jx] - cd[jn]) if has_both else float("nan")  # M-DEM paper Eq. 8
         pos, neg = cd > 0, cd < 0
         ipl = int(np.flatnonzero(pos)[np.argmax(cp[pos])]) if pos.any() else jx
         iml = int(np.flatnonzero(neg)[np.argmin(cp[neg])]) if neg.any() else jn
         n = len(cycles) + 1
+        if not complete:  # the record ends inside this cycle: kept apart, out of every index
+            partial.append({"cycle": n, "start": s, "end": e, "complete": False, "d_plus": float(cd[jx]),
+                            "P_plus": px, "d_minus": float(cd[jn]), "P_minus": pn, "W_i": w,
+                            "d_end": float(cd[-1])})
+            continue
+        e_cum += w
         if w < 0:
             warnings.append(f"{source}: cycle {n} has a negative dissipated energy W_i = {w:.4g} J (a loop run "
                             "anticlockwise returns energy: noise, an unclosed loop or a wrong load sign)")
@@ -115,7 +123,9 @@ def analyse(d, p, k_el: float | None = None, e_h: float | None = None, deadband:
         })
     finite_k = [c["k_i"] for c in cycles if np.isfinite(c["k_i"])]
     if not finite_k:
-        raise ToolError(f"{source}: no cycle goes both to positive and to negative displacement")
+        raise ToolError(f"{source}: no complete cycle goes both to positive and to negative displacement"
+                        + (f" ({len(partial)} partial cycle(s) at the end of the record are not counted)"
+                           if partial else ""))
     k_ref = k_el if k_el is not None else finite_k[0]
     e_ref = e_h if e_h is not None else e_cum
     if k_ref <= 0:
@@ -129,9 +139,13 @@ def analyse(d, p, k_el: float | None = None, e_h: float | None = None, deadband:
         warn(msg)
     return {
         "n_cycles": len(cycles),
+        "n_partial": len(partial),
+        "partial": partial,
+        "W_partial": float(sum(c["W_i"] for c in partial)),
         "sign_y": sign_y,
         "k_el": k_ref, "k_el_rule": "given" if k_el is not None else "secant stiffness of the first cycle",
-        "E_h": e_ref, "E_h_rule": "given" if e_h is not None else "cumulative energy at the end of the record",
+        "E_h": e_ref, "E_h_rule": "given" if e_h is not None else "cumulative energy at the end of the last complete "
+                                                                    "cycle",
         "E_total": e_cum,
         "peak_rule": f"largest load within {100 * tip_band:g} % of the excursion's extreme displacement (M-DEM "
                      "paper Eqs. 6-8)",
@@ -150,6 +164,10 @@ def plot(d, p, res: dict, prefix: str, label: str, x_unit=("mm", 1e-3), y_unit=(
     ax.plot([c["d_plus"] * sx for c in cyc] + [c["d_minus"] * sx for c in cyc],
             [c["P_plus"] * sy for c in cyc] + [c["P_minus"] * sy for c in cyc], "o", color="#d62728", ms=4,
             label="cycle peaks (loads at the loop tips)")
+    for c in res.get("partial", []):  # where the record ends inside a cycle: drawn apart, not as loop peaks
+        d0, d1 = c["start"], c["end"] + 1
+        ax.plot(np.asarray(d)[d0:d1] * sx, res["sign_y"] * np.asarray(p)[d0:d1] * sy, color="#ff7f0e", lw=1.2,
+                ls="--", label=f"partial cycle {c['cycle']} (the record ends inside it; not in the metrics)")
     ax.set_xlabel(f"displacement ({x_unit[0]})")
     ax.set_ylabel(f"load ({y_unit[0]})" + (" [sign reversed]" if res["sign_y"] < 0 else ""))
     ax.legend(fontsize=8)

@@ -70,6 +70,7 @@ class Task:
     log: str
     cmd: list
     params: dict = field(default_factory=dict)
+    prepare: object = None  # called before the task is submitted (batch: clears a stale run, writes its fingerprint)
 
 
 SLURM_ONLY = ("partition", "time", "mem", "account", "sbatch_arg", "no_wait", "collect", "max_wait")
@@ -439,6 +440,9 @@ def run_tasks(tasks: list, opts: Options, slurm_dir: str, is_finished, log=print
 def submit(todo: list, opts: Options, slurm_dir: str, subs: Submissions, log) -> str:
     os.makedirs(os.path.join(slurm_dir, "out"), exist_ok=True)
     os.makedirs(os.path.join(slurm_dir, "exit"), exist_ok=True)
+    for t in todo:
+        if t.prepare is not None:
+            t.prepare()
     script_path = subs.next_script()
     with open(script_path, "w", encoding="utf-8") as f:
         f.write(job_script(todo, opts, slurm_dir))

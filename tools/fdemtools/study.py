@@ -11,8 +11,11 @@ study mesh: the case at a list of values of a mesh key (default geometry.mesh_si
   / ((h2/h3)^p - 1)). Differences of opposite sign (oscillating) or a zero difference give no order. A run that did
   not complete is reported with why: its summary's message, else the last error and warning lines of its log.
 study speed: a grid of mesh sizes x loading rates x damping values. Error of a run: |P - P_ref| / |P_ref| of its
-  peak load, with P_ref given (--reference, kN), else the case's reference peak, else the peak of the most
-  accurate run of the grid (smallest mesh size, slowest rate, least damping). A run is on the Pareto front when
+  peak load, with P_ref given (--reference, kN); else, when the case has a [reference] (monitor, quantity peak,
+  first_peak or final, value), | |q| - |value| | / |value| of that quantity q as the run computed it (its
+  summary.json reference.computed; the engine's comparison); else the peak of the most accurate run of the grid
+  (smallest mesh size, slowest rate, least damping). The output, the JSON (reference, reference_quantity) and the
+  figure say which. A run is on the Pareto front when
   no other run is at the same time both faster and more accurate.
   Whole-curve errors (curve_errors): every completed run's loading curve H(u) (the last stage, the tools' load sign
   rule, as `validate` and `eeep` read it) against a reference curve: a run folder given (--reference-run, e.g. a
@@ -47,20 +50,61 @@ def _num(v: str):
         return None
 
 
+# How a reference quantity is shown: the unit of its monitor (summary.json columns) -> (shown unit, factor from it)
+SHOWN_UNITS = {"N": ("kN", 1e-3), "m": ("mm", 1e3), "J": ("J", 1.0), "s": ("s", 1.0)}
+
+
+def reference_shown(run, ref: dict) -> dict:
+    """The case's reference quantity as study mesh tabulates and draws it: in kN (forces) or mm (lengths), and a force
+    with the tools' one load sign rule (common.resolve_sign: the case's output.curve.sign for the curve's load, else
+    the sign whose loading work along the curve's displacement is positive), as plot, eeep and validate draw it. The
+    reference value is compared by magnitude (the engine's relative_error is (|computed| - |value|) / |value|), so
+    it is shown as |value|. Before, a reaction's -74 kN was drawn against +74 kN on an axis of +-80,000 (N)."""
+    mon = ref.get("monitor")
+    unit = run.unit(mon) if mon else ""
+    shown, factor = SHOWN_UNITS.get(unit, (unit or "as recorded", 1.0))
+    sign, rule = 1.0, "as recorded"
+    if unit == "N":
+        from .common import Curve, load_curve, loading_work_sign, resolve_sign
+        try:
+            c = load_curve(run.path, partial=True)
+            if mon == c.y_name:
+                sign, rule = resolve_sign(c)
+            elif run.history is not None and run.history.has(mon):
+                sign = loading_work_sign(c.x, run.history.numeric(mon))
+                rule = "loading work along the curve's displacement"
+        except ToolError:
+            pass
+    out = {"reference_unit": shown, "reference_sign": sign, "reference_sign_rule": rule,
+           "reference_value_shown": None, "reference_computed_shown": None}
+    try:
+        if ref.get("value") is not None:
+            out["reference_value_shown"] = abs(float(ref["value"])) * factor
+        if ref.get("computed") is not None:
+            out["reference_computed_shown"] = sign * float(ref["computed"]) * factor
+    except (TypeError, ValueError):
+        pass
+    return out
+
+
 def run_quantities(rec: dict) -> dict:
-    """Quantities of interest of a finished run (None where the run does not record them)."""
-    peak = rec.get("peak_load_N")
+    """Quantities of interest of a finished run (None where the run does not record them, and for a run that did
+    not complete: its values are not results, the row says why)."""
+    done = rec.get("status") == "completed"
+    peak = rec.get("peak_load_N") if done else None
     q = {"peak_load_kN": peak / 1e3 if peak is not None else None, "wall_time_s": rec.get("wall_time_s"),
          "n_triangles": rec.get("n_triangles"), "D_frac_J": None, "W_ext_J": None}
     ref = (rec.get("summary") or {}).get("reference")
     if isinstance(ref, dict) and ref.get("monitor"):
         q["reference"] = f"{ref.get('monitor')} {ref.get('quantity', 'peak')}"
         q["reference_value"] = ref.get("value")
-        q["reference_computed"] = ref.get("computed")
-        q["reference_error"] = ref.get("relative_error")
-    if rec.get("status") != "completed":
+        q["reference_computed"] = ref.get("computed") if done else None
+        q["reference_error"] = ref.get("relative_error") if done else None
+    if not done:
         return q
     run = load_run(rec["run_dir"])
+    if isinstance(ref, dict) and ref.get("monitor"):
+        q.update(reference_shown(run, ref))
     h = run.history
     for col, key in (("D_frac", "D_frac_J"), ("W_ext", "W_ext_J")):
         if h.has(col) and len(h):
@@ -248,7 +292,8 @@ def cmd_mesh(args):
         why = "" if r["status"] == "completed" else failure_reason(r)
         rows.append({var: h, "status": r["status"], **q, "why": why, "run": r["name"]})
     for r in rows:
-        for k in ("reference", "reference_value", "reference_computed", "reference_error"):
+        for k in ("reference", "reference_value", "reference_computed", "reference_error", "reference_unit",
+                  "reference_sign", "reference_sign_rule", "reference_value_shown", "reference_computed_shown"):
             r.setdefault(k, None)
     ok = [r for r in rows if r["status"] == "completed"]
     for r in rows:
@@ -259,8 +304,9 @@ def cmd_mesh(args):
                         + "; ".join(f"{r[var]:g}: {r['why']}" for r in rows))
     finest = min(ok, key=lambda r: r[var])
     ref_name = next((r["reference"] for r in ok if r["reference"]), None)
+    ref_unit = next((r["reference_unit"] for r in ok if r["reference_unit"]), None)
     qty = [("peak_load_kN", "peak load", 1.0, "kN"),
-           ("reference_computed", f"reference: {ref_name}", 1.0, "as the case"),
+           ("reference_computed_shown", f"reference: {ref_name}", 1.0, ref_unit),
            ("D_frac_J", "fracture dissipation", 1.0, "J"), ("W_ext_J", "external work", 1.0, "J")]
     qty = [t for t in qty if any(r[t[0]] is not None for r in ok)]
     orders = {}
@@ -277,36 +323,17 @@ def cmd_mesh(args):
     write_json(os.path.join(out, "mesh_study.json"), {"case": os.path.abspath(args.case), "key": args.key,
                                                      "variable": var, "finest": finest[var],
                                                      "convergence_order": orders, "runs": rows})
-    from .figures import new_figure, save
-    n = len(qty) + 1
-    fig, axs = new_figure(1, n, figsize=(4.2 * n, 4.0), squeeze=False)
-    h_ok = np.array([r[var] for r in ok]) * var_scale
-    for ax, (key, name, scale, unit) in zip(axs[0], qty):
-        v = [r[key] for r in ok]
-        sel = [i for i, x in enumerate(v) if x is not None]
-        ax.plot(h_ok[sel], np.array([v[i] for i in sel]) * scale, "o-", color="#1f77b4")
-        if key == "reference_computed" and finest.get("reference_value") is not None:
-            ax.axhline(finest["reference_value"], color="k", lw=1.0, ls="--", label="reference value")
-            ax.legend(fontsize=7)
-        _mesh_axis(ax, h_ok, var_label, size_key)
-        ax.set_ylabel(f"{name} ({unit})")
-        o = orders.get(key)
-        ax.set_title(name + (f"\nobserved order {o['order']:.2f}" if o and o["order"] is not None else ""),
-                     fontsize=9)
-    ax = axs[0, -1]
-    t = [r["wall_time_s"] for r in ok]
-    ax.loglog(h_ok, t, "s-", color="#d62728")
-    for x, y, r in zip(h_ok, t, ok):
-        if r["n_triangles"]:
-            ax.annotate(f"{r['n_triangles']} tri", (x, y), xytext=(4, 4), textcoords="offset points", fontsize=7)
-    _mesh_axis(ax, h_ok, var_label, size_key)
-    ax.set_ylabel("wall time (s)")
-    ax.set_title("run time", fontsize=9)
+    from .figures import save
+    fig, _ = mesh_figure(ok, qty, orders, var, var_label, var_scale, size_key, finest)
     files = save(fig, os.path.join(out, "mesh_study"))
-    print(format_rows(rows, [var, "status", "peak_load_kN", "reference_computed", "reference_error", "D_frac_J",
+    print(format_rows(rows, [var, "status", "peak_load_kN", "reference_computed_shown", "reference_error", "D_frac_J",
                              "wall_time_s", "n_triangles"]))
     if ref_name:
-        print(f"reference quantity of the case: {ref_name}, value {finest['reference_value']}")
+        val = finest["reference_value_shown"]
+        print(f"reference quantity of the case: {ref_name}, value "
+              + (f"{val:.6g} {finest['reference_unit']} (|value|, as the engine compares it)" if val is not None
+                 else "none") + "; reference_computed_shown in "
+              f"{finest['reference_unit']}, sign {finest['reference_sign']:+g} ({finest['reference_sign_rule']})")
     for key, o in orders.items():
         if o["order"] is not None:
             print(f"{key}: observed convergence order {o['order']:.3g} (three finest: {o['sizes']}), "
@@ -315,6 +342,42 @@ def cmd_mesh(args):
             print(f"{key}: no convergence order: {o['note']}")
     print("wrote " + ", ".join([os.path.join(out, "mesh_study.csv"), os.path.join(out, "mesh_study.json")] + files))
     return 0 if len(ok) == len(rows) else 2
+
+
+def mesh_figure(ok, qty, orders, var, var_label, var_scale, size_key, finest):
+    """One panel per quantity and one of the run time, at most three panels a row (figure and axes, not saved)."""
+    from .figures import new_figure
+    n = len(qty) + 1
+    ncol = min(3, n)
+    nrow = (n + ncol - 1) // ncol
+    fig, axs = new_figure(nrow, ncol, figsize=(4.4 * ncol, 3.9 * nrow), squeeze=False)
+    flat = list(axs.ravel())
+    for ax in flat[n:]:
+        ax.set_visible(False)
+    h_ok = np.array([r[var] for r in ok]) * var_scale
+    for ax, (key, name, scale, unit) in zip(flat, qty):
+        v = [r[key] for r in ok]
+        sel = [i for i, x in enumerate(v) if x is not None]
+        ax.plot(h_ok[sel], np.array([v[i] for i in sel]) * scale, "o-", color="#1f77b4", label="runs")
+        if key == "reference_computed_shown" and finest.get("reference_value_shown") is not None:
+            ax.axhline(finest["reference_value_shown"], color="k", lw=1.0, ls="--", label="reference value")
+            ax.legend(fontsize=7)
+        _mesh_axis(ax, h_ok, var_label, size_key)
+        ax.set_ylabel(f"{name} ({unit})")
+        ax.ticklabel_format(axis="y", style="plain", useOffset=False)
+        o = orders.get(key)
+        ax.set_title(name + (f"\nobserved order {o['order']:.2f}" if o and o["order"] is not None else ""),
+                     fontsize=9)
+    ax = flat[n - 1]
+    t = [r["wall_time_s"] for r in ok]
+    ax.loglog(h_ok, t, "s-", color="#d62728")
+    for x, y, r in zip(h_ok, t, ok):
+        if r["n_triangles"]:
+            ax.annotate(f"{r['n_triangles']} tri", (x, y), xytext=(4, 4), textcoords="offset points", fontsize=7)
+    _mesh_axis(ax, h_ok, var_label, size_key)
+    ax.set_ylabel("wall time (s)")
+    ax.set_title("run time", fontsize=9)
+    return fig, axs
 
 
 def _mesh_axis(ax, h, label="mesh size (mm)", log=True):
@@ -373,10 +436,20 @@ def cmd_speed(args):
         raise ToolError(f"no run of the speed study completed (see {os.path.join(out, 'logs')})")
     # reference peak load
     ref_run = None
+    case_ref = case_reference(ok)
+    value_of = lambda r: r["peak_load_N"]  # noqa: E731  (the quantity each run's error is taken on)
+    ref_qty = "peak load"
     if args.reference is not None:
         ref, ref_src = args.reference * 1e3, "given (--reference)"
+    elif case_ref is not None:
+        # the case's own [reference]: its monitor and quantity (peak, first_peak or final) as each run computed it,
+        # against |value| (the engine's comparison: magnitudes)
+        ref = abs(float(case_ref["value"]))
+        ref_qty = f"{case_ref['monitor']} {case_ref.get('quantity', 'peak')}"
+        ref_src = f"case reference ({ref_qty} = {_show(ref, case_ref['unit'])})"
+        value_of = lambda r: _ref_computed(r)  # noqa: E731
     elif ok[0].get("reference_peak_N"):
-        ref, ref_src = ok[0]["reference_peak_N"], "case reference"
+        ref, ref_src = ok[0]["reference_peak_N"], "case reference (peak_load_N)"
     else:
         best = min(ok, key=_accuracy_key(dims))
         ref, ref_src = best["peak_load_N"], "most accurate run"
@@ -416,11 +489,12 @@ def cmd_speed(args):
         raise ToolError("--error curve_max_smoothed needs --curve-smooth MM (the window of travel, mm)")
     rows = []
     for r in recs:
-        err = abs(r["peak_load_N"] - ref) / abs(ref) if r in ok else None
+        v = value_of(r) if r in ok else None
+        err = abs(v - ref) / abs(ref) if v is not None else None
         row = {**r["params"], "status": r["status"], "wall_time_s": r.get("wall_time_s"),
                "cpu_time_s": r.get("cpu_time_s"), "steps": r.get("steps"),
                "peak_load_kN": r["peak_load_N"] / 1e3 if r.get("peak_load_N") is not None else None,
-               "error": err, "curve_rms": None, "curve_max": None,
+               "error": err, "error_quantity": ref_qty, "curve_rms": None, "curve_max": None,
                **({"curve_max_smoothed": None} if smooth > 0 else {}), "K_e_error": None, "P_y_error": None,
                "ductility_error": None, "peak_error": None, "curve_note": "", "pareto": False, "run": r["name"]}
         c = curves.get(r["name"])
@@ -447,7 +521,7 @@ def cmd_speed(args):
     header = list(rows[0].keys())
     write_csv(os.path.join(out, "speed_study.csv"), header, [[r[k] for k in header] for r in rows])
     write_json(os.path.join(out, "speed_study.json"), {"case": os.path.abspath(args.case), "reference_peak_N": ref,
-                                                      "reference": ref_src, "reference_run": ref_run,
+                                                      "reference": ref_src, "reference_quantity": ref_qty, "reference_run": ref_run,
                                                       "reference_curve": cref_src, "curve_to_m": u_to,
                                                       "curve_from_m": u_from, "front_error": args.error, "runs": rows})
     files = plot_speed(rows, dims, ref_src if args.error == "peak" else cref_src, os.path.join(out, "speed_study"),
@@ -455,7 +529,11 @@ def cmd_speed(args):
     print(format_rows(rows, [k for k, _, _ in dims] + ["status", "wall_time_s", "cpu_time_s", "peak_load_kN", "error", "curve_rms",
                                                        "curve_max"] + (["curve_max_smoothed"] if smooth > 0 else [])
                       + ["K_e_error", "ductility_error", "pareto"]))
-    print(f"reference peak load {ref / 1e3:.5g} kN: {ref_src}" + (f" ({ref_run})" if ref_run else ""))
+    if case_ref is not None and args.reference is None:
+        print(f"error against the {ref_src}: |computed| of each run (summary.json reference.computed) against "
+              "|value|")
+    else:
+        print(f"reference peak load {ref / 1e3:.5g} kN: {ref_src}" + (f" ({ref_run})" if ref_run else ""))
     if cref_src:
         print(f"reference curve: {cref_src}; curve_rms over 0-{u_to * 1e3:.4g} mm, curve_max over "
               f"{u_from * 1e3:.4g}-{u_to * 1e3:.4g} mm, shares of its peak {cref['peak'] / 1e3:.5g} kN"
@@ -463,6 +541,35 @@ def cmd_speed(args):
                  if smooth > 0 else "") + f"; Pareto front on the {args.error} error")
     print("wrote " + ", ".join([os.path.join(out, "speed_study.csv"), os.path.join(out, "speed_study.json")] + files))
     return 0 if len(ok) == len(recs) else 2
+
+
+def case_reference(recs) -> dict | None:
+    """The case's [reference] as the runs' summaries carry it (monitor, quantity, value, and the monitor's unit),
+    when it has a monitor and a non-zero value; else None."""
+    for r in recs:
+        s = r.get("summary") or {}
+        ref = s.get("reference")
+        if isinstance(ref, dict) and ref.get("monitor") and ref.get("value") not in (None, 0):
+            try:
+                float(ref["value"])
+            except (TypeError, ValueError):
+                continue
+            return {**ref, "unit": (s.get("columns") or {}).get(ref["monitor"], "")}
+    return None
+
+
+def _ref_computed(rec) -> float | None:
+    """|reference.computed| of a run (its value of the case's reference quantity), None if it has none."""
+    ref = (rec.get("summary") or {}).get("reference")
+    try:
+        return abs(float(ref["computed"]))
+    except (TypeError, KeyError, ValueError):
+        return None
+
+
+def _show(v: float, unit: str) -> str:
+    shown, factor = SHOWN_UNITS.get(unit, (unit, 1.0))
+    return f"{v * factor:.5g} {shown}".strip()
 
 
 def plot_speed(rows, dims, ref_src, prefix, measure="error", label="peak", tkey="wall_time_s"):

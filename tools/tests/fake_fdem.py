@@ -4,9 +4,12 @@
 `fake_fdem.py run CASE --out DIR [--set k=v ...] [--threads N] [--quiet]` appends its --set list to the file
 named by $FAKE_FDEM_LOG and writes a run folder following the contract. The "peak load" depends on the settings
 in a known way: peak = 10 kN * (1 + mesh_size) * (1 + rate) * (1 + damping); wall time = 0.01 / mesh_size^2.
-A setting `fail=true` makes it exit 2 with a failed summary; `slow=SECONDS` makes it sleep first; `die=TEXT` makes
+A setting `fail=true` (or `fail_below=H` with a mesh size below H) makes it exit 2 with a failed summary (its
+monitors written all the same); `slow=SECONDS` makes it sleep first; `die=TEXT` makes
 it print "error: TEXT" as the engine does for bad input and exit 1 before writing any summary. With `ref=1` the summary
-carries a [reference] result (monitor F, quantity peak, value 10 kN, computed = the peak).
+carries a [reference] result (monitor F, quantity peak, value 10 kN, computed = the peak). `ref_quantity=first_peak` makes it
+that quantity, computed = 0.9 x the peak (`final`: the peak). With `reaction=1` the load
+F is recorded as a reaction (negative: -peak), and so is the reference's computed value, as the engine writes it.
 Like fdem, SIGTERM stops it with status "interrupted" and exit 143; it then also writes a checkpoint file
 (checkpoint.bin). `run --help` lists `--restart RUN_DIR` only when $FAKE_FDEM_RESTART is 1; `--restart DIR` is
 logged (key "--restart") and skips the `slow` sleep.
@@ -66,23 +69,27 @@ def main(argv):
     damp = float(sets.get("damping", 0.0))
     peak = 10e3 * (1 + h) * (1 + rate) * (1 + damp)
     n = 21
+    sgn = -1.0 if sets.get("reaction") == "1" else 1.0
     with open(os.path.join(out, "history.csv"), "w") as f:
         f.write("time,step,stage,u,F,E_kin,W_ext,D_frac\n")
         for k in range(n):
             u = 1e-3 * k / (n - 1)
             F = peak * min(1.0, 2 * k / (n - 1))
-            f.write(f"{k * 0.1},{k},1,{u},{F},0,{F * u},{0.3 * F * u}\n")
-    failed = sets.get("fail") == "true"
+            f.write(f"{k * 0.1},{k},1,{u},{sgn * F},0,{F * u},{0.3 * F * u}\n")
+    failed = sets.get("fail") == "true" or h < float(sets.get("fail_below", 0))
     summ.update({"status": "failed" if failed else "completed", "message": "made to fail" if failed else "",
                  "n_triangles": int(1 / h ** 2), "n_nodes": int(1 / h ** 2), "dt": 1e-6, "steps": 20,
                  "wall_time_s": 0.01 / h ** 2, "cpu_time_s": 0.02 / h * (1 + float(sets.get("damping", 0))),
                  "threads": 1,
-                 "monitors": {"u": {"min": 0, "max": 1e-3, "final": 1e-3}, "F": {"min": 0, "max": peak, "final": peak}},
+                 "monitors": {"u": {"min": 0, "max": 1e-3, "final": 1e-3},
+                              "F": {"min": min(0, sgn * peak), "max": max(0, sgn * peak), "final": sgn * peak}},
                  "energy": {"balance_error": 0.001 * (1 + h)},
                  "settings": sets})
     if sets.get("ref") == "1":
-        summ["reference"] = {"monitor": "F", "quantity": "peak", "value": 10e3, "source": "fake", "computed": peak,
-                             "relative_error": (peak - 10e3) / 10e3}
+        q = sets.get("ref_quantity", "peak")
+        got = {"peak": peak, "first_peak": 0.9 * peak, "final": peak}[q]
+        summ["reference"] = {"monitor": "F", "quantity": q, "value": 10e3, "source": "fake", "computed": sgn * got,
+                             "relative_error": (got - 10e3) / 10e3}
     with open(os.path.join(out, "summary.json"), "w") as f:
         json.dump(summ, f)
     return 2 if failed else 0

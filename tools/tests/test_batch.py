@@ -125,3 +125,114 @@ def test_reference_peak_both_forms():
     s = {"curve": {"x": "u", "y": "F"}, "reference": {"monitor": "u", "quantity": "peak", "value": 1.0}}
     assert batch.reference_peak(s) is None
     assert batch.reference_peak({}) is None
+
+
+def test_stale_runs_are_rerun(tmp_path, cli):
+    """Issue 51 (1): a completed run is reused only when its case (parsed contents and the mesh file it names), its
+    overrides and the fdem build are those of the run folder's fingerprint; the log says which changed. Before,
+    an edited case, a new --set and a rebuilt fdem all gave "already completed, skipped"."""
+    import shutil
+    case = tmp_path / "case.toml"
+    case.write_text('[geometry]\ntype = "msh"\nfile = "wall.msh"\n[materials.stone]\nE = 1.0e9\n')
+    (tmp_path / "wall.msh").write_text("mesh v1\n")
+    fake = tmp_path / "fdem_fake.py"
+    shutil.copy(FAKE, fake)
+    log = str(tmp_path / "calls.log")
+    out = tmp_path / "b"
+
+    def go(*extra):
+        return cli("batch", case, "--grid", "geometry.mesh_size=0.1,0.05", "--out-dir", out, "--fdem", fake,
+                   *extra, env={"FAKE_FDEM_LOG": log})
+
+    rc, o, err = go()
+    assert rc == 0 and len(calls(log)) == 2, err
+    fp = json.loads((out / "runs" / batch.run_name({"geometry.mesh_size": "0.1"}) / "fingerprint.json").read_text())
+    assert fp["overrides"] == [["geometry.mesh_size", "0.1"]] and "wall.msh" in fp["case"]["files"]
+    rc, o, err = go()  # nothing changed: both reused
+    assert rc == 0 and len(calls(log)) == 2 and o.count("already completed, skipped") == 2
+    # a comment does not change what the engine reads: still reused
+    case.write_text("# a comment\n" + case.read_text())
+    rc, o, err = go()
+    assert rc == 0 and len(calls(log)) == 2
+    # E edited in the case: both rerun, and the log says the case file changed
+    case.write_text(case.read_text().replace("1.0e9", "2.0e9"))
+    rc, o, err = go()
+    assert rc == 0 and len(calls(log)) == 4 and o.count("stale: case file") == 2
+    assert "0 already completed" in o
+    # the mesh file it names changed
+    (tmp_path / "wall.msh").write_text("mesh v2\n")
+    rc, o, err = go()
+    assert rc == 0 and len(calls(log)) == 6 and o.count("file wall.msh changed") == 2
+    # a fixed --set added: rerun with it, the log names it
+    rc, o, err = go("--set", "numerics.dt=8e-7")
+    assert rc == 0 and len(calls(log)) == 8 and all(c["numerics.dt"] == "8e-7" for c in calls(log)[-2:])
+    assert o.count("overrides (--set numerics.dt: (not set) -> 8e-7)") == 2
+    rc, o, err = go("--set", "numerics.dt=8e-7")
+    assert rc == 0 and len(calls(log)) == 8
+    # another build of fdem: rerun
+    with open(fake, "a") as f:
+        f.write("# rebuilt\n")
+    rc, o, err = go("--set", "numerics.dt=8e-7")
+    assert rc == 0 and len(calls(log)) == 10 and o.count("stale: build") == 2
+    m = json.loads((out / "batch.json").read_text())
+    assert all(r["fingerprint"]["overrides"][0] == ["numerics.dt", "8e-7"] for r in m["runs"])
+    # a completed run folder without a fingerprint (older tools) cannot be checked: rerun
+    (out / "runs" / batch.run_name({"geometry.mesh_size": "0.05"}) / "fingerprint.json").unlink()
+    rc, o, err = go("--set", "numerics.dt=8e-7")
+    assert rc == 0 and len(calls(log)) == 11 and "no fingerprint recorded" in o
+
+
+def test_stale_run_that_fails_to_start_is_not_taken_as_completed(tmp_path, cli):
+    """A stale completed run whose rerun dies before writing a summary must not keep its old 'completed' summary
+    (it would be reused next time under the new fingerprint); its old checkpoint goes too."""
+    case = tmp_path / "case.toml"
+    case.write_text("# fake\n")
+    out = tmp_path / "b"
+    rc, o, err = cli("batch", case, "--grid", "geometry.mesh_size=0.1", "--out-dir", out, "--fdem", FAKE)
+    assert rc == 0, err
+    rd = out / "runs" / batch.run_name({"geometry.mesh_size": "0.1"})
+    (rd / "checkpoint.bin").write_text("old\n")
+    rc, o, err = cli("batch", case, "--grid", "geometry.mesh_size=0.1", "--set", "die=bad key", "--out-dir", out,
+                     "--fdem", FAKE)
+    assert rc == 2 and not (rd / "summary.json").exists() and not (rd / "checkpoint.bin").exists()
+    rc, o, err = cli("batch", case, "--grid", "geometry.mesh_size=0.1", "--set", "die=bad key", "--out-dir", out,
+                     "--fdem", FAKE)
+    assert rc == 2 and "already completed, skipped" not in o and "0 already completed" in o
+
+
+def test_failed_run_has_no_peak_in_the_results(tmp_path, cli):
+    """Issue 51 (13): a failed run's largest load so far was tabulated as its peak load, as if it were a result."""
+    case = tmp_path / "case.toml"
+    case.write_text("# fake\n")
+    out = tmp_path / "b"
+    rc, o, err = cli("batch", case, "--grid", "fail=false,true", "--out-dir", out, "--fdem", FAKE)
+    assert rc == 2
+    rows = (out / "results.csv").read_text().splitlines()
+    head = rows[0].split(",")
+    got = {r.split(",")[head.index("status")]: r.split(",")[head.index("peak_load_kN")] for r in rows[1:]}
+    assert got == {"completed": "11.0", "failed": ""}
+
+
+def test_slurm_tasks_see_stale_runs(tmp_path, cli):
+    """--scheduler slurm (batch, study, validate) asks batch.is_finished(run folder) which runs to submit: once the
+    batch has made the task, a completed run of another fingerprint is not finished, and the task's prepare step
+    (called before submission) clears its summary and checkpoint and writes the new fingerprint."""
+    case = tmp_path / "case.toml"
+    case.write_text("[materials.stone]\nE = 1.0e9\n")
+    out = tmp_path / "b"
+    rc, o, err = cli("batch", case, "--grid", "geometry.mesh_size=0.1", "--out-dir", out, "--fdem", FAKE)
+    assert rc == 0, err
+    name = batch.run_name({"geometry.mesh_size": "0.1"})
+    rd = out / "runs" / name
+    (rd / "checkpoint.bin").write_text("old\n")
+    b = batch.Batch(str(case), str(out), FAKE, log=lambda m: None)
+    t = b.task(name, {"geometry.mesh_size": "0.1"})
+    assert batch.is_finished(str(rd))  # same case, overrides and build
+    case.write_text("[materials.stone]\nE = 2.0e9\n")
+    said = []
+    b = batch.Batch(str(case), str(out), FAKE, log=said.append)
+    t = b.task(name, {"geometry.mesh_size": "0.1"})
+    assert not batch.is_finished(str(rd)) and "stale: case file" in said[0]
+    t.prepare()
+    assert not (rd / "summary.json").exists() and not (rd / "checkpoint.bin").exists()
+    assert json.loads((rd / "fingerprint.json").read_text()) == b.fingerprint({"geometry.mesh_size": "0.1"})

@@ -187,3 +187,121 @@ def test_usage_errors_are_one_line(cli_subprocess):
         rc, out, err = cli_subprocess(*args)
         assert rc == 1, args
         assert len(err.strip().splitlines()) == 1 and "error" in err, (args, err)
+
+
+# ------------------------------------------------------------------------------------------------------------------
+# Issue 51 (2): curves without a post-peak branch, and reversing (cyclic) records
+
+
+@pytest.mark.parametrize("end,past", [(9.6, False), (9.4, True), (10.0, False)])
+def test_post_peak_branch_or_lower_bound(end, past):
+    """Peak 10 at d = 2, the load at the end 9.6 (4 % below: no post-peak branch), 9.4 (6 % below) or 10 (the
+    largest load at the end): the ductility is a lower bound unless the load fell at least 5 % below the peak."""
+    d = np.array([0.0, 1.0, 2.0, 3.0])
+    p = np.array([0.0, 5.0, 10.0, end])
+    r = eeep.eeep(d, p)
+    assert r["past_peak"] is past and r["ductility_is_lower_bound"] is (not past)
+    assert (r["post_peak_note"] == "no post-peak branch: ductility is a lower bound") is (not past)
+
+
+def test_rising_curve_is_reported_as_lower_bound(tmp_path, cli):
+    """A curve still rising at its end (no peak reached) gave a ductility with exit 0 and no word of it; now the
+    terminal, the JSON and the figure say it is a lower bound."""
+    d = np.linspace(0, 10, 101)
+    p = 10 * np.tanh(d / 2)
+    f = tmp_path / "rise.csv"
+    f.write_text("d_mm,F_kN\n" + "".join(f"{a!r},{b!r}\n" for a, b in zip(d, p)))
+    rc, out, err = cli("eeep", f)
+    assert rc == 0, err
+    assert "no post-peak branch: ductility is a lower bound" in out
+    j = json.loads((tmp_path / "rise_eeep.json").read_text())
+    assert j["past_peak"] is False and j["ductility_is_lower_bound"] is True
+    assert "no post-peak branch: ductility is a lower bound" in (tmp_path / "rise_eeep.svg").read_text()
+    # a softening curve is past its peak: no such note
+    d2, p2 = softening_curve()
+    g = tmp_path / "soft.csv"
+    g.write_text("u_m,F_N\n" + "".join(f"{a!r},{b!r}\n" for a, b in zip(d2, p2)))
+    rc, out, err = cli("eeep", g)
+    assert rc == 0, err
+    assert "lower bound" not in out and json.loads((tmp_path / "soft_eeep.json").read_text())["past_peak"] is True
+
+
+def cyclic_epp(k, fy, fyn, amps, h):
+    """A cyclic record whose envelope is elastic-perfectly-plastic in each direction: stiffness k, yield load fy
+    (positive), fyn (negative, magnitude). Each cycle follows the positive envelope from the last positive extreme to
+    the new amplitude, unloads at k to zero load, goes back to the last negative extreme and follows the negative
+    envelope to the new amplitude, unloads at k. Displacements on a grid of step h."""
+    env = lambda x, f: min(k * x, f)  # noqa: E731
+    pts = [(0.0, 0.0)]
+    last = 0.0
+    for a in amps:
+        for s, f in ((1.0, fy), (-1.0, fyn)):
+            if last > 0:
+                pts.append((s * last, s * env(last, f)))
+            n0, n1 = int(round(last / h)), int(round(a / h))
+            pts += [(s * i * h, s * env(i * h, f)) for i in range(n0 + 1, n1 + 1)]
+            pts.append((s * (a - env(a, f) / k), 0.0))
+        last = a
+    d, p = np.array(pts).T
+    return d, p
+
+
+def test_cyclic_record_uses_the_envelope_of_each_direction(tmp_path, cli):
+    """A cyclic record (k = 5 kN/mm, yield 10 kN positive and 8 kN negative, cycles to 1, 4, 8, 12 mm): EEEP of each
+    direction's envelope gives back k, P_y = 10 and 8 kN, Delta_u = 12 mm, ductility 12 / 2 = 6 and 12 / 1.6 = 7.5
+    (both lower bounds: the envelopes end on their plateau). Before, the record went into the monotonic fit: a
+    ductility below 1 with Delta_y > Delta_u."""
+    k, fy, fyn, amps = 5.0, 10.0, 8.0, (1.0, 4.0, 8.0, 12.0)  # kN/mm, kN, kN, mm
+    d, p = cyclic_epp(k, fy, fyn, amps, 0.1)
+    assert eeep.is_reversing(d)
+    with pytest.raises(ToolError, match="reverses"):
+        eeep.eeep(d, p)
+    with pytest.raises(ToolError, match="reverses"):  # folded (|d|, as a stage curve is measured): refused too
+        eeep.eeep(np.abs(d), p)
+    xe, ye = eeep.envelope(d, p, -1.0)
+    assert xe.max() == pytest.approx(12.0, rel=1e-12) and ye.max() == pytest.approx(fyn, rel=1e-12)
+    f = tmp_path / "cyc.csv"
+    f.write_text("d_mm,F_kN\n" + "".join(f"{a!r},{b!r}\n" for a, b in zip(d, p)))
+    rc, out, err = cli("eeep", f)
+    assert rc == 0, err
+    j = json.loads((tmp_path / "cyc_eeep.json").read_text())
+    assert j["cyclic"] is True and j["ductility"] is None
+    for name, py in (("positive", fy), ("negative", fyn)):
+        e = j["envelope"][name]
+        assert e["K_e"] == pytest.approx(k, rel=1e-9)
+        assert e["P_y"] == pytest.approx(py, rel=1e-9)
+        assert e["Delta_u"] == pytest.approx(12.0, rel=1e-9)
+        assert e["ductility"] == pytest.approx(12.0 / (py / k), rel=1e-9)
+        assert e["Delta_y"] < e["Delta_u"] and e["ductility_is_lower_bound"] is True
+    assert "positive envelope" in out and "negative envelope" in out and "lower bound" in out
+    svg = (tmp_path / "cyc_eeep.svg").read_text()
+    assert "positive envelope" in svg and "negative envelope" in svg
+    # the ductility fit refuses one number for it
+    rc, out, err = cli("ductility-fit", "--point", f"0.1={tmp_path / 'cyc_eeep.json'}", "--point", "0.2=x.json")
+    assert rc == 1 and "per direction" in err
+
+
+def test_monotonic_with_small_jitter_is_not_reversing():
+    d, p = softening_curve()
+    d = d + 1e-5 * np.sin(np.arange(len(d)))  # a 0.01 mm wobble on 20 mm
+    assert not eeep.is_reversing(d)
+    d2 = np.concatenate((d, d[-1] - np.linspace(0, 5e-3, 20)[1:]))  # unloaded by 5 mm (25 %) at the end
+    assert eeep.is_reversing(d2)
+
+
+def test_eeep_figure_labels_do_not_overlap():
+    """Issue 51 (13): the legend sat on the curve and the Delta_u label; now it is below the axes and every text
+    (title with its notes, axis labels, legend) has its own place."""
+    d, p = softening_curve()
+    r = eeep.eeep(d, p)
+    fig, ax = eeep.figure(d, p, r, "a curve")
+    fig.canvas.draw()
+    rend = fig.canvas.get_renderer()
+    leg = ax.get_legend().get_window_extent(rend)
+    boxes = {"axes": ax.get_window_extent(rend), "title": ax.title.get_window_extent(rend),
+             "xlabel": ax.xaxis.label.get_window_extent(rend)}
+    for name, b in boxes.items():
+        assert not leg.overlaps(b), name
+    assert not boxes["title"].overlaps(boxes["axes"])
+    import matplotlib.pyplot as plt
+    plt.close(fig)

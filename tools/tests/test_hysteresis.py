@@ -117,9 +117,11 @@ def test_given_references_and_trailing_half_cycle():
     d2 = np.concatenate((d, tail))
     p2 = np.concatenate((p, K * tail + 6e3))
     r = hysteresis.analyse(d2, p2, k_el=2 * K, e_h=10.0)
-    assert r["n_cycles"] == len(AMPS) + 1
-    last = r["cycles"][-1]
-    assert not last["complete"] and np.isnan(last["k_i"])
+    # the trailing partial cycle is kept apart (issue 51, 3): not a cycle of the table, listed as partial
+    assert r["n_cycles"] == len(AMPS) and r["n_partial"] == 1
+    assert all(c["complete"] and np.isfinite(c["k_i"]) for c in r["cycles"])
+    last = r["partial"][0]
+    assert not last["complete"] and last["cycle"] == len(AMPS) + 1 and last["d_plus"] == pytest.approx(7e-3)
     c1 = r["cycles"][0]
     assert c1["k_d"] == pytest.approx((K + HS[0] / AMPS[0]) / (2 * K), rel=1e-12)
     assert c1["E_d"] == pytest.approx(4 * HS[0] * AMPS[0] / 10.0, rel=1e-10)
@@ -154,3 +156,33 @@ def test_cli(tmp_path, cli):
     f.write_text("u,F\n0,0\n1,1\n2,2\n")
     rc, out, err = cli("hysteresis", f)
     assert rc == 1 and "not a cyclic curve" in err and len(err.strip().splitlines()) == 1
+
+
+def test_trailing_partial_cycle_is_kept_apart(tmp_path, cli):
+    """Issue 51 (3): a record that ends inside a cycle (0 -> +0.2 mm -> -0.1 mm, the load still high at d = 0) counted
+    it as a cycle: k_i over 0.3 mm of travel (k_d of several times the elastic one) and a loop peak drawn at d = 0.
+    Now the table, k_el, k_d, E_i, E_d and E_h are those of the complete loops exactly, and the partial cycle is listed
+    apart, marked '*', with the mark explained, and drawn as partial."""
+    d, p = loops(AMPS, HS, K)
+    td = np.array([1e-4, 2e-4, 1e-4, 0.0, -1e-4])
+    tp = np.array([8e3, 9e3, 8e3, 6e3, -2e3])
+    d2, p2 = np.concatenate((d, td)), np.concatenate((p, tp))
+    r = hysteresis.analyse(d2, p2, load_sign=1.0)
+    ref = hysteresis.analyse(d, p, load_sign=1.0)
+    assert r["n_cycles"] == len(AMPS) and r["n_partial"] == 1
+    for a, b in zip(r["cycles"], ref["cycles"]):
+        for k in ("k_i", "k_d", "E_i", "E_d", "P_plus", "P_minus"):
+            assert a[k] == pytest.approx(b[k], rel=1e-12)
+    assert r["E_h"] == pytest.approx(ref["E_h"], rel=1e-12) and r["k_el"] == pytest.approx(ref["k_el"], rel=1e-12)
+    assert r["partial"][0]["d_plus"] == pytest.approx(2e-4) and r["partial"][0]["d_minus"] == pytest.approx(-1e-4)
+    f = tmp_path / "cyc.csv"
+    f.write_text("u_m,F_N\n" + "".join(f"{a!r},{b!r}\n" for a, b in zip(d2, p2)))
+    rc, out, err = cli("hysteresis", f, "--load-sign", "1")
+    assert rc == 0, err
+    assert f"{len(AMPS)} complete cycles (+ 1 partial, not counted)" in out
+    assert f"cycle   {len(AMPS) + 1}*" in out and "* partial cycle: the record ends" in out
+    csv_rows = (tmp_path / "cyc_hysteresis.csv").read_text().splitlines()
+    assert len(csv_rows) == 1 + len(AMPS)
+    j = json.loads((tmp_path / "cyc_hysteresis.json").read_text())
+    assert j["n_cycles"] == len(AMPS) and len(j["partial_cycles"]) == 1 and j["partial_cycles"][0]["cycle"] == 5
+    assert "partial cycle 5" in (tmp_path / "cyc_hysteresis.svg").read_text()

@@ -35,8 +35,15 @@ def test_cracks_counts_and_files(tmp_path, cli):
     run = make_run(str(tmp_path / "run"))
     rc, out, err = cli("cracks", run, "--time", "0.65")
     assert rc == 0, err
-    for ext in ("png", "svg"):
-        assert os.path.getsize(os.path.join(run, "post", f"cracks.{ext}")) > 2000
+    for ext in ("png", "svg"):  # named by the moment (issue 51, 13: every map was post/cracks.png)
+        assert os.path.getsize(os.path.join(run, "post", f"cracks_t0.65s.{ext}")) > 2000
+    rc, out, err = cli("cracks", run, "--displacement", "9.9")
+    assert rc == 0, err
+    rc, out, err = cli("cracks", run)
+    assert rc == 0, err
+    for name in ("cracks_t0.65s", "cracks_d9.9mm", "cracks"):  # three maps, none overwritten
+        assert os.path.getsize(os.path.join(run, "post", f"{name}.png")) > 2000
+    assert "3 broken elements" in open(os.path.join(run, "post", "cracks_t0.65s.svg")).read()
     files, info = cracks.draw(run, str(tmp_path / "c"), time=0.65)
     c = info["counts"]
     assert (c["interface_I"], c["interface_II"], c["unit_mixed"], c["unit_I"], c["unit_II"]) == (1, 1, 1, 0, 0)
@@ -189,8 +196,8 @@ def test_dry_joint_rows_drawn_and_counted_apart(tmp_path, cli):
     assert c == {"unit_I": 0, "unit_II": 0, "unit_mixed": 1, "interface_I": 1, "interface_II": 1,
                  "interface_mixed": 0, "dry_open": 2, "dry_slip": 1}
     for ext in ("png", "svg"):
-        assert os.path.getsize(os.path.join(run, "post", f"cracks.{ext}")) > 2000
-    svg = open(os.path.join(run, "post", "cracks.svg")).read()
+        assert os.path.getsize(os.path.join(run, "post", f"cracks_t0.65s.{ext}")) > 2000
+    svg = open(os.path.join(run, "post", "cracks_t0.65s.svg")).read()
     assert "3 broken elements" in svg and "dry joints opened: 2, slipped: 1" in svg
     assert "dry joint opened &gt; 0.1 mm (2)" in svg and "dry joint slipped &gt; 0.2 mm (1)" in svg
     assert "#ff7f0e" in svg and "#2ca02c" in svg and "dry-joint events" in svg
@@ -214,7 +221,7 @@ def test_dry_joint_rows_only_and_without_snapshots(tmp_path, cli):
     c = counts_from_stdout(out)
     assert c["dry_open"] == 2 and c["dry_slip"] == 1 and sum(c.values()) == 3
     assert "none (markers" in out
-    svg = open(os.path.join(run, "post", "cracks.svg")).read()
+    svg = open(os.path.join(run, "post", "cracks_t0.5s.svg")).read()
     assert "dry joints opened: 2, slipped: 1" in svg and "broken elements</text>" not in svg  # no "0 broken"
     assert "dry joint opened (2)" in svg  # no joint_record in summary.json: no threshold in the label
     rc, out, err = cli("cracks", run, "--time", "0.1")  # before the first event

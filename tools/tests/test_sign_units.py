@@ -200,3 +200,42 @@ def test_one_default_and_names_for_every_csv_command(tmp_path, cli):
     # a unit given on the command line wins over the name, with a warning
     rc, out, err = cli("eeep", f, "--x-unit", "m", "--no-plot", "-o", tmp_path / "forced")
     assert rc == 0 and "named in mm" in out
+
+
+def test_csv_columns_by_name(tmp_path, cli):
+    """Issue 51 (12): `time,d_mm,F_kN` was read as displacement = time, load = d_mm (the first two columns), with the
+    advice to rename d_mm to 'd_mm_kN'. Now the columns are picked by their names; names that do not tell need --x and
+    --y, with a message that says so."""
+    x, y = pushover()
+    f = tmp_path / "exp.csv"
+    f.write_text("time,d_mm,F_kN\n" + "".join(f"{0.1 * i!r},{a * 1e3!r},{b / 1e3!r}\n"
+                                              for i, (a, b) in enumerate(zip(x, y))))
+    rc, out, err = cli("eeep", f, "--no-plot")
+    assert rc == 0, err
+    j = json.loads((tmp_path / "exp_eeep.json").read_text())
+    assert (j["x_column"], j["y_column"], j["columns_rule"]) == ("d_mm", "F_kN", "by name")
+    assert j["P_peak"] == pytest.approx(40.0, rel=1e-12) and j["Delta_u"] == pytest.approx(3.0, rel=1e-12)
+    assert "warning" not in out and "columns d_mm, F_kN (by name)" in out
+    g = tmp_path / "anon.csv"
+    g.write_text("a,b,c\n0,0,0\n1,1,1\n2,2,1\n")
+    rc, out, err = cli("eeep", g)
+    assert rc == 1 and "give --x DISPLACEMENT_COLUMN --y LOAD_COLUMN" in err and len(err.strip().splitlines()) == 1
+    rc, out, err = cli("eeep", g, "--x", "a", "--y", "b", "--no-plot", "--load-sign", "1")
+    assert rc == 0, err
+    # two displacement-like names: ambiguous, so not guessed
+    h = tmp_path / "two.csv"
+    h.write_text("u_mm,d_mm,F_kN\n0,0,0\n1,1,1\n2,2,1\n")
+    rc, out, err = cli("eeep", h)
+    assert rc == 1 and "displacement-like: u_mm, d_mm" in err
+
+
+def test_unit_advice_names_the_right_column():
+    """The advice for a load that looks like kN read in N renames the unit ('F_N' -> 'F_kN', was 'F_N_kN'); a load
+    column whose name carries a length unit is the wrong column, and the advice says so (was: rename d_mm to
+    'd_mm_kN')."""
+    c = common.Curve(np.array([0.0, 1e-3]), np.array([0.0, 40.0]), "c", "c.csv", "u_m", "F_N", y_unit="N")
+    (msg,) = common.check_magnitudes(c)
+    assert "name it 'F_kN'" in msg and "F_N_kN" not in msg
+    c = common.Curve(np.array([0.0, 1e-3]), np.array([0.0, 4.0]), "c", "c.csv", "time", "d_mm", y_unit="N")
+    (msg,) = common.check_magnitudes(c)
+    assert "d_mm_kN" not in msg and "its name says mm, a length: pick the right column with --y" in msg

@@ -184,6 +184,17 @@ def test_real_fdem_cyclic_hysteresis(tmp_path, cli):
         assert cyc[col["P_minus_kN"]] == pytest.approx(-cyc[col["P_plus_kN"]], rel=0.05)
         assert cyc[col["k_d"]] == pytest.approx(1.0, abs=0.05)
     assert (tmp_path / "h.png").exists()
+    # eeep on the same cyclic run reads the envelope of each direction (issue 51, 2): an elastic block, so the
+    # same stiffness both ways and no post-peak branch (a lower bound); before, the record went into the monotonic
+    # fit (ductility below 1, Delta_y > Delta_u)
+    rc, o, err = cli("eeep", run, "--out", tmp_path / "e")
+    assert rc == 0, err
+    e = json.loads((tmp_path / "e.json").read_text())
+    assert e["cyclic"] is True and e["ductility"] is None
+    pos, neg = e["envelope"]["positive"], e["envelope"]["negative"]
+    assert pos["K_e"] == pytest.approx(neg["K_e"], rel=0.1)
+    assert pos["Delta_u"] == pytest.approx(1.0, rel=0.05) and neg["Delta_u"] == pytest.approx(1.0, rel=0.05)
+    assert pos["ductility_is_lower_bound"] and neg["ductility_is_lower_bound"]
 
 
 @needs_fdem
@@ -287,3 +298,83 @@ def test_loading_branch_and_curve_errors():
     assert e["curve_max"] == pytest.approx(0.05, rel=1e-12) and e["curve_rms"] == pytest.approx(0.05, rel=1e-12)
     e = study.curve_errors(xb[:3], yb[:3], xb, yb, 4.0, 1.0)
     assert e["curve_max"] is None and "the run's curve ends at" in e["curve_note"]
+
+
+def test_mesh_study_reruns_when_a_fixed_setting_changes(tmp_path, cli):
+    """Issue 51 (1), the study repro: the same sizes with a new --set numerics.dt ran nothing ("2 already completed,
+    skipped") and rewrote batch.json with the new setting. Now every run is redone with it."""
+    case = tmp_path / "case.toml"
+    case.write_text("# fake\n")
+    out = tmp_path / "m"
+    log = str(tmp_path / "calls.log")
+    rc, o, err = cli("study", "mesh", case, "--sizes", "0.1,0.05", "--fdem", FAKE, "--out-dir", out,
+                     env={"FAKE_FDEM_LOG": log})
+    assert rc == 0, err
+    rc, o, err = cli("study", "mesh", case, "--sizes", "0.1,0.05", "--fdem", FAKE, "--out-dir", out,
+                     "--set", "numerics.dt=8e-7", env={"FAKE_FDEM_LOG": log})
+    assert rc == 0, err
+    with open(log) as f:
+        got = [json.loads(line) for line in f]
+    assert len(got) == 4 and all(c.get("numerics.dt") == "8e-7" for c in got[2:])
+    assert "already completed, skipped" not in o and o.count("numerics.dt: (not set) -> 8e-7") == 2
+
+
+def test_mesh_study_signs_units_grid_and_failed_runs(tmp_path, cli):
+    """Issue 51 (6, 13): the case's reference is a reaction (the engine writes computed = -peak): the panel drew
+    -10 kN-ish values in N against a +10,000 line, 'as the case'. Now it is in kN with the tools' one load sign rule
+    (+10 (1 + h) kN against the |value| 10 kN); the panels sit at most three a row; a failed run's peak is left
+    empty (it was tabulated as a result)."""
+    case = tmp_path / "case.toml"
+    case.write_text("# fake\n")
+    out = tmp_path / "m"
+    rc, o, err = cli("study", "mesh", case, "--sizes", "0.4,0.2,0.1,0.05", "--fdem", FAKE, "--out-dir", out,
+                     "--set", "ref=1", "--set", "reaction=1", "--set", "fail_below=0.07")
+    assert rc == 2, err
+    j = json.loads((out / "mesh_study.json").read_text())
+    for r in j["runs"]:
+        h = r["mesh_size_m"]
+        if h < 0.07:
+            assert r["status"] == "failed" and r["peak_load_kN"] is None and r["reference_computed_shown"] is None
+            continue
+        assert r["reference_unit"] == "kN" and r["reference_sign"] == -1
+        assert r["reference_computed_shown"] == pytest.approx(10 * (1 + h), rel=1e-12)
+        assert r["reference_value_shown"] == pytest.approx(10.0, rel=1e-12)
+        assert r["reference_computed"] == pytest.approx(-1e4 * (1 + h), rel=1e-12)  # the engine's value, kept
+    rows = read_csv(out / "mesh_study.csv")
+    assert [r["peak_load_kN"] for r in rows if r["status"] == "failed"] == [""]
+    svg = (out / "mesh_study.svg").read_text()
+    assert "reference: F peak (kN)" in svg and "as the case" not in svg
+    import matplotlib.image as mpimg
+    hpx, wpx = mpimg.imread(str(out / "mesh_study.png")).shape[:2]
+    assert wpx <= 2200 and wpx / hpx < 2.5  # 5 panels: two rows of at most three (was 1 x 5, 3131 x 583 px)
+    # the reference panel draws what the table says: positive values and the reference line at +10 kN
+    ok = [r for r in j["runs"] if r["status"] == "completed"]
+    fig, axs = study.mesh_figure(ok, [("reference_computed_shown", "reference", 1.0, "kN")], {}, "mesh_size_m",
+                                 "mesh size (mm)", 1e3, True, min(ok, key=lambda r: r["mesh_size_m"]))
+    lines = axs[0, 0].get_lines()
+    assert sorted(lines[0].get_ydata()) == pytest.approx(sorted(10 * (1 + r["mesh_size_m"]) for r in ok), rel=1e-12)
+    assert list(lines[1].get_ydata()) == pytest.approx([10.0, 10.0], rel=1e-12)
+    import matplotlib.pyplot as plt
+    plt.close(fig)
+
+
+def test_speed_study_uses_the_case_reference_quantity(tmp_path, cli):
+    """Issue 51 (11): a case whose [reference] is a first_peak (here computed = 0.9 x the peak, against 10 kN) was
+    measured against the grid's most accurate run without a word. Now each run's error is that of the case's
+    quantity, |0.9 P - 10 kN| / 10 kN, and the output says which reference is used."""
+    case = tmp_path / "case.toml"
+    case.write_text("# fake\n")
+    out = tmp_path / "s"
+    rc, o, err = cli("study", "speed", case, "--sizes", "0.2,0.1", "--rates", "0.5,0", "--rate-key", "rate",
+                     "--fdem", FAKE, "--out-dir", out, "--set", "ref=1", "--set", "ref_quantity=first_peak",
+                     "--set", "reaction=1")
+    assert rc == 0, err
+    j = json.loads((out / "speed_study.json").read_text())
+    assert j["reference"].startswith("case reference (F first_peak = 10 kN)") and j["reference_run"] is None
+    assert j["reference_quantity"] == "F first_peak" and j["reference_peak_N"] == pytest.approx(1e4, rel=1e-12)
+    for r in j["runs"]:
+        peak = 1e4 * (1 + float(r["geometry.mesh_size"])) * (1 + float(r["rate"]))
+        assert r["error"] == pytest.approx(abs(0.9 * peak - 1e4) / 1e4, rel=1e-9)
+        assert r["error_quantity"] == "F first_peak"
+    assert "error against the case reference (F first_peak = 10 kN)" in o
+    assert "F first_peak = 10 kN" in (out / "speed_study.svg").read_text()

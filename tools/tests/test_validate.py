@@ -219,3 +219,21 @@ def test_plateau_rising_and_falling_curves_are_told_apart():
         i, past = validate.peak_index(y)
         assert validate.plateau_or(past, x, y, i) == expect
     assert validate.past_peak("plateau").startswith("plateau")
+
+
+def test_validate_reruns_a_case_whose_file_changed(tmp_path, cli):
+    """Issue 51 (1), through validate (which runs its cases with batch's machinery): an edited case is run again,
+    with its half-rate rerun, and the log says the case file changed; the unchanged case is reused."""
+    fam = family(tmp_path)
+    out = tmp_path / "out"
+    log = tmp_path / "calls.log"
+    args = ("validate", fam, "--fdem", FAKE, "--out-dir", out, "--set", "rate=0.2", "--rate-key", "rate",
+            "--rate-case", "c0")
+    rc, o, err = cli(*args, env={"FAKE_FDEM_LOG": str(log)})
+    assert rc == 0 and len(log.read_text().splitlines()) == 3, err
+    c0 = fam / "c0.toml"
+    c0.write_text(c0.read_text().replace("local_damping = 0.8", "local_damping = 0.5"))
+    rc, o, err = cli(*args, env={"FAKE_FDEM_LOG": str(log)})
+    assert rc == 0, err
+    assert len(log.read_text().splitlines()) == 5  # c0 and its half-rate rerun, not c1
+    assert o.count("stale: case file") == 2 and "c1: already completed, skipped" in o
