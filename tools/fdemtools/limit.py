@@ -545,9 +545,8 @@ def solve(pr: Problem, nonassoc: bool = True) -> dict:
         # The associative limit load bounds the non-associative one from above (Radenkovic's theorem), but an iterate
         # with fixed normal forces may land a little above it: the estimate is then the bound itself.
         na["uncapped"] = na["lam"]
-        na["capped"] = bool(na["lam"] > assoc["lam"])
-        if na["capped"]:
-            na["lam"] = assoc["lam"]
+        na["capped"] = bool(na["lam"] > assoc["lam"] * (1 + 1e-9))  # above round-off
+        na["lam"] = min(na["lam"], assoc["lam"])
         out["nonassoc"] = na
     return out
 
