@@ -715,7 +715,13 @@ def analyse(case: str, sets=None, fdem=None, bonded=False, out_dir=None, plot=Tr
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
     t0 = time.perf_counter()
-    pr = Problem(model, bonded=bonded)
+    try:
+        pr = Problem(model, bonded=bonded)
+    except Refused as e:
+        # the reason goes to limit.json too, so that a table over many cases can say why a case has no factor
+        write_json(os.path.join(out, "limit.json"), {"case": case, "name": name, "overrides": list(sets or []),
+                                                     "refused": str(e), "export_time_s": export_s})
+        raise
     build_s = time.perf_counter() - t0
     sol = solve(pr, nonassoc=nonassoc)
     a = sol["assoc"]
@@ -737,7 +743,9 @@ def analyse(case: str, sets=None, fdem=None, bonded=False, out_dir=None, plot=Tr
                                  "group's nodes; collapse load = lambda x the live load's total")
     if a["status"] != 0:
         why = {2: "infeasible: the dead loads alone cannot be carried (a body with no support?)",
-               3: "unbounded: the live load cannot move any free body (it acts on fixed bodies only?)"}
+               3: "unbounded: no mechanism is compatible with the supports, so the associative bound is infinite "
+                  "(the live load acts on fixed bodies only, or the supports forbid the dilatancy of associative "
+                  "sliding and the uplift of rocking: a wall held in y between a fixed base and a held beam)"}
         rep["error"] = why.get(a["status"], a["message"])
         write_json(os.path.join(out, "limit.json"), rep)
         raise ToolError(f"{case}: LP {rep['error']} (solver: {a['message']})")

@@ -256,6 +256,7 @@ def test_settlement_is_refused(tmp_path, cli):
     rc, so, se = cli("limit", case, "--out", tmp_path / "o", "--fdem", _fdem())
     assert rc == 1
     assert "settlement" in se
+    assert "settlement" in json.loads((tmp_path / "o" / "limit.json").read_text())["refused"]
 
 
 def test_nonassociative_estimate_below_the_bound_on_a_stack(tmp_path):
