@@ -14,6 +14,7 @@
 #include "fdem/case.hpp"
 #include "fdem/omp_env.hpp"
 #include "fdem/errors.hpp"
+#include "fdem/limit_export.hpp"
 #include "fdem/model.hpp"
 #include "fdem/scene.hpp"
 #include "fdem/simulation.hpp"
@@ -35,7 +36,8 @@ const char* kUsage =
     "  fdem check CASE.toml [-s KEY=VALUE ...]\n"
     "      validate a case and its mesh without running\n"
     "  fdem mesh CASE.toml [-o DIR] [-s KEY=VALUE ...]\n"
-    "      mesh only: writes DIR/mesh.vtu (regions, bodies, edge classes) and prints statistics\n"
+    "      mesh only: writes DIR/mesh.vtu (regions, bodies, edge classes) and DIR/limit_model.json (the rigid\n"
+    "      bodies, joints, supports and loads of the last stage, for fdem-tools limit) and prints statistics\n"
     "  fdem --help | --version       (fdem COMMAND -h prints this too)\n"
     "\n"
     "options (long forms also as --option=VALUE):\n"
@@ -172,11 +174,13 @@ int main(int argc, char** argv) {
             const std::filesystem::path dir = a.out.empty() ? std::filesystem::path("runs") / spec.name : std::filesystem::path(a.out);
             std::filesystem::create_directories(dir);
             fdem::mesh::write_topology_vtu((dir / "mesh.vtu").string(), topo);
+            fdem::write_limit_model((dir / "limit_model.json").string(), spec, topo);
             std::cout << fdem::mesh::format_stats(fdem::mesh::mesh_stats(topo));
             if (rough.points > 0)
                 std::cout << "joint roughness      " << rough.points << " face points moved inwards, mean " << rough.mean
                           << " m, largest " << rough.largest << " m\n";
             std::cout << "mesh written to " << (dir / "mesh.vtu").string() << "\n";
+            std::cout << "limit model written to " << (dir / "limit_model.json").string() << "\n";
             return 0;
         }
         fdem::RunOptions opt;

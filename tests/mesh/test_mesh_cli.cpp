@@ -66,6 +66,9 @@ TEST_CASE("fdem mesh writes the mesh and its statistics", "[unit]") {
     CHECK(r.out.find("56 bodies") != std::string::npos);
     CHECK(r.out.find("dry") != std::string::npos);
     CHECK(std::filesystem::exists(dir / "out" / "mesh.vtu"));
+    // the rigid-block model for fdem-tools limit (fdem/limit_export.hpp)
+    CHECK(std::filesystem::exists(dir / "out" / "limit_model.json"));
+    CHECK(r.out.find("limit model written to") != std::string::npos);
 }
 
 TEST_CASE("fdem mesh reports the roughened joint faces", "[unit]") {

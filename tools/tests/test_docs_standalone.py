@@ -35,7 +35,8 @@ def test_no_citation_of_documents_outside_the_repository():
 
 
 @pytest.mark.parametrize("cmd", [[], ["eeep"], ["hysteresis"], ["ductility-fit"], ["plot"], ["cracks"], ["batch"],
-                                 ["study", "mesh"], ["study", "speed"], ["validate"]])
+                                 ["study", "mesh"], ["study", "speed"], ["validate"],
+                                 ["limit"]])
 def test_help_texts_cite_nothing_outside(cmd):
     rc, out, err = run_inprocess(*cmd, "--help")
     assert rc == 0 and out
