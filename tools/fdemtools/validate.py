@@ -73,6 +73,7 @@ from .common import SIGN_CHOICES, ToolError, load_curve, load_run, stage_curve, 
 
 QS_LIMIT = 0.02  # the peak may change by less than this when the rate is halved
 PAST_PEAK_DROP = 0.05  # the load at the end must be this far below the peak (fraction of it) to call it a peak
+BOUND_TOL = 0.02  # a peak more than this fraction above its case's rigid-block bound is flagged (it cannot be right)
 PLATEAU_REACH = 0.75  # a curve with less drop whose largest load lies before this fraction of its travel: a plateau
 FIRST_PEAK_DROP = 0.05  # --peak first: the load must fall this far below the largest value so far (fraction)
 FIRST_PEAK_FLOOR = 0.5  # --peak first: only a maximum of at least this fraction of the largest load is a peak
@@ -325,6 +326,21 @@ def curve_metrics(run_dir: str, smooth_m: float = 0.0, rule: str = "largest", up
 
 
 UNIT_CRACK_COLUMNS = ("broken_unit_I", "broken_unit_II", "broken_unit_mixed")
+
+
+def rigid_block_bound(case: str, fixed: list, fdem: str, out_dir: str) -> dict:
+    """The case's rigid-block collapse load (`fdem-tools limit`: the associative bound of its own blocks, joints,
+    supports and loads; tools/README.md "limit"), in N, with the limit folder under out_dir; {"note": why} when the
+    case has none (a refused case: no load to multiply; a confined one: unbounded; a tilting case: an angle)."""
+    from .limit import analyse
+    try:
+        rep = analyse(case, [f"{k}={v}" for k, v in fixed], fdem, out_dir=out_dir, plot=False, nonassoc=False,
+                      quiet=True)
+    except (ToolError, OSError, ValueError, KeyError) as e:  # a refused or unbounded case, or no model to export
+        return {"note": (str(e).splitlines() or [type(e).__name__])[0][:160]}
+    if rep.get("collapse_load_N") is None:
+        return {"note": "no collapse load (" + str(rep.get("mode")) + ")"}
+    return {"bound_N": float(rep["collapse_load_N"]), "solve_s": rep.get("solve_time_s")}
 
 
 def crack_counts(run, stage, n: int, i_peak: int) -> dict:
@@ -596,6 +612,11 @@ def run_family(args) -> int:
                 m = {"note": str(e)}
         by_task[label] = (rec, m)
 
+    bounds = {}
+    if not args.no_bound:
+        for c in cases:
+            bounds[c] = rigid_block_bound(c, fixed, fdem, os.path.join(out, _stem(c), "limit"))
+
     kn = lambda v: v / 1e3 if v is not None else None  # noqa: E731
     mm = lambda v: v * 1e3 if v is not None else None  # noqa: E731
     qs_rows = []
@@ -637,6 +658,10 @@ def run_family(args) -> int:
                "peak_rule": args.peak, "peak_up_to_mm": args.peak_up_to,
                "experiment_kN": exp_N / 1e3 if exp_N else None, "error_vs_experiment": rel(peak, exp_N),
                "published_fdem_kN": pub_N / 1e3 if pub_N else None, "error_vs_published_fdem": rel(peak, pub_N),
+               "rigid_block_bound_kN": kn(bounds.get(c, {}).get("bound_N")),
+               "peak_over_bound": (peak / bounds[c]["bound_N"] if peak is not None and
+                                   bounds.get(c, {}).get("bound_N") else None),
+               "bound_note": bounds.get(c, {}).get("note"),
                "peak_half_rate_kN": q.get("peak_half_kN"), "rate_change": q.get("change"),
                "triangles": rec.get("n_triangles"), "steps": rec.get("steps"), "wall_time_s": rec.get("wall_time_s"),
                "dt_s": rec.get("dt"),
@@ -674,6 +699,13 @@ def run_family(args) -> int:
     return 0
 
 
+def bound_ratio(r: dict) -> str:
+    q = r.get("peak_over_bound")
+    if q is None:
+        return "-"
+    return f"{q:.3f}" + (" ABOVE THE BOUND" if q > 1 + BOUND_TOL else "")
+
+
 def report_markdown(family, rows, qs_rows, trend, fixed, args, elapsed) -> str:
     L = [f"# Validation report: {family}", ""]
     L.append(f"Cases: {len(rows)} (pattern `{args.glob}`); overrides: "
@@ -682,8 +714,8 @@ def report_markdown(family, rows, qs_rows, trend, fixed, args, elapsed) -> str:
     L.append("")
     L.append("| case | status | peak (kN) | disp. at peak (mm) | K0 (kN/mm) | load at end (kN) | drop after peak "
              "| past peak | stage ended by | unit cracks at peak / end | experiment (kN) | error | published FDEM (kN) "
-             "| error vs FDEM | triangles | steps | wall time (s) |")
-    L.append("|---" * 17 + "|")
+             "| error vs FDEM | rigid-block bound (kN) | peak / bound | triangles | steps | wall time (s) |")
+    L.append("|---" * 19 + "|")
     for r in rows:
         drop = "-" if r["drop_after_peak"] is None else f"{100 * r['drop_after_peak']:.1f} %"
         L.append(f"| {r['case']} | {r['status']} | {fmt(r['peak_load_kN'])} | {fmt(r['disp_at_peak_mm'])} | "
@@ -691,7 +723,9 @@ def report_markdown(family, rows, qs_rows, trend, fixed, args, elapsed) -> str:
                  f"{fmt(r['past_peak'])} | {fmt(r['stage_ended_by'])} | "
                  f"{fmt(r['unit_cracks_at_peak'])} / {fmt(r['unit_cracks_at_end'])} | "
                  f"{fmt(r['experiment_kN'])} | {pct(r['error_vs_experiment'])} | "
-                 f"{fmt(r['published_fdem_kN'])} | {pct(r['error_vs_published_fdem'])} | {fmt(r['triangles'])} | "
+                 f"{fmt(r['published_fdem_kN'])} | {pct(r['error_vs_published_fdem'])} | "
+                 f"{fmt(r['rigid_block_bound_kN']) if r['rigid_block_bound_kN'] is not None else '-'} | "
+                 f"{bound_ratio(r)} | {fmt(r['triangles'])} | "
                  f"{fmt(r['steps'])} | {fmt(r['wall_time_s'], 3)} |")
     if args.smooth > 0:
         L += ["", f"Smoothing: peak, displacement at peak, load at end and the quasi-static check use the load averaged "
@@ -722,6 +756,17 @@ def report_markdown(family, rows, qs_rows, trend, fixed, args, elapsed) -> str:
               "[[stages]] past_peak criterion). Unit cracks: broken cohesive elements inside the units (stones, "
               "bricks) since the start of the loading stage, at the peak row and at the end (history columns "
               "broken_unit_*)."]
+    if not args.no_bound:
+        L += ["", "Rigid-block bound: the collapse load of the case's own blocks, rigid, with no-tension Coulomb joints "
+                  "and associative flow (`fdem-tools limit`, tools/README.md); a deformable model with non-associative "
+                  f"friction stays below it. A peak more than {100 * BOUND_TOL:g} % above it (BOUND_TOL) is flagged "
+                  "ABOVE THE BOUND: it cannot be right."]
+        notes = [f"{r['case']}: {r['bound_note']}" for r in rows if r.get("bound_note")]
+        if notes:
+            L += ["", "No bound: " + "; ".join(notes) + "."]
+        above = [r["case"] for r in rows if r["peak_over_bound"] is not None and r["peak_over_bound"] > 1 + BOUND_TOL]
+        if above:
+            L += ["", f"ABOVE THE BOUND (more than {100 * BOUND_TOL:g} %): {', '.join(above)}."]
     not_past = [r["case"] for r in rows if r["past_peak"] is not None and r["past_peak"].startswith("no")]
     if not_past:
         L += ["", f"Not past the peak: {', '.join(not_past)}."]
@@ -808,6 +853,8 @@ def add_parser(sub):
     p.add_argument("--rate-key", help="dotted key of the loading rate, used for every checked case (default: each "
                                       "case's last-stage prescribed velocity)")
     p.add_argument("--no-rate-check", action="store_true", help="skip the half-rate reruns")
+    p.add_argument("--no-bound", action="store_true",
+                   help="do not compute each case's rigid-block bound (fdem-tools limit; about 1 s per case)")
     p.add_argument("--smooth", type=float, default=0.0, metavar="MM",
                    help="take peaks on the load averaged over MM mm of control displacement (default 0: raw); the "
                         "raw largest load and the oscillation are reported beside them")

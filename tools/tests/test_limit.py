@@ -340,3 +340,21 @@ def test_engine_run_reaches_the_bound_and_stays_below_it(tmp_path):
     Hs = np.array([H[np.abs(u - uu) <= 0.5e-4].mean() for uu in u])
     assert Hs.max() >= 0.95 * lam
     assert Hs.max() <= 1.02 * lam
+
+
+def test_validate_tabulates_the_bound_and_flags_a_peak_above_it(tmp_path):
+    """validate's rigid-block column: the single block pushed at its top (b 0.4 m, h 0.6 m, 40 deg) has the bound
+    W b / (2 h) (rocking, below mu W); a peak 1 % above it is tabulated as its ratio, 3 % above is flagged."""
+    from fdemtools import validate
+    case = write_case(tmp_path / "b.toml", b=0.4, h=0.6, friction=40.0)
+    got = validate.rigid_block_bound(case, [], _fdem(), str(tmp_path / "lim"))
+    W = weight(0.4, 0.6)
+    assert got["bound_N"] == pytest.approx(W * 0.4 / (2 * 0.6), rel=1e-9)
+    assert validate.bound_ratio({"peak_over_bound": 1.01}) == "1.010"
+    assert validate.bound_ratio({"peak_over_bound": 1.03}).endswith("ABOVE THE BOUND")
+    # a case with no load to multiply (a settlement: a support moving along gravity) has a note, not a number
+    settle = write_case(tmp_path / "s.toml", extra_stage="")
+    text = open(settle).read().replace('group = "wall_top"\n  vx = 0.01', 'group = "base_bottom"\n  vy = -0.01')
+    open(settle, "w").write(text)
+    got = validate.rigid_block_bound(settle, [], _fdem(), str(tmp_path / "lim2"))
+    assert "bound_N" not in got and got["note"]

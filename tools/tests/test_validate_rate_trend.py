@@ -21,6 +21,9 @@ FAKE_SRC = r'''#!/usr/bin/python3
 import json, os, sys, tomllib
 
 def main(argv):
+    if argv[0] != "run":  # validate's rigid-block bound asks `fdem mesh`: this stand-in has no mesh (not a run)
+        print("fake fdem: only 'run'", file=sys.stderr)
+        return 1
     case, out, sets, i = argv[1], None, {}, 2
     while i < len(argv):
         if argv[i] == "--out":
