@@ -504,6 +504,28 @@ def cmd_speed(args):
                 row[k + "_error"] = _signed_rel(c[k], cref[k])
             row["peak_error"] = _signed_rel(c["peak"], cref["peak"])
         rows.append(row)
+    bound = None
+    if not getattr(args, "no_bound", False):
+        # the zero-cost end of speed against error: the rigid-block bound of the case's own blocks (fdem-tools limit),
+        # with the time of its export and LP, as a point of the study (its peak error only: it has no curve)
+        from .validate import rigid_block_bound
+        fixed = [parse_assignment(s, "--set") for s in args.set or []]
+        bound = rigid_block_bound(args.case, fixed, fdem_binary(args.fdem), os.path.join(out, "limit"))
+        if "bound_N" in bound:
+            v = bound["bound_N"]
+            rows.append({**{k: "" for k in rows[0] if k not in ("status",)}, "status": "rigid-block bound",
+                         "wall_time_s": bound["time_s"], "cpu_time_s": bound["time_s"], "steps": 0,
+                         "peak_load_kN": v / 1e3, "error": abs(v - ref) / abs(ref) if ref_qty != "final" else None,
+                         "error_quantity": ref_qty, "curve_note": "no curve (limit analysis)", "pareto": False,
+                         "run": "rigid-block bound"})
+            for k in ("curve_rms", "curve_max", "curve_max_smoothed", "K_e_error", "P_y_error", "ductility_error",
+                      "peak_error"):
+                if k in rows[0]:
+                    rows[-1][k] = None
+            if cref is not None:
+                rows[-1]["peak_error"] = _signed_rel(v, cref["peak"])
+        else:
+            print(f"fdem-tools study: no rigid-block bound for this case ({bound['note']})", file=sys.stderr)
     measure = "error" if args.error == "peak" else args.error
     valid = [i for i, r in enumerate(rows) if r[measure] is not None]
     if not valid:
@@ -580,13 +602,17 @@ def plot_speed(rows, dims, ref_src, prefix, measure="error", label="peak", tkey=
     floor = min([r["error"] for r in valid if r["error"] > 0], default=1e-6) / 3.0
     # colour by the first dimension, marker by the second
     k0 = dims[0][0]
-    v0 = list(dict.fromkeys(r[k0] for r in valid))
+    v0 = list(dict.fromkeys(r[k0] for r in valid if r.get("run") != "rigid-block bound"))
     markers = "osD^v<>pH*"
     k1 = dims[1][0] if len(dims) > 1 else None
-    v1 = list(dict.fromkeys(r[k1] for r in valid)) if k1 else [None]
+    v1 = list(dict.fromkeys(r[k1] for r in valid if r.get("run") != "rigid-block bound")) if k1 else [None]
     import matplotlib.pyplot as plt
     cmap = plt.get_cmap("viridis", max(2, len(v0)))
-    for r in valid:
+    for r in [r for r in valid if r.get("run") == "rigid-block bound"]:
+        ax.plot(r[tkey], 100 * max(r["error"], floor), "*", color="tab:red", ms=13,
+                mec="k" if r["pareto"] else "none", ls="none")
+    valid_runs = [r for r in valid if r.get("run") != "rigid-block bound"]
+    for r in valid_runs:
         e = max(r["error"], floor)
         ax.plot(r[tkey], 100 * e, markers[v1.index(r[k1]) % len(markers)] if k1 else "o",
                 color=cmap(v0.index(r[k0])), ms=7, mec="k" if r["pareto"] else "none", mew=1.2, ls="none")
@@ -596,6 +622,9 @@ def plot_speed(rows, dims, ref_src, prefix, measure="error", label="peak", tkey=
     from matplotlib.lines import Line2D
     handles = [Line2D([], [], color="k", lw=1.0, ls="--", label="Pareto front (black edge)")]
     name0 = dims[0][2]
+    if any(r.get("run") == "rigid-block bound" for r in valid):
+        handles.append(Line2D([], [], marker="*", color="tab:red", ms=11, ls="none",
+                              label="rigid-block bound (limit analysis, export + LP)"))
     handles += [Line2D([], [], marker="o", color=cmap(i), ls="none", label=f"{name0} = {v}") for i, v in enumerate(v0)]
     if k1:
         handles += [Line2D([], [], marker=markers[i % len(markers)], color="0.4", ls="none",
@@ -679,6 +708,9 @@ def add_parser(sub):
                    help="time of the Pareto front and the figure: the runs' wall time (default) or their CPU time "
                         "(summary.json cpu_time_s; on a machine shared with other jobs it stays near the time of "
                         "the run alone)")
+    s.add_argument("--no-bound", action="store_true",
+                   help="leave out the rigid-block bound (fdem-tools limit), the study's zero-cost point (default: "
+                        "computed for a case that has one; its peak error only)")
     s.add_argument("--out-dir", help="study folder (default runs/study_speed_<case>)")
     s.set_defaults(func=cmd_speed)
     p.set_defaults(func=lambda a: p.print_help() or 1)

@@ -333,6 +333,7 @@ def rigid_block_bound(case: str, fixed: list, fdem: str, out_dir: str) -> dict:
     supports and loads; tools/README.md "limit"), in N, with the limit folder under out_dir; {"note": why} when the
     case has none (a refused case: no load to multiply; a confined one: unbounded; a tilting case: an angle)."""
     from .limit import analyse
+    t0 = time.perf_counter()
     try:
         rep = analyse(case, [f"{k}={v}" for k, v in fixed], fdem, out_dir=out_dir, plot=False, nonassoc=False,
                       quiet=True)
@@ -340,7 +341,8 @@ def rigid_block_bound(case: str, fixed: list, fdem: str, out_dir: str) -> dict:
         return {"note": (str(e).splitlines() or [type(e).__name__])[0][:160]}
     if rep.get("collapse_load_N") is None:
         return {"note": "no collapse load (" + str(rep.get("mode")) + ")"}
-    return {"bound_N": float(rep["collapse_load_N"]), "solve_s": rep.get("solve_time_s")}
+    return {"bound_N": float(rep["collapse_load_N"]), "solve_s": rep.get("solve_time_s"),
+            "time_s": time.perf_counter() - t0}
 
 
 def crack_counts(run, stage, n: int, i_peak: int) -> dict:

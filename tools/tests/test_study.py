@@ -378,3 +378,27 @@ def test_speed_study_uses_the_case_reference_quantity(tmp_path, cli):
         assert r["error_quantity"] == "F first_peak"
     assert "error against the case reference (F first_peak = 10 kN)" in o
     assert "F first_peak = 10 kN" in (out / "speed_study.svg").read_text()
+
+
+def test_speed_study_has_the_rigid_block_bound_as_its_zero_cost_point(tmp_path, cli, monkeypatch):
+    """With a bound (stood in for here: 12 kN in 0.5 s), the study gains a row 'rigid-block bound' whose error is
+    |12 - P_ref| / P_ref against the study's reference peak (--reference 10 kN: 20 %), with its time, no curve
+    errors, and a red star in the figure; with --no-bound, no such row."""
+    from fdemtools import validate
+    monkeypatch.setattr(validate, "rigid_block_bound", lambda *a, **k: {"bound_N": 12e3, "time_s": 0.5})
+    case = tmp_path / "case.toml"
+    case.write_text("# fake\n")
+    out = tmp_path / "s"
+    rc, o, err = cli("study", "speed", case, "--sizes", "0.2,0.1", "--fdem", FAKE, "--out-dir", out,
+                     "--reference", "10")
+    assert rc == 0, err
+    j = json.loads((out / "speed_study.json").read_text())
+    b = [r for r in j["runs"] if r["run"] == "rigid-block bound"]
+    assert len(b) == 1 and b[0]["error"] == pytest.approx(0.2, rel=1e-12) and b[0]["wall_time_s"] == 0.5
+    assert b[0]["curve_rms"] is None and b[0]["status"] == "rigid-block bound"
+    assert "rigid-block bound" in (out / "speed_study.svg").read_text()
+    rc, o, err = cli("study", "speed", case, "--sizes", "0.2,0.1", "--fdem", FAKE, "--out-dir", out,
+                     "--reference", "10", "--no-bound")
+    assert rc == 0, err
+    j = json.loads((out / "speed_study.json").read_text())
+    assert not [r for r in j["runs"] if r["run"] == "rigid-block bound"]
