@@ -369,10 +369,11 @@ def k25_case(r, quick=False):
 #   {s['drive_ramp']} s ramp) with per-node mass scaling ([numerics] mass_scale = {s['mass_scale']}, mass_scaling = "per_node"; gravity keeps
 #   the physical mass): every inertial mass x {s['mass_scale']}, the time step {s['safety']} of the triangles' limit at that, and the
 #   nodes whose contact springs (the joint penalty) would need a smaller step made heavier until they do not (total
-#   inertial mass x 2.4 over x {s['mass_scale']}): 23,480 steps. Against this wall's converged curve (uniform mass scaling 10 at
-#   half the rate, RESULTS.md §29, §33, recomputed in §34, §42; this build §42): peak +0.70 %, K_e -3.2 %, P_y +0.2 %, ductility -3.4 %, whole
-#   curve 0-10 mm RMS 1.3 % of the peak; uniform mass scaling 100, the setting before §33, took 21,779 steps for
-#   +2.3 %, -7.1 % and 2.3 %. The family report is the validation; this is its fast preview."""
+#   inertial mass x 2.4 over x {s['mass_scale']}): 24,073 steps. Against this wall's converged curve with this set-up (uniform
+#   mass scaling 10 at half the rate, RESULTS.md §43): peak +0.03 %, K_e +2.8 %, P_y -0.1 %, ductility +3.0 %, whole
+#   curve 0-10 mm RMS 0.85 % of the peak, largest difference 2.8 % (§42: the same measures with the set-up of
+#   seeds/004). It stops at {s['until'] * 1000:g} mm, before the wall's peak (about 47.5 kN near 16 mm, k25_N100.toml): the run
+#   says so. The family report is the validation; this is its fast preview."""
     else:
         settings_text = f"""# Mass scaling: per node ([numerics] mass_scale = {s['mass_scale']}, mass_scaling = "per_node"; gravity keeps the physical
 #   mass): every inertial mass x {s['mass_scale']}, the time step {s['safety']} of the triangles' limit at that (~4e-5 s instead of
