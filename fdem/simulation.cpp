@@ -82,6 +82,14 @@ Simulation::Simulation(CaseSpec spec, Model model, RunOptions options)
     if (!(std::isfinite(dt_) && dt_ > 0 && dt_ < 1e3))
         throw InputError(spec_.file + ": the time step comes out as " + sci(dt_) +
                          " s: expected a finite step > 0 (check materials.*.E and density, case.thickness, numerics.mass_scale and numerics.dt)");
+    // A fixed step (numerics.dt) beyond the stable limit of this mesh would blow up the run after some steps: refused
+    // here, so that `fdem check` says it (issue 51: a mesh study of a case with a fixed step at finer sizes).
+    if (spec_.dt_override && *spec_.dt_override > dt_limit_)
+        throw InputError(spec_.file + ": key 'numerics.dt': a fixed time step of " + sci(*spec_.dt_override) +
+                         " s exceeds the stable limit of this mesh, " + sci(dt_limit_) + " s (triangles " +
+                         sci(dt_triangles_) + " s, joint and contact springs " + sci(dt_springs_) +
+                         " s): expected at most " + sci(dt_limit_) + " s, or no numerics.dt (the automatic step, "
+                         "numerics.safety x the limit, follows the mesh)");
     wall_start_ = wall_clock();
     cpu_start_ = cpu_clock();
     last_checkpoint_wall_ = wall_start_;

@@ -491,7 +491,9 @@ shear_stiffness = {ks:.4g}    # Pa/m
 
 # Single stone in tension (cases/README.md §A2): the joint penalty must satisfy the fracture-energy check at the coarsest
 # mesh (100 mm: p_j > 4 h f_t^2 / (3 G_I) = 2.3e10 Pa for its 141 mm diagonal edges), so the study uses 3e10 Pa at
-# every size. The stable limit of the joint springs scales with h (node mass ~ h^2, spring p_j t): dt = 0.7 x that.
+# every size. The time step is the automatic one at safety 0.7 (0.7 x the stable limit of each mesh, which scales with
+# h: node mass ~ h^2, spring p_j t). Until 28 Nov each case fixed numerics.dt = 0.7 x an estimate of its own mesh's
+# limit, which a mesh study (--set geometry.mesh_size) then kept at the finer sizes, beyond their limit (issue 51).
 # Local damping 0.8 in the pull: the bar stores f_t^2 V / (2E) = 35.6 J at peak, 16 x G_I A, and a displacement-driven
 # bar this much longer than its characteristic length snaps back; undamped, the released energy shattered it (many
 # broken elements, the 10 mm mesh inverting a triangle; RESULTS.md E4). Damped, one crack forms and the damping takes
@@ -501,7 +503,6 @@ STONE_SIZES = [(0.1, "100mm"), (0.05, "50mm"), (0.025, "25mm"), (0.01, "10mm")]
 
 
 def stone_case(h, tag):
-    dt = 0.7 * 2.0e-6 * (1.0e10 / STONE["penalty"]) ** 0.5 * (h / 0.025)
     fname = f"stone_tension_{tag}.toml"
     text = f"""# Single sandstone unit in uniaxial tension, mesh {h * 1000:g} mm (mesh sensitivity, cases/README.md §A2)
 # Reproduces: the single-stone study of [K25] that chose the 25 mm mesh of the walls (sizes 100, 50, 25, 10 mm: 1, 2,
@@ -512,7 +513,7 @@ def stone_case(h, tag):
 #   G_I 110 N/m, G_II 770 N/m, friction 35 deg), left edge fixed, right edge pulled at {STONE['rate']} m/s to
 #   {STONE['until'] * 1000:g} mm (the elastic elongation at peak is f_t L / E = 0.96 mm).
 # Assumed values: E = 768 MPa (the [K25] modulus of the 100 kN wall), Poisson 0.2, density 2400 kg/m^3, joint penalty
-#   p_j = {STONE['penalty']:g} Pa at every size (see make_cases.py), time step {dt:.3g} s, local damping {STONE['damping']}: the bar
+#   p_j = {STONE['penalty']:g} Pa at every size (see make_cases.py), time step 0.7 x the stable limit, local damping {STONE['damping']}: the bar
 #   stores f_t^2 V / (2E) = 35.6 J at peak, 16 x G_I A, and snaps back after the peak; the damping takes that energy
 #   so that one crack forms (undamped, the release shattered the bar: RESULTS.md E4 and §10).
 # Report per size: peak of R_left (N), D_frac at the end (J, history.csv), run time (measured: RESULTS.md §10;
@@ -560,7 +561,7 @@ group = "left"
 component = "x"
 
 [numerics]
-dt = {dt:.3g}            # s
+safety = 0.7             # the automatic step: 0.7 x this mesh's stable limit (see make_cases.py)
 
 [output]
 history_interval = 0.0005  # s

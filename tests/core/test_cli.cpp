@@ -439,3 +439,25 @@ TEST_CASE("output.curve.sign: a stated load sign reaches summary.json for the to
     CHECK(rb.code == 1);
     CHECK(rb.err.find("output.curve.sign") != std::string::npos);
 }
+
+TEST_CASE("a fixed numerics.dt beyond the mesh's stable limit is refused by fdem check, naming the key and the limit",
+          "[unit]") {
+    // The single-stone case at the 100 mm mesh with numerics.dt = 3.23e-6 s (what the shipped case fixed until 28 Nov)
+    // runs; refined to 25 mm the joint springs' limit is 9.5e-7 s and the run blew up at step 155 (issue 51): now exit 1.
+    const auto dir = testing::tmp_dir("cli_fixed_dt");
+    const std::string path = std::string(FDEM_CASES_DIR) + "/lourenco2005/stone_tension_100mm.toml";
+    const auto ok = testing::run_fdem("check \"" + path + "\" --set numerics.dt=3.23e-6", dir);
+    INFO(ok.out << ok.err);
+    CHECK(ok.code == 0);
+    const auto bad = testing::run_fdem("check \"" + path + "\" --set numerics.dt=3.23e-6 --set geometry.mesh_size=0.025", dir);
+    INFO(bad.out << bad.err);
+    CHECK(bad.code == 1);
+    CHECK(bad.err.find("numerics.dt") != std::string::npos);
+    CHECK(bad.err.find("exceeds the stable limit of this mesh") != std::string::npos);
+    // the shipped case (automatic step) checks at every size of a mesh study
+    for (const char* h : {"0.1", "0.05", "0.025", "0.01"}) {
+        const auto r = testing::run_fdem("check \"" + path + "\" --set geometry.mesh_size=" + std::string(h), dir);
+        INFO(h << r.out << r.err);
+        CHECK(r.code == 0);
+    }
+}

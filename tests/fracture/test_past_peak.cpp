@@ -119,7 +119,7 @@ TEST_CASE("past_peak: bad keys are exit 1 naming the key and what was expected",
     }
 }
 
-TEST_CASE("past_peak: a 'peak' result that ended while still rising is reported as a lower bound; one past its peak "
+TEST_CASE("past_peak: a 'peak' result that ended while still rising is reported as a lower bound, one past its peak "
           "is not",
           "[unit][stages]") {
     const std::string ref = "\n[reference]\nmonitor = \"R\"\nquantity = \"peak\"\nvalue = 74.0e3\nsource = \"f_t A\"\n";
