@@ -376,15 +376,7 @@ void write_limit_model(const std::string& path, const CaseSpec& spec, const mesh
                 for (int k : {ed[0], ed[1]}) f[k][0] += -0.5 * ls.pressure * t * dy, f[k][1] += 0.5 * ls.pressure * t * dx;
             }
         } else if (!ls.is_spring) {
-            std::map<int, double> share;
-            double total = 0;
-            for (auto ed : g.edges) {
-                const double L = std::hypot(m.xy[2 * ed[1]] - m.xy[2 * ed[0]], m.xy[2 * ed[1] + 1] - m.xy[2 * ed[0] + 1]);
-                share[ed[0]] += 0.5 * L, share[ed[1]] += 0.5 * L, total += L;
-            }
-            if (g.edges.empty())
-                for (int k : g.nodes) share[k] += 1.0, total += 1.0;
-            for (const auto& [k, w] : share) f[k] = {w / total * ls.force[0], w / total * ls.force[1]};
+            for (const auto& [k, w] : mesh::load_shares(g, m.xy)) f[k] = {w * ls.force[0], w * ls.force[1]};
         }
         o << (i ? ",\n" : "") << "  {\"group\": " << str(ls.group) << ", \"stage\": " << loads[i].stage + 1
           << ", \"kind\": " << str(kind) << ", \"force\": [" << num(ls.force[0]) << "," << num(ls.force[1])

@@ -220,15 +220,7 @@ void Simulation::begin_stage(int s) {
             }
         } else {
             // Total force shared by tributary length along the group's edges, or equally among its nodes.
-            std::map<int, double> share;
-            double total = 0;
-            for (auto ed : grp.edges) {
-                const double L = std::hypot(model_.X[2 * ed[1]] - model_.X[2 * ed[0]], model_.X[2 * ed[1] + 1] - model_.X[2 * ed[0] + 1]);
-                share[ed[0]] += 0.5 * L, share[ed[1]] += 0.5 * L, total += L;
-            }
-            if (grp.edges.empty())
-                for (int k : grp.nodes) share[k] += 1.0, total += 1.0;
-            for (auto& [k, w] : share) l.nodes.push_back(k), l.weight.push_back(w / total);
+            for (const auto& [k, w] : mesh::load_shares(grp, model_.X)) l.nodes.push_back(k), l.weight.push_back(w);
         }
         if (ls.is_spring) {
             // The anchor starts at the group's weighted mean position: no force at the start of the stage.

@@ -554,4 +554,17 @@ Topology build_topology(const Mesh& m, const TopologyOptions& opt) {
     return topo;
 }
 
+std::map<int, double> load_shares(const PhysicalGroup& g, const std::vector<double>& X) {
+    std::map<int, double> share;
+    double total = 0;
+    for (const auto& ed : g.edges) {
+        const double L = std::hypot(X[2 * ed[1]] - X[2 * ed[0]], X[2 * ed[1] + 1] - X[2 * ed[0] + 1]);
+        share[ed[0]] += 0.5 * L, share[ed[1]] += 0.5 * L, total += L;
+    }
+    if (g.edges.empty())
+        for (int k : g.nodes) share[k] += 1.0, total += 1.0;
+    for (auto& [k, w] : share) w = w / total;
+    return share;
+}
+
 }  // namespace fdem::mesh

@@ -45,6 +45,7 @@
 #pragma once
 
 #include <array>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -123,5 +124,10 @@ struct Topology {
 // triangle of another body: e.g. a .geo whose units were not fragmented), and bodies touching without shared
 // nodes when their pair is tied, bonded or has no rule.
 Topology build_topology(const Mesh& mesh, const TopologyOptions& options);
+
+// The share of a total force on a group that each of its nodes takes (shares sum to 1): by tributary length along
+// the group's edges (half of each edge to each end node), or equally among its nodes when it has no edges. X: the
+// nodes' coordinates (x0, y0, x1, y1, ...). Used by the engine's loads and by the limit-analysis export alike.
+std::map<int, double> load_shares(const PhysicalGroup& g, const std::vector<double>& X);
 
 }  // namespace fdem::mesh
