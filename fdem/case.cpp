@@ -53,7 +53,14 @@ struct Ctx {
     std::string where(const std::string& path, int line) const {
         for (const auto& p : set_paths)
             if (path == p || path.rfind(p + ".", 0) == 0) return "--set " + p;
-        return file + ":" + std::to_string(line);
+        if (line > 0) return file + ":" + std::to_string(line);
+        // No line: a table that a --set made (it was not in the file), so its other keys are missing there.
+        for (const auto& p : set_paths) {
+            const auto dot = p.rfind('.');
+            if (dot != std::string::npos && path.rfind(p.substr(0, dot + 1), 0) == 0)
+                return "--set " + p + " (it makes the table '" + p.substr(0, dot) + "', which is not in " + file + ")";
+        }
+        return file;
     }
     void error(const std::string& path, int line, const std::string& msg) {
         errors.push_back(where(path, line) + ": key '" + path + "': " + msg);
@@ -1133,8 +1140,15 @@ void check_against_mesh(const CaseSpec& spec, const MeshNames& names) {
     std::string available;
     for (const auto& g : names.groups) available += (available.empty() ? "" : ", ") + g;
     auto missing = [&](const std::string& key, int line, const std::string& g) {
+        std::string best;  // the nearest group name within two edits: a typo's likely intent
+        std::size_t best_d = 3;
+        for (const auto& cand : names.groups) {
+            const std::size_t d = edit_distance(g, cand);
+            if (d < best_d) best_d = d, best = cand;
+        }
         errors.push_back(spec.file + ":" + std::to_string(line) + ": key '" + key + "': no group named '" + g +
-                         "' in the mesh (groups: " + available + ")");
+                         "' in the mesh" + (best.empty() ? "" : "; did you mean '" + best + "'?") +
+                         " (groups: " + available + ")");
     };
     for (const auto& r : names.regions)
         if (!spec.region_material.count(r))

@@ -461,3 +461,22 @@ TEST_CASE("a fixed numerics.dt beyond the mesh's stable limit is refused by fdem
         CHECK(r.code == 0);
     }
 }
+
+TEST_CASE("a --set that makes a new table names that --set for the table's missing keys, and a group typo gets a "
+          "suggestion",
+          "[unit]") {
+    const auto dir = testing::tmp_dir("cli_set_table");
+    const std::string path = std::string(FDEM_CASES_DIR) + "/lourenco2005/k25_N100.toml";
+    // [reference] exists in the case; a [materials.concrete.fracture] table does not (issue 51: "case.toml:0")
+    const auto r = testing::run_fdem("check \"" + path + "\" --set materials.concrete.fracture.GI=10", dir);
+    INFO(r.out << r.err);
+    CHECK(r.code == 1);
+    CHECK(r.err.find(":0:") == std::string::npos);
+    CHECK(r.err.find("--set materials.concrete.fracture.GI (it makes the table 'materials.concrete.fracture'") !=
+          std::string::npos);
+    const auto g = testing::run_fdem("check \"" + path + "\" --set 'stages.2.supports.1.group=\"actuatr\"' "
+                                     "--set stages.2.max_duration=4", dir);
+    INFO(g.out << g.err);
+    CHECK(g.code == 1);
+    CHECK(g.err.find("no group named 'actuatr' in the mesh; did you mean 'actuator'?") != std::string::npos);
+}
