@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <functional>
 #include <set>
@@ -1130,6 +1131,54 @@ CaseSpec load_case(const std::string& path, const std::vector<std::string>& over
     // Until-targets on a driven displacement must lie in the direction of the velocity (from zero for stage 1).
     if (!ctx.errors.empty()) throw InputError(ctx.errors);
     return spec;
+}
+
+namespace {
+std::string g4(double v) {
+    char b[32];
+    std::snprintf(b, sizeof b, "%.4g", v);
+    return b;
+}
+}  // namespace
+
+std::vector<std::string> plausibility_warnings(const CaseSpec& spec) {
+    std::vector<std::string> w;
+    auto warn = [&](int line, const std::string& key, const std::string& what) {
+        w.push_back(spec.file + (line > 0 ? ":" + std::to_string(line) : std::string()) + ": key '" + key + "': " + what);
+    };
+    for (const Material& m : spec.materials) {
+        const std::string k = "materials." + m.name;
+        if (m.E > 0 && m.E < 1e6)
+            warn(m.line, k + ".E", "E = " + g4(m.E) + " Pa is below any masonry or rock (1e8-1e11 Pa): given in MPa? (" +
+                                       g4(m.E) + " MPa = " + g4(m.E * 1e6) + " Pa)");
+        else if (m.E > 1e12)
+            warn(m.line, k + ".E", "E = " + g4(m.E) + " Pa is above any masonry, rock or steel (1e8-2.1e11 Pa)");
+        if (m.density > 0 && m.density < 100)
+            warn(m.line, k + ".density", "density = " + g4(m.density) + " kg/m^3 is below any masonry or rock "
+                                         "(1500-3000 kg/m^3): given in t/m^3 or g/cm^3? (x 1000)");
+        else if (m.density > 2e4)
+            warn(m.line, k + ".density", "density = " + g4(m.density) + " kg/m^3 is above any solid (steel 7850)");
+    }
+    if (spec.thickness > 10)
+        warn(0, "case.thickness", "thickness = " + g4(spec.thickness) + " m: given in mm? (" + g4(spec.thickness) +
+                                      " mm = " + g4(spec.thickness * 1e-3) + " m)");
+    const GeometrySpec& g = spec.geometry;
+    auto length = [&](const std::string& key, double v) {
+        if (v > 200)
+            warn(g.line, "geometry." + key, key + " = " + g4(v) + " m is larger than any wall or building: given in mm? (" +
+                                                g4(v * 1e-3) + " m)");
+    };
+    if (g.type == "rectangle") length("width", g.width), length("height", g.height), length("mesh_size", g.mesh_size);
+    if (g.type == "wall") {
+        length("length", g.wall.length), length("height", g.wall.height);
+        const double unit = std::max(g.wall.unit_length, g.wall.unit_height);
+        if (unit > 0 && g.wall.mesh_size > unit)
+            warn(g.line, "geometry.mesh_size", "mesh_size = " + g4(g.wall.mesh_size) + " m is larger than the units (" +
+                                                   g4(g.wall.unit_length) + " x " + g4(g.wall.unit_height) +
+                                                   " m): each unit is meshed at its own size" +
+                                                   (g.wall.mesh_size > 1 ? "; given in mm?" : ""));
+    }
+    return w;
 }
 
 void check_against_mesh(const CaseSpec& spec, const MeshNames& names) {

@@ -300,6 +300,11 @@ struct CaseSpec {
 
 // Reads and validates a case file. `overrides` are "dotted.key=value" strings (the --set option);
 // a value is parsed as TOML and taken as a string if that fails. Throws InputError listing every problem.
+// Warnings (not errors) for values outside the usual range of masonry and rock in SI units, each naming the file,
+// the key and the likely unit mix-up (E in MPa, a thickness or length in mm, a density in t/m^3): a case that reads
+// fine can still be a unit slip. Printed by fdem check, run and mesh on stderr.
+std::vector<std::string> plausibility_warnings(const CaseSpec& spec);
+
 CaseSpec load_case(const std::string& path, const std::vector<std::string>& overrides = {});
 
 // Checks that concern the mesh: every region has a material, every group a case refers to exists.

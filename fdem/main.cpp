@@ -156,6 +156,7 @@ int main(int argc, char** argv) {
             throw fdem::InputError("fdem " + a.command + ": --restart and --stop-after-steps belong to fdem run");
         if (a.command == "check") {
             const fdem::CaseSpec spec = fdem::load_case(a.case_file, a.sets);
+            for (const std::string& w : fdem::plausibility_warnings(spec)) std::cerr << "warning: " << w << "\n";
             fdem::RunOptions quiet;
             quiet.quiet = true;
             quiet.threads = a.threads;
@@ -169,6 +170,7 @@ int main(int argc, char** argv) {
         }
         if (a.command == "mesh") {
             const fdem::CaseSpec spec = fdem::load_case(a.case_file, a.sets);
+            for (const std::string& w : fdem::plausibility_warnings(spec)) std::cerr << "warning: " << w << "\n";
             fdem::mesh::RoughnessStats rough;
             const fdem::mesh::Topology topo = fdem::build_topology_only(spec, &rough);
             const std::filesystem::path dir = a.out.empty() ? std::filesystem::path("runs") / spec.name : std::filesystem::path(a.out);

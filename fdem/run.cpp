@@ -268,6 +268,7 @@ void Simulation::run() {
 
 int run_case(const std::string& case_file, const std::vector<std::string>& overrides, const RunOptions& options) {
     CaseSpec spec = load_case(case_file, overrides);
+    for (const std::string& w : plausibility_warnings(spec)) std::cerr << "warning: " << w << "\n";
     RunOptions opt = options;
     if (!opt.restart_dir.empty()) {
         if (!opt.out_dir.empty() && std::filesystem::weakly_canonical(opt.out_dir) != std::filesystem::weakly_canonical(opt.restart_dir))

@@ -480,3 +480,23 @@ TEST_CASE("a --set that makes a new table names that --set for the table's missi
     CHECK(g.code == 1);
     CHECK(g.err.find("no group named 'actuatr' in the mesh; did you mean 'actuator'?") != std::string::npos);
 }
+
+TEST_CASE("unit slips pass as warnings naming the key and the likely unit: E in MPa, a thickness or length in mm, a wall "
+          "mesh size beyond its units",
+          "[unit]") {
+    const auto dir = testing::tmp_dir("cli_plausibility");
+    const std::string cant = std::string(FDEM_CASES_DIR) + "/elastic/cantilever.toml";
+    const auto r = testing::run_fdem("check \"" + cant + "\" --set materials.steelish.E=1000 --set case.thickness=100", dir);
+    INFO(r.out << r.err);
+    CHECK(r.code == 0);  // warnings, not errors
+    CHECK(r.err.find("key 'materials.steelish.E': E = 1000 Pa") != std::string::npos);
+    CHECK(r.err.find("given in MPa? (1000 MPa = 1e+09 Pa)") != std::string::npos);
+    CHECK(r.err.find("key 'case.thickness': thickness = 100 m: given in mm?") != std::string::npos);
+    const auto w = testing::run_fdem("check \"" + std::string(FDEM_CASES_DIR) + "/lourenco2005/dec_N30.toml\" --set "
+                                     "geometry.mesh_size=25", dir);
+    INFO(w.out << w.err);
+    CHECK(w.err.find("key 'geometry.mesh_size': mesh_size = 25 m is larger than the units") != std::string::npos);
+    // the shipped case as it is: none
+    const auto ok = testing::run_fdem("check \"" + cant + "\"", dir);
+    CHECK(ok.err.find("warning") == std::string::npos);
+}
