@@ -99,12 +99,29 @@ def plot_energy(run, label: str, prefix: str) -> list:
     return save(fig, prefix)
 
 
+def dry_joint_record(run_dir: str):
+    """{"open": control displacements (m), "slip": ...} of the dry-joint events of the run's cracks.csv (class
+    interface-dry), or None when the run has no cracks.csv or no dry-joint event and no dry-joint rows at all."""
+    from .cracks import read_cracks
+    try:
+        cr = read_cracks(run_dir)
+    except ToolError:
+        return None
+    dry = cr["class"] == "dry"
+    if not np.any(dry):
+        return None
+    cd = cr["control_displacement"]
+    return {m: np.asarray(cd[dry & (cr["mode"] == m)], float) for m in ("open", "slip")}
+
+
 def plot_damage(run, label: str, prefix: str, xu=("mm", 1e-3), yu=("kN", 1e3), load_sign: str = "auto") -> list:
     from .figures import new_figure, save
     h = run.history
     missing = [c for cols in BROKEN.values() for c in cols if not h.has(c)]
-    if missing:
-        raise ToolError(f"{run.path}: history.csv has no broken-element columns ({missing[0]}...): fracture off?")
+    dry = dry_joint_record(run.path)
+    if missing and dry is None:
+        raise ToolError(f"{run.path}: history.csv has no broken-element columns ({missing[0]}...) and cracks.csv no "
+                        "dry-joint record: fracture off, and no dry joints in this run")
     c = load_curve(run.path, partial=True)
     x = c.x * (1.0 / xu[1])
     y = c.y * (1.0 / yu[1])
@@ -117,11 +134,25 @@ def plot_damage(run, label: str, prefix: str, xu=("mm", 1e-3), yu=("kN", 1e3), l
     ax2 = ax.twinx()
     ax2.grid(False)
     lines = []
-    for cls, colour, ls in (("unit", "#d62728", "-"), ("interface", "#1f77b4", "--")):
-        n = sum(h.numeric(c) for c in BROKEN[cls])
-        lines += ax2.plot(x, n, color=colour, ls=ls, lw=1.8,
-                          label=f"broken in {'units' if cls == 'unit' else 'interfaces'} (final {int(n[-1]) if len(n) else 0})")
-    ax2.set_ylabel("cumulative broken cohesive elements (-)")
+    if not missing:
+        for cls, colour, ls in (("unit", "#d62728", "-"), ("interface", "#1f77b4", "--")):
+            n = sum(h.numeric(c) for c in BROKEN[cls])
+            lines += ax2.plot(x, n, color=colour, ls=ls, lw=1.8,
+                              label=f"broken in {'units' if cls == 'unit' else 'interfaces'} "
+                                    f"(final {int(n[-1]) if len(n) else 0})")
+    if dry is not None:
+        # the dry-joint record of cracks.csv (README "The run folder"): segments first opened / slipped beyond the
+        # output thresholds, counted against the control displacement at which each was recorded
+        for mode, colour, ls in (("open", "#ff7f0e", "-."), ("slip", "#2ca02c", ":")):
+            d = np.sort(dry[mode]) * (1.0 / xu[1])
+            if len(d):
+                xs = np.concatenate(([min(x[0], d[0])], np.repeat(d, 2), [max(x[-1], d[-1])]))
+                ys = np.concatenate(([0], np.repeat(np.arange(len(d) + 1), 2)[1:-1], [len(d)]))
+            else:
+                xs, ys = np.array([x[0], x[-1]]), np.zeros(2)
+            lines += ax2.plot(xs, ys, color=colour, ls=ls, lw=1.6,
+                              label=f"dry joint segments {'opened' if mode == 'open' else 'slipped'} (final {len(d)})")
+    ax2.set_ylabel("cumulative broken elements / dry joint segments (-)")
     ax2.set_ylim(bottom=0)
     handles = ax.get_lines()[:1] + lines
     ax.legend(handles, [hh.get_label() for hh in handles], fontsize=8, loc="upper left")

@@ -303,3 +303,28 @@ def test_crushing_blocks_and_joint_widths_drawn_and_counted(tmp_path, cli):
     assert "joint_open" not in info["counts"] and info["counts"]["crushed"] == 2
     rc, out, err = cli("cracks", run, "--joint-width", "0")
     assert rc == 1 and "--joint-width" in err and "> 0" in err
+
+
+def test_damage_figure_counts_the_dry_joint_record(tmp_path, cli):
+    """A dry-joint run (no broken-element columns): the damage figure draws the dry-joint record of cracks.csv (3
+    segments opened at 2, 4, 6 mm and 2 slipped at 5, 7 mm: the step counts 3 and 2) instead of failing 'fracture
+    off?'; a fracture run keeps its broken-element lines and adds the record."""
+    from fdemtools import plots
+    run = make_run(str(tmp_path / "dry"), fracture=False)
+    with open(os.path.join(run, "cracks.csv"), "w") as f:
+        f.write("time,control_displacement,x,y,class,unit_a,unit_b,mode\n")
+        for d, m in ((2e-3, "open"), (4e-3, "open"), (5e-3, "slip"), (6e-3, "open"), (7e-3, "slip")):
+            f.write(f"{d * 100},{d},0.1,0.1,interface-dry,0,1,{m}\n")
+    rec = plots.dry_joint_record(run)
+    assert sorted(rec["open"]) == pytest.approx([2e-3, 4e-3, 6e-3]) and sorted(rec["slip"]) == pytest.approx([5e-3, 7e-3])
+    rc, o, err = cli("plot", run, "--figures", "damage", "--out", tmp_path / "p")
+    assert rc == 0, err
+    svg = (tmp_path / "p" / "damage.svg").read_text()
+    assert "dry joint segments opened (final 3)" in svg and "dry joint segments slipped (final 2)" in svg
+    assert "broken in units" not in svg
+    # a run with neither: a clear error
+    bare = make_run(str(tmp_path / "bare"), fracture=False)
+    if os.path.exists(os.path.join(bare, "cracks.csv")):
+        os.remove(os.path.join(bare, "cracks.csv"))
+    with pytest.raises(Exception, match="no dry-joint record"):
+        plots.plot_damage(plots.load_run(bare), "bare", str(tmp_path / "bare_damage"))
