@@ -259,7 +259,7 @@ monitor = "H"
 quantity = "peak"
 value = {p['peak']:g}          # N
 tolerance = 0.10
-source = "Anthoine, Magonette, Magenes 1995, pier {pier} (seeds/000 results table)"
+source = "Anthoine, Magonette, Magenes 1995, pier {pier} (the M-DEM paper's results table, cases/README.md §D)"
 
 [[stages]]
 name = "precompression"  # 150 kN on the beam, damped to rest
