@@ -46,6 +46,12 @@ std::string describe(const toml::node& n) {
 }
 
 // Where a problem is reported: the case file and the lines of its nodes, or --set for overridden keys.
+std::string g4(double v) {
+    char b[32];
+    std::snprintf(b, sizeof b, "%.4g", v);
+    return b;
+}
+
 struct Ctx {
     std::string file;
     std::vector<std::string> errors;
@@ -1103,6 +1109,28 @@ CaseSpec load_case(const std::string& path, const std::vector<std::string>& over
             s.supports.push_back(read_support(ctx, *sups[i], p + ".supports." + std::to_string(i + 1)));
         r.finish();
 
+        // A protocol (or cyclic) support's history ends at its last point: a stage with no other end ends there, and
+        // a stage whose duration or max_duration ends before it would cut the protocol short (an error: the
+        // protocol's amplitudes are what the user asked for).
+        double protocol_end = 0;
+        std::string protocol_key;
+        for (std::size_t i = 0; i < s.supports.size(); ++i)
+            if (!s.supports[i].protocol_t.empty() && s.supports[i].protocol_t.back() > protocol_end)
+                protocol_end = s.supports[i].protocol_t.back(), protocol_key = p + ".supports." + std::to_string(i + 1);
+        if (protocol_end > 0) {
+            const double tol = 1e-9 * protocol_end;
+            if (!s.duration && !s.until_monitor && !s.equilibrium) s.duration = protocol_end;
+            else if (s.duration && *s.duration < protocol_end - tol)
+                ctx.error(p + ".duration", s.line, "the stage ends at " + g4(*s.duration) + " s, before the protocol of " +
+                                                       protocol_key + " (its last point at " + g4(protocol_end) +
+                                                       " s): expected a duration >= " + g4(protocol_end) +
+                                                       " s, or none (the stage then ends with its protocol)");
+            else if (!s.duration && s.max_duration && *s.max_duration < protocol_end - tol)
+                ctx.error(p + ".max_duration", s.line, "the stage may stop at " + g4(*s.max_duration) +
+                                                           " s, before the protocol of " + protocol_key +
+                                                           " ends (its last point at " + g4(protocol_end) + " s)");
+        }
+
         // A stage must be able to end.
         if (!s.duration && !s.until_monitor && !s.equilibrium)
             ctx.error(p, s.line, "this stage can never end: give duration (s), until = { monitor, value } or equilibrium");
@@ -1133,13 +1161,6 @@ CaseSpec load_case(const std::string& path, const std::vector<std::string>& over
     return spec;
 }
 
-namespace {
-std::string g4(double v) {
-    char b[32];
-    std::snprintf(b, sizeof b, "%.4g", v);
-    return b;
-}
-}  // namespace
 
 std::vector<std::string> plausibility_warnings(const CaseSpec& spec) {
     std::vector<std::string> w;

@@ -136,3 +136,30 @@ TEST_CASE("cyclic protocol with ramp T: the trailing-window average, turning poi
     CHECK(tr.max_reaction <= M * 2 * kV / T * (1 + 1e-6));
     CHECK(tr.max_reaction >= 0.9 * M * 2 * kV / T);  // the reversal does take about T
 }
+
+TEST_CASE("a protocol stage ends with its protocol: no duration ends at its last point, a shorter duration is refused",
+          "[unit]") {
+    // driven_block's cycle: one cycle of 1 mm at 0.01 m/s, 0.4 s (4 a / v)
+    std::string text = driven_block("");
+    const auto at = text.find("duration = 0.45\n");
+    REQUIRE(at != std::string::npos);
+    {
+        std::string open = text;
+        open.erase(at, std::string("duration = 0.45\n").size());
+        auto sim = testing::make_simulation(open, "protocol_end_open");
+        sim.begin_stage(0);
+        while (!sim.stage_finished()) sim.step();
+        REQUIRE(sim.stage_results().size() == 1);
+        CHECK(sim.stage_results()[0].ended_by == "duration");
+        CHECK(sim.time() == Approx(4 * kA / kV).margin(2 * sim.dt()));
+    }
+    const auto dir = testing::tmp_dir("protocol_end_short");
+    std::string cut = text;
+    cut.replace(at, std::string("duration = 0.45\n").size(), "duration = 0.3\n");
+    const std::string path = testing::write_text(dir / "case.toml", cut);
+    const auto r = testing::run_fdem("check \"" + path + "\"", dir);
+    INFO(r.out << r.err);
+    CHECK(r.code == 1);
+    CHECK(r.err.find("key 'stages.1.duration': the stage ends at 0.3 s, before the protocol of stages.1.supports.1 "
+                     "(its last point at 0.4 s)") != std::string::npos);
+}
