@@ -224,7 +224,28 @@ long array_index(const std::string& p, std::size_t size) {
     return idx - 1;
 }
 
+// '!' KEY (fdem --unset KEY): removes the key, so that its default applies.
+void apply_unset(toml::table& root, const std::string& path, Ctx& ctx) {
+    std::vector<std::string> parts;
+    std::stringstream ss(path);
+    for (std::string p; std::getline(ss, p, '.');) parts.push_back(p);
+    toml::node* cur = &root;
+    for (std::size_t i = 0; i + 1 < parts.size() && cur; ++i) {
+        if (auto* t = cur->as_table()) cur = t->get(parts[i]);
+        else if (auto* a = cur->as_array()) {
+            const long idx = array_index(parts[i], a->size());
+            cur = idx < 0 ? nullptr : a->get(static_cast<std::size_t>(idx));
+        } else cur = nullptr;
+    }
+    toml::table* t = cur ? cur->as_table() : nullptr;
+    if (parts.empty() || !t || !t->contains(parts.back()))
+        throw InputError("--unset " + path + ": no such key in " + ctx.file + " (or the --set options before it)");
+    t->erase(parts.back());
+    ctx.set_paths.insert(path);
+}
+
 void apply_override(toml::table& root, const std::string& spec, Ctx& ctx) {
+    if (!spec.empty() && spec[0] == '!') return apply_unset(root, spec.substr(1), ctx);
     const auto eq = spec.find('=');
     if (eq == std::string::npos || eq == 0) throw InputError("--set " + spec + ": expected key=value, e.g. --set materials.stone.E=1e9");
     const std::string path = spec.substr(0, eq), value = spec.substr(eq + 1);
@@ -724,6 +745,10 @@ CaseSpec load_case(const std::string& path, const std::vector<std::string>& over
     spec.dir = fs::path(path).parent_path().string();
     for (const auto& o : overrides) {
         apply_override(root, o, ctx);
+        if (!o.empty() && o[0] == '!') {
+            spec.overrides.emplace_back(o.substr(1), "(unset)");
+            continue;
+        }
         const auto eq = o.find('=');
         spec.overrides.emplace_back(o.substr(0, eq), o.substr(eq + 1));
     }

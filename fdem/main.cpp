@@ -44,6 +44,8 @@ const char* kUsage =
     "  -s, --set KEY=VALUE  override any case value; KEY is dotted, elements of arrays of tables count from 1,\n"
     "                       VALUE is TOML (e.g. --set materials.stone.E=1.5e10 --set stages.1.duration=2:\n"
     "                       the duration of the first stage)\n"
+    "  --unset KEY          remove a key of the case, so that its default applies (e.g. --unset numerics.dt);\n"
+    "                       applied in order with the --set options\n"
     "  -t, -j, --threads N  OpenMP threads (results are bit-identical for any N)\n"
     "  -o, --out DIR        run folder\n"
     "  -q, --quiet          nothing on stdout and no progress lines; errors and warnings still go to stderr,\n"
@@ -104,6 +106,7 @@ Args parse_args(int argc, char** argv) {
             a.stop_after_steps = n;
         }
         else if (s == "--set" || s == "-s") a.sets.push_back(value(s));
+        else if (s == "--unset") a.sets.push_back("!" + value(s));  // load_case: '!' KEY removes the key
         else if (s == "--threads" || s == "-t" || s == "-j") {
             const std::string v = value(s);
             char* end = nullptr;

@@ -500,3 +500,22 @@ TEST_CASE("unit slips pass as warnings naming the key and the likely unit: E in 
     const auto ok = testing::run_fdem("check \"" + cant + "\"", dir);
     CHECK(ok.err.find("warning") == std::string::npos);
 }
+
+TEST_CASE("--unset KEY removes a case key so that its default applies; an absent key is exit 1", "[unit]") {
+    const auto dir = testing::tmp_dir("cli_unset");
+    const std::string path = std::string(FDEM_CASES_DIR) + "/lourenco2005/stone_tension_100mm.toml";
+    // a fixed step too large for the 25 mm mesh is refused; unset after it, the automatic step applies
+    const auto bad = testing::run_fdem("check \"" + path + "\" --set numerics.dt=3.23e-6 --set geometry.mesh_size=0.025", dir);
+    CHECK(bad.code == 1);
+    const auto ok = testing::run_fdem(
+        "check \"" + path + "\" --set numerics.dt=3.23e-6 --set geometry.mesh_size=0.025 --unset numerics.dt", dir);
+    INFO(ok.out << ok.err);
+    CHECK(ok.code == 0);
+    // the same step as the shipped case at 25 mm without the --set/--unset pair (0.7 x the limit)
+    const auto plain = testing::run_fdem("check \"" + path + "\" --set geometry.mesh_size=0.025", dir);
+    const auto step = [](const std::string& out) { return out.substr(out.find("time step")); };
+    CHECK(step(ok.out) == step(plain.out));
+    const auto none = testing::run_fdem("check \"" + path + "\" --unset numerics.nothere", dir);
+    CHECK(none.code == 1);
+    CHECK(none.err.find("--unset numerics.nothere: no such key") != std::string::npos);
+}
