@@ -358,3 +358,21 @@ def test_validate_tabulates_the_bound_and_flags_a_peak_above_it(tmp_path):
     open(settle, "w").write(text)
     got = validate.rigid_block_bound(settle, [], _fdem(), str(tmp_path / "lim2"))
     assert "bound_N" not in got and got["note"]
+
+
+def test_preview_draws_the_set_up_the_engine_builds(tmp_path, cli):
+    """fdem-tools preview on the single block of these tests: a PNG with the regions, the dry joint under the block,
+    the fixed base, the drive at wall_top (vx = 0.01 m/s) and gravity, all read from the engine's export."""
+    from fdemtools import preview
+    case = write_case(tmp_path / "b.toml", b=0.4, h=0.6, friction=40.0)
+    out = tmp_path / "p.png"
+    rc, o, err = cli("preview", case, "--out", out)
+    assert rc == 0, err
+    assert out.stat().st_size > 10000
+    texts = preview.draw(model_of(case, tmp_path), str(tmp_path / "q.png"))
+    joined = "\n".join(texts)
+    assert "region units" in joined and "region base" in joined
+    assert "dry joint segments" in joined
+    assert "wall_top: vx = 0.01 m/s" in joined
+    assert "base_bottom: x fixed" in joined and "base_bottom: y fixed" in joined
+    assert "g = 9.81 m/s^2" in joined
