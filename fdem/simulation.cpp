@@ -285,7 +285,13 @@ std::string Simulation::audit_text(const Energies& e) const {
 double Simulation::monitor_value(int i) const {
     const MonitorSpec& m = spec_.monitors[i];
     const double lag = steps_ > 0 ? dt_ : 0.0;
-    if (m.type == "tilt") return tilt_deg_ - tilt_rate_ * lag;
+    if (m.type == "tilt") {
+        // the angle of gravity from -y (counter-clockwise, deg): the stage's gravity vector as given (a tilted table
+        // given as a tilted vector reads its angle) plus the rotation of tilt_rate at t^n
+        const double g = std::hypot(gravity_[0], gravity_[1]);
+        const double base = g > 0 ? std::atan2(gravity_[0], -gravity_[1]) * 180 / kPi : 0.0;
+        return base + (tilt_deg_ - tilt_rate_ * lag);
+    }
     const auto& grp = model_.group(m.group);
     if (m.type == "rotation") return rotation_deg(grp.nodes, lag);
     const int c = m.component;
