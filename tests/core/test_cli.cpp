@@ -501,7 +501,7 @@ TEST_CASE("unit slips pass as warnings naming the key and the likely unit: E in 
     CHECK(ok.err.find("warning") == std::string::npos);
 }
 
-TEST_CASE("fdem --unset KEY removes a case key so that its default applies; an absent key is exit 1", "[unit]") {
+TEST_CASE("fdem --unset KEY removes a case key so that its default applies, and an absent key is exit 1", "[unit]") {
     const auto dir = testing::tmp_dir("cli_unset");
     const std::string path = std::string(FDEM_CASES_DIR) + "/lourenco2005/stone_tension_100mm.toml";
     // a fixed step too large for the 25 mm mesh is refused; unset after it, the automatic step applies
