@@ -606,7 +606,8 @@ local_damping = 0.0
 namespace {
 
 // Tilting table through stages.tilt_rate: a b x h block (mesh 50 mm) on the base, gravity ramped to theta0 under
-// damping, then rotated at 1 deg/s undamped. Returns the tilt (deg, the engine's tilt monitor plus theta0) of the
+// damping, then rotated at 1 deg/s undamped. Returns the tilt (deg, the engine's tilt monitor: the angle of gravity,
+// theta0 included since the monitor reads the gravity vector's direction) of the
 // first event and whether it was overturning (block rotation > 0.01 rad) rather than sliding (bottom-left corner
 // moved > 0.5 mm along the base with rotation < 0.005 rad).
 double tilt_until_event(double b, double h, double mu, double theta0_deg, bool& overturned) {
@@ -641,9 +642,9 @@ double tilt_until_event(double b, double h, double mu, double theta0_deg, bool& 
         const double rot = std::fabs(angle() - ref);
         if (rot > 0.01) {
             overturned = true;
-            return theta0_deg + sim.monitor_value(0);
+            return sim.monitor_value(0);
         }
-        if (md.x[2 * bl] - x_bl0 > 5e-4 && rot < 0.005) return theta0_deg + sim.monitor_value(0);
+        if (md.x[2 * bl] - x_bl0 > 5e-4 && rot < 0.005) return sim.monitor_value(0);
     }
     return 1e9;
 }
