@@ -303,32 +303,13 @@ local_damping = 0.0
 
 TEST_CASE("the tilt monitor reads the angle of gravity: a vector given tilted by 20 deg reads 20, then 20 + rate t",
           "[unit][scene]") {
-    // A fixed block (only the monitor matters): gravity [g sin 20, -g cos 20] reads 20 deg; the same with tilt_rate
+    // The fixed elastic column of these tests (only the monitor matters): gravity [g sin 20, -g cos 20] reads 20 deg; the same with tilt_rate
     // 5 deg/s reads 20 + 5 t at the monitors' time t^n; no gravity reads 0 (issue 54: it read 0 for a tilted vector).
     const double a = 20.0 * 3.14159265358979323846 / 180.0;
     auto text = [&](const std::string& gravity, double rate) {
-        return std::string(R"(
-[case]
-name = "tilt_monitor"
-thickness = 0.1
-[geometry]
-type = "rectangle"
-width = 0.1
-height = 0.1
-mesh_size = 0.05
-[materials.m]
-E = 1.0e9
-nu = 0.2
-density = 2000.0
-[regions]
-body = "m"
-[[monitors]]
-name = "tilt"
-type = "tilt"
-[[stages]]
-name = "s"
-duration = 0.1
-)") + gravity + "tilt_rate = " + std::to_string(rate) + "\n  [[stages.supports]]\n  group = \"bottom\"\n  fix = \"xy\"\n";
+        return testing::column_case_head("tilt_monitor") + "[[monitors]]\nname = \"tilt\"\ntype = \"tilt\"\n"
+               "[[stages]]\nname = \"s\"\nduration = 0.1\n" + gravity + "tilt_rate = " + std::to_string(rate) +
+               "\n  [[stages.supports]]\n  group = \"bottom\"\n  fix = \"xy\"\n";
     };
     char g[128];
     std::snprintf(g, sizeof g, "gravity = [%.17g, %.17g]\n", 9.81 * std::sin(a), -9.81 * std::cos(a));
