@@ -90,6 +90,10 @@ public:
     // of a triangle that can touch needs m >= k dt^2 / 4 for its springs to be stable at step dt; need[node] (kg) is
     // raised to that, never lowered.
     void required_mass(const double* x, double dt, double* need) const;
+    // k of stable_dt per node (N/m): over the edges at the node that are or may become faces, the stiffest slope
+    // the triangle's material can meet times t times the edge's length (the engine adds it to the triangles' and
+    // joints' row sums for the step of the assembled system).
+    std::vector<double> node_stiffness(const double* x) const;
 
     // One step: re-detects when 2 * (sum of dt max|v| since the last detection) would exceed the buffer, then
     // evaluates all pairs and adds the contact forces (N) to f. dt in s. v2max >= 0: the caller's largest |v|^2 over
@@ -144,9 +148,6 @@ public:
     void load_state(StateReader& r);
 
 private:
-    // k of stable_dt per node (N/m): over the edges at the node that are or may become faces, the stiffest slope
-    // the triangle's material can meet times t times the edge's length.
-    std::vector<double> node_stiffness(const double* x) const;
     void update_faces();
     void detect(const double* x);
     void set_pair_nodes();  // pair_nodes_ from the pair list; the masks to be made again

@@ -69,13 +69,20 @@ double Simulation::contact_xi_max() const {
 void Simulation::scale_node_masses() {
     if (!spec_.per_node_mass || spec_.dt_override) return;
     const int nn = model_.n_nodes();
-    // The springs are made stable at `margin` times the triangles' limit dt_t, not at dt_t itself: a node carries both, and
-    // the highest frequency of the two together is at most sqrt(omega_t^2 + omega_s^2) (Weyl's inequality), so with
-    // the step safety * dt_t the sum stays stable when safety^2 (1 + 1 / margin^2) <= 1 (margin 4/3 at the default safety
-    // 0.8). Made exactly stable at dt_t (margin 1), the default wall at mass scaling 30 blew up in its precompression.
-    const double dt = per_node_margin(spec_.safety) * triangle_step_limit(spec_, model_).dt;
+    // Each node (a tied group as one: its copies' shares summed at its first node) is made heavy enough that its
+    // assembled nodal bound (nodal_step_limit: its triangles' share plus its joint and contact springs' row sums, over
+    // its mass) allows the triangles' exact limit dt_t; the step is then safety * dt_t, as in a case without mass
+    // scaling whose triangles set the step. (Until 28 Nov the springs alone were made stable at a margin over dt_t
+    // and the sum bounded by Weyl's inequality, which asked more mass wherever the springs dominate.)
+    const double dt = triangle_step_limit(spec_, model_).dt;
+    const int* rep = ties_ ? tie_rep_.data() : nullptr;
+    std::vector<double> kt(nn, 0.0), kj(nn, 0.0), kc(nn, 0.0);
+    add_triangle_node_stiffness(spec_, model_, rep, kt.data());
+    inter_.add_node_stiffness(model_, contact_xi_max(), rep, kj.data(), kc.data());
+    // m >= k dt^2 / 4, with a relative margin of 1e-12 so that rounding leaves the nodal bound at or above dt_t.
+    const double q = 0.25 * dt * dt * (1 + 1e-12);
     std::vector<double> need(nn, 0.0);
-    inter_.required_mass(model_, contact_xi_max(), dt, ties_ ? tie_rep_.data() : nullptr, need.data());
+    for (int k = 0; k < nn; ++k) need[k] = (kt[k] + kj[k] + kc[k]) * q;
     double before = 0, after = 0;
     for (int k = 0; k < nn; ++k) before += model_.mass[k];
     int raised = 0;
@@ -88,12 +95,12 @@ void Simulation::scale_node_masses() {
     if (ties_) {
         const int ng = static_cast<int>(tie_start_.size()) - 1;
         for (int g = 0; g < ng; ++g) {
-            double M = 0, N = 0;
+            double M = 0;
             for (int j = tie_start_[g]; j < tie_start_[g + 1]; ++j) {
-                const int k = tie_node_[j];
-                M += model_.mass[k], N = std::max(N, need[k]);
-                done[k] = 1;
+                M += model_.mass[tie_node_[j]];
+                done[tie_node_[j]] = 1;
             }
+            const double N = need[tie_node_[tie_start_[g]]];
             if (N > M)
                 for (int j = tie_start_[g]; j < tie_start_[g + 1]; ++j) raise(tie_node_[j], N / M);
         }
@@ -104,6 +111,26 @@ void Simulation::scale_node_masses() {
     mass_raised_nodes_ = raised;
     mass_raised_ratio_ = before > 0 ? after / before : 1.0;
     if (raised > 0) build_ties();  // the groups' masses and the copies' shares
+}
+
+Simulation::NodalLimit Simulation::nodal_step_limit(const double* mass, const int* rep, double xi_contact) {
+    const int nn = model_.n_nodes();
+    if (tri_node_k_.size() != static_cast<std::size_t>(nn)) {
+        tri_node_k_.assign(nn, 0.0);
+        add_triangle_node_stiffness(spec_, model_, nullptr, tri_node_k_.data());
+    }
+    std::vector<double> kt(nn, 0.0), kj(nn, 0.0), kc(nn, 0.0);
+    for (int k = 0; k < nn; ++k) kt[rep ? rep[k] : k] += tri_node_k_[k];
+    inter_.add_node_stiffness(model_, xi_contact, rep, kj.data(), kc.data());
+    NodalLimit lim;
+    double w2max = 0;  // 1/s^2
+    for (int k = 0; k < nn; ++k) {
+        if (rep && rep[k] != k) continue;  // a copy: its group is counted at its first node
+        const double w2 = (kt[k] + kj[k] + kc[k]) / mass[k];
+        if (w2 > w2max) w2max = w2, lim.node = k, lim.k_tri = kt[k], lim.k_joint = kj[k], lim.k_contact = kc[k];
+    }
+    if (w2max > 0) lim.dt = 2.0 / std::sqrt(w2max);
+    return lim;
 }
 
 void Simulation::compute_dt() {
@@ -121,7 +148,11 @@ void Simulation::compute_dt() {
     // booked ten times the work they did: the balance was off by 33 %.)
     dt_contact_ = inter_.contact_stable_dt(model_);
     dt_springs_ = inter_.stable_dt(model_, xi_max, mass, rep);
+    // The assembled bound: triangles and springs at each node together (the springs' own limit dt_springs_ ignores
+    // the triangles at the same nodes and was taken alone until 28 Nov).
+    dt_nodal_ = nodal_step_limit(mass ? mass : model_.mass.data(), rep, xi_max);
     if (dt_springs_ < dt_limit_) dt_limit_ = dt_springs_, dt_element_ = -1;
+    if (dt_nodal_.dt < dt_limit_) dt_limit_ = dt_nodal_.dt, dt_element_ = -1;
     dt_ = spec_.dt_override ? *spec_.dt_override : spec_.safety * dt_limit_;
 }
 
@@ -245,7 +276,8 @@ void Simulation::reduce_dt_after_insertion() {
     const int* rep = tie_rep_.empty() ? nullptr : tie_rep_.data();
     // The contact dashpots keep their coefficient beta = xi dt_contact_ of the copies' masses (compute_dt): at most
     // xi of critical on any node, so xi bounds the damped step.
-    const double springs = inter_.stable_dt(model_, xi_max_, mass, rep);
+    const double springs = std::min(inter_.stable_dt(model_, xi_max_, mass, rep),
+                                    nodal_step_limit(mass ? mass : model_.mass.data(), rep, xi_max_).dt);
     const double dt = spec_.safety * std::min(dt_triangles_, springs);
     if (!(dt < dt_)) return;
     dt_ = dt;

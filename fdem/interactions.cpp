@@ -236,6 +236,27 @@ void Interactions::required_mass(const Model& model, double xi_contact, double d
     }
 }
 
+void Interactions::add_node_stiffness(const Model& model, double xi_contact, const int* rep, double* k_joint,
+                                      double* k_contact) const {
+    if (joints_) {
+        const std::vector<double> k = joints_->node_stiffness(rep);
+        for (std::size_t v = 0; v < k.size(); ++v) k_joint[v] += k[v];
+    }
+    if (contact_) {
+        const double damped = xi_contact > 0 ? std::sqrt(1 + xi_contact * xi_contact) - xi_contact : 1.0;
+        const std::vector<double> k = contact_->node_stiffness(model.X.data());
+        // A tied group (rep) takes its stiffest copy's, not the sum: each copy's count holds the faces a crack could
+        // open at it, which are no faces while the group is tied (summed, the default wall's groups asked 4 times the
+        // mass); once an insertion unties the copies, reduce_dt_after_insertion checks the step again.
+        std::vector<double> top(k.size(), 0.0);
+        for (std::size_t v = 0; v < k.size(); ++v) {
+            const std::size_t r = rep ? static_cast<std::size_t>(rep[v]) : v;
+            top[r] = std::max(top[r], k[v]);
+        }
+        for (std::size_t v = 0; v < k.size(); ++v) k_contact[v] += top[v] / (damped * damped);
+    }
+}
+
 double Interactions::contact_stable_dt(const Model& model, const double* mass) const {
     return contact_ ? contact_->stable_dt(model.X.data(), mass ? mass : model.mass.data())
                     : std::numeric_limits<double>::infinity();

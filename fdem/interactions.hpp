@@ -33,6 +33,10 @@ public:
     // stable_dt solved for the masses (per-node mass scaling): need[k] (kg) is raised to the least mass node k (for
     // joints with rep: its representative) needs for the joint and contact springs to be stable at step dt.
     void required_mass(const Model& model, double xi_contact, double dt, const int* rep, double* need) const;
+    // The springs' share of the assembled system's nodal bound: adds to k_joint and k_contact (per node, or per
+    // representative with rep) the Gershgorin row sums of the intact joints and of the contact springs (N/m), the
+    // contact's divided by (sqrt(1 + xi^2) - xi)^2 for its dashpots at xi_contact of critical.
+    void add_node_stiffness(const Model& model, double xi_contact, const int* rep, double* k_joint, double* k_contact) const;
     // Undamped stable step of the contact springs alone (s), +inf without contact: beta = xi * this.
     double contact_stable_dt(const Model& model, const double* mass = nullptr) const;
     void set_contact_dashpot(double beta_s) {

@@ -209,9 +209,18 @@ double triangle_omega2(const double* p, const int* n, const Material& m, Plane p
     return 3.0 * lmax / (m.density * mass_scale);
 }
 
-double per_node_margin(double safety) {
-    const double s2 = safety * safety;
-    return s2 < 0.9 ? std::max(1.0, 1.0 / std::sqrt(1.0 / s2 - 1.0)) : 3.0;
+void add_triangle_node_stiffness(const CaseSpec& spec, const Model& model, const int* rep, double* k) {
+    for (int e = 0; e < model.n_triangles(); ++e) {
+        const Material& m = spec.materials[model.tri_material[e]];
+        const double xi = m.viscous_damping;
+        const double f = std::sqrt(1 + xi * xi) - xi;
+        const double w2 = triangle_omega2(model.X.data(), model.tris[e].n, m, spec.plane, spec.mass_scale) / (f * f);
+        const double m3 = m.density * spec.mass_scale * model.tris[e].A0t / 3.0;  // kg
+        for (int j = 0; j < 3; ++j) {
+            const int v = model.tris[e].n[j];
+            k[rep ? rep[v] : v] += w2 * m3;
+        }
+    }
 }
 
 StepLimit triangle_step_limit(const CaseSpec& spec, const Model& model) {

@@ -68,10 +68,12 @@ struct StepLimit {
 };
 StepLimit triangle_step_limit(const CaseSpec& spec, const Model& model);
 
-// Per-node mass scaling: the factor over the triangles' limit at which the joint and contact springs are made
-// stable, so that both together stay stable at the step safety * dt_t: safety^2 (1 + 1 / margin^2) <= 1, at least 1
-// (4/3 at the default safety 0.8; 3 from safety^2 >= 0.9 on).
-double per_node_margin(double safety);
+// The triangles' share of the assembled system's nodal bound (README.md 'Time step'): adds to k[node] (or to
+// k[rep[node]] when rep is given: tied copies that move as one) sum over the node's triangles of omega_e^2 m_e / 3
+// (N/m), omega_e the triangle's highest frequency (damped: divided by sqrt(1 + xi^2) - xi) and m_e / 3 its lumped
+// share at mass_scale. With u^T K_e u <= omega_e^2 u^T M_e u per triangle, u^T K u <= sum_i k_i u_i^2 for the triangles,
+// so the node's k / m bounds omega^2 together with the springs' Gershgorin row sums.
+void add_triangle_node_stiffness(const CaseSpec& spec, const Model& model, const int* rep, double* k);
 
 // omega_e^2 (1/s^2) of triangle n (node indices into the coordinates p) of material m at the given mass scaling.
 double triangle_omega2(const double* p, const int* n, const Material& m, Plane plane, double mass_scale);

@@ -151,8 +151,18 @@ void Simulation::run() {
     const StopHandlers stop_handlers;
     log("fdem " FDEM_VERSION ": case '" + spec_.name + "' (" + spec_.file + ")");
     log("mesh: " + std::to_string(model_.n_triangles()) + " triangles, " + std::to_string(model_.n_nodes()) + " nodes");
+    std::string by;
+    if (dt_element_ >= 0) {
+        by = "triangle " + std::to_string(dt_element_);
+    } else {
+        const NodalLimit& L = dt_nodal_;
+        const double k = L.k_tri + L.k_joint + L.k_contact;
+        auto pct = [k](double x) { return std::to_string(static_cast<int>(std::lround(100 * x / k))) + " %"; };
+        by = "node " + std::to_string(L.node) + ": triangles " + pct(L.k_tri) + ", joints " + pct(L.k_joint) + ", contact " +
+             pct(L.k_contact) + " of its stiffness";
+    }
     log("time step: " + sci(dt_) + " s = " + (spec_.dt_override ? std::string("fixed by numerics.dt") : sci(spec_.safety) + " x stable limit") +
-        " " + sci(dt_limit_) + " s (set by " + (dt_element_ >= 0 ? "triangle " + std::to_string(dt_element_) : std::string("joint/contact springs")) + ")" +
+        " " + sci(dt_limit_) + " s (set by " + by + ")" +
         (std::isfinite(dt_springs_) ? "; joint/contact springs alone " + sci(dt_springs_) + " s" : std::string()));
     if (!model_.has_topology && model_.mesh.n_bodies() > 1)
         log("no interface or fracture rules: the " + std::to_string(model_.mesh.n_bodies()) + " bodies of the mesh are tied into one continuum");
@@ -176,8 +186,7 @@ void Simulation::run() {
             "); gravity uses the physical mass");
     if (spec_.per_node_mass)
         log("per-node mass scaling: " + std::to_string(mass_raised_nodes_) + " of " + std::to_string(model_.n_nodes()) +
-            " nodes made heavier for their springs to be stable at " + sci(per_node_margin(spec_.safety), 3) +
-            " x the triangles' step; total inertial mass x " +
+            " nodes made heavier for the triangles' limit to bound their springs too; total inertial mass x " +
             sci(mass_raised_ratio_));
     if (!spec_.dt_override && spec_.safety > 1)
         log("warning: numerics.safety = " + sci(spec_.safety) + " > 1: the time step exceeds the stability limit");

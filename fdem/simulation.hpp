@@ -84,6 +84,16 @@ public:
     // since (initial conditions, a restart, model()), and the contact step scans v itself.
     double speed2_of_node_loop() const { return v2max_; }
     double dt() const { return dt_; }
+    // The assembled system's stable step (README.md 'Time step'): 2 / sqrt(max over nodes of k / m), k the node's
+    // triangles' share (add_triangle_node_stiffness) plus its joint and contact springs' row sums, m its mass (a tied
+    // group's, summed over its copies, with rep). Bounds the highest frequency of triangles and springs together, which
+    // the smaller of their separate limits does not.
+    struct NodalLimit {
+        double dt = std::numeric_limits<double>::infinity();  // s
+        int node = -1;                                         // the node that sets it
+        double k_tri = 0, k_joint = 0, k_contact = 0;          // N/m, that node's shares
+    };
+    const NodalLimit& nodal_limit() const { return dt_nodal_; }  // at the start of the run
     const CaseSpec& spec() const { return spec_; }
     double time() const { return time_; }
     long steps() const { return steps_; }
@@ -160,6 +170,7 @@ private:
     double rotation_deg(const std::vector<int>& nodes, double lag) const;  // deg, positions x - lag v
 
     void compute_dt();
+    NodalLimit nodal_step_limit(const double* mass, const int* rep, double xi_contact);  // (see NodalLimit)
     // Extrinsic insertion (fracture/cohesive_system.hpp): the copies joined by dormant cohesive elements move as one
     // node. build_ties groups them (union-find over the dormant elements' node pairs; groups in order of their first
     // node, members ascending); check_ties refuses a support that holds only some copies of a group.
@@ -256,6 +267,8 @@ private:
     std::vector<double> eff_mass_;           // kg, per node: its group's mass (tied) or its own (empty: no ties)
     std::vector<int> tie_rep_;               // per node: its group's first node, or itself (empty: no ties)
     double dt_triangles_ = 0;                // s, the triangles' stable limit (does not change with the ties)
+    NodalLimit dt_nodal_;                    // the assembled bound at the start (for the log)
+    std::vector<double> tri_node_k_;         // N/m, per node: the triangles' share of the nodal bound (set-up, not saved)
     double xi_max_ = 0;                      // largest contact dashpot fraction of any stage
     int mass_raised_nodes_ = 0;              // per-node mass scaling: nodes made heavier, and the total inertial
     double mass_raised_ratio_ = 1;           // mass after it over the total before

@@ -120,6 +120,9 @@ class CohesiveSystem {
   // The same bound solved for the mass (per-node mass scaling): need[v] (kg, v a node or, with rep, a
   // representative) is raised to k dt^2 / 4 where that is larger, so its joint springs are stable at step dt.
   void required_mass(double dt, const int* rep, double* need) const;
+  // k of stable_dt per node (or representative, with rep): the Gershgorin row sums of its intact elements, N/m
+  // (the engine adds them to the triangles' and contact springs' for the step of the assembled system).
+  std::vector<double> node_stiffness(const int* rep) const;
 
   // Evaluate every intact element at positions x (2 * num_nodes, m), update its irreversible damage and
   // dissipation, and ADD its nodal forces (N, whole thickness) to f (2 * num_nodes). Deterministic: per-element
@@ -166,8 +169,6 @@ class CohesiveSystem {
   void load_state(StateReader& r);
 
  private:
-  // k of stable_dt per node (or representative, with rep): the Gershgorin bounds of its intact elements, N/m.
-  std::vector<double> node_stiffness(const int* rep) const;
   std::vector<CohesiveElement> elems_;
   std::vector<CohesiveProps> props_;
   bool has_cap_ = false;  // some class has a compressive cap (output of crushing)

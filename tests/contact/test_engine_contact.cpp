@@ -764,15 +764,15 @@ contact_damping = )" + std::to_string(xi) + "\n";
     }
 }
 
-TEST_CASE("engine: per-node mass scaling makes the springs stable at the triangles' step, keeps gravity on the physical "
-          "mass and leaves a stack standing",
+TEST_CASE("engine: per-node mass scaling makes the assembled nodal bound reach the triangles' limit, keeps gravity on "
+          "the physical mass and leaves a stack standing",
           "[engine][regression]") {
     // The stack of 10 blocks of the test above with softer blocks (E 0.1 GPa) and stiff dry joints (k_n 1e11 Pa/m),
-    // so that under uniform density scaling the contact springs, not the triangles, set the step, by a factor 1.5. With mass_scaling = "per_node" every node whose
-    // springs need it is made heavier (integrator.cpp scale_node_masses): the springs' bound must then reach the
-    // margin 4/3 over the triangles' (safety 0.8: 0.8^2 (1 + (3/4)^2) = 1), the step be 0.8 of the triangles' limit,
-    // the settled stack carry exactly its physical weight on the base (gravity does not see the added mass) and
-    // stand still, with the energy books closed.
+    // so that under uniform density scaling the contact springs, not the triangles, set the step, by a factor 1.5. With
+    // mass_scaling = "per_node" every node whose triangles and springs together need it is made heavier (integrator.cpp
+    // scale_node_masses): the assembled nodal bound (triangles' shares plus spring row sums over the mass) must then
+    // reach the triangles' limit, and the step be 0.8 of it; the settled stack carry exactly its physical weight on
+    // the base (gravity does not see the added mass) and stand still, with the energy books closed.
     auto text = [](const std::string& scaling) {
         return stack_case("1.0e8", "1e11", "[numerics]\nmass_scale = 1\nmass_scaling = \"" + scaling + "\"\n");
     };
@@ -781,8 +781,12 @@ TEST_CASE("engine: per-node mass scaling makes the springs stable at the triangl
     const double dt_tri = fdem::triangle_step_limit(sim.spec(), sim.model()).dt;
     // Uniform scaling: the springs set the step (the premise of the test).
     REQUIRE(uni.dt() < 0.8 * dt_tri * (1 - 1e-9));
-    // Per node: the springs' bound reaches 4/3 of the triangles' limit; the step is the triangles'.
-    CHECK(sim.interactions().stable_dt(sim.model()) >= (4.0 / 3.0) * dt_tri * (1 - 1e-12));
+    // Per node: the assembled bound reaches the triangles' limit (and is set by a node the springs stiffen); the step
+    // is 0.8 of the triangles' limit.
+    CHECK(sim.nodal_limit().dt >= dt_tri * (1 - 1e-12));
+    CHECK(sim.nodal_limit().dt <= dt_tri * (1 + 1e-9));
+    CHECK(sim.nodal_limit().k_contact > 0);
+    CHECK(uni.nodal_limit().dt < dt_tri);
     CHECK(sim.dt() == Approx(0.8 * dt_tri).epsilon(1e-12));
     // No node lost mass; some gained.
     double m_uni = 0, m_pn = 0;

@@ -1,0 +1,169 @@
+// tests/contact/test_stable_step.cpp: the automatic time step is stable at the default safety for any stiffness of
+// blocks and contacts (issue 50, "Stable by default").
+//
+// THE BOUND (README.md 'Time step'). Central differences are stable while dt <= 2 / omega_max. The engine bounds
+// omega_max^2 of the assembled system node by node: max over nodes of (k_tri + k_joint + k_contact) / m, where k_tri
+// sums omega_e^2 m_e / 3 over the node's triangles (u^T K_e u <= omega_e^2 u^T M_e u for each lumped-mass triangle)
+// and k_joint, k_contact are the Gershgorin row sums of the joint and contact springs at the node (every edge that is
+// or may become a face counted). Until 28 Nov the step was the smaller of the triangles' limit and the springs' limit
+// taken apart, which overestimates the assembled limit where both are alike: on the 10-block stack below with
+// E = 1e11 Pa and k_n = 3e12 Pa/m the two separate limits were 3.61e-6 and 3.59e-6 s, the default step 2.87e-6 s,
+// and the undamped stack blew up at 3.09e-6 s (energy grew without work), its energy books off by 0.29 % at 2.83e-6 s.
+//
+// SCENES. A block on a base (0.2 x 0.1 m on a 0.6 x 0.1 m base), a stack of 5 blocks from the wall generator, a
+// running-bond wall of 3 courses; thickness 0.1 m, density 2000 kg/m^3, dry joints (friction 30 deg, k_s = k_n).
+// Each at E in {1e9, 1e10, 1e11, 1e12} Pa and k_n in {1e9, ..., 1e13} Pa/m, default safety (0.8), no mass scaling:
+// 3e4 steps of gravity settling with local damping 0.7, then 7e4 undamped steps. Asserted: no stop (the engine
+// stops a run whose energy grew without work) and the energy balance error within 0.5 % over the undamped part.
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "core/engine_helpers.hpp"
+#include "fdem/scene.hpp"
+
+namespace {
+
+// Materials, interfaces and the two stages of every scene. The stages' durations are long: the test counts steps.
+std::string tail(double E, double kn) {
+    std::ostringstream c;
+    c.precision(17);
+    c << "[materials.m]\nE = " << E << "\nnu = 0.2\ndensity = 2000.0\n[regions]\nunits = \"m\"\nbase = \"m\"\n";
+    for (const char* pair : {"[\"units\", \"units\"]", "[\"units\", \"base\"]"})
+        c << "[[interfaces]]\nregions = " << pair << "\nkind = \"dry\"\nfriction = 30.0\nnormal_stiffness = " << kn
+          << "\nshear_stiffness = " << kn << "\n";
+    c << "[[stages]]\nname = \"settle\"\nduration = 100.0\nlocal_damping = 0.7\ngravity = [0.0, -9.81]\n"
+      << "  [[stages.supports]]\n  group = \"base\"\n  fix = \"xy\"\n"
+      << "[[stages]]\nname = \"free\"\nduration = 100.0\nlocal_damping = 0.0\n";
+    return c.str();
+}
+
+// A generated wall on a base slab: `courses` courses of `per_course` 0.2 x 0.1 m units.
+std::string wall_case(const std::string& name, int courses, int per_course, const std::string& bond, double E, double kn) {
+    std::ostringstream c;
+    c << "[case]\nname = \"" << name << "\"\nthickness = 0.1\n[geometry]\ntype = \"wall\"\nlength = " << 0.2 * per_course
+      << "\ncourses = " << courses << "\nunit_length = 0.2\nunit_height = 0.1\nbond = \"" << bond
+      << "\"\njoint = \"dry\"\nbase = \"slab\"\nbase_height = 0.1\nbase_overhang = 0.2\nmesh_size = 0.05\n"
+      << "mesh_size_base = 0.1\n";
+    return c.str() + tail(E, kn);
+}
+
+std::string block_case(double E, double kn) {
+    return "[case]\nname = \"block\"\nthickness = 0.1\n[geometry]\ntype = \"gmsh\"\nfile = \"blocks.geo\"\n" + tail(E, kn);
+}
+
+const char* kBlockGeo =
+    "SetFactory(\"OpenCASCADE\");\nRectangle(1) = {-0.2, -0.1, 0, 0.6, 0.1};\nRectangle(2) = {0, 0, 0, 0.2, 0.1};\n"
+    "MeshSize{ PointsOf{ Surface{1}; } } = 0.1;\nMeshSize{ PointsOf{ Surface{2}; } } = 0.05;\n"
+    "Physical Surface(\"base\") = {1};\nPhysical Surface(\"units\") = {2};\n";
+
+struct Outcome {
+    double dt = 0, dt_separate = 0;  // s: the step, and the old rule's (0.8 x the smaller separate limit)
+    double balance = 0;              // largest |balance error| over the undamped steps
+    bool stopped = false;
+    std::string what;
+};
+
+Outcome run_scene(const std::string& scene, double E, double kn) {
+    const auto dir = testing::tmp_dir("stable_step_" + scene);
+    std::string text;
+    if (scene == "block") {
+        testing::write_text(dir / "blocks.geo", kBlockGeo);
+        text = block_case(E, kn);
+    } else if (scene == "stack") {
+        text = wall_case("stack", 5, 1, "stack", E, kn);
+    } else {
+        text = wall_case("wall", 3, 3, "running", E, kn);
+    }
+    const std::string path = testing::write_text(dir / "case.toml", text);
+    fdem::CaseSpec spec = fdem::load_case(path, {});
+    fdem::Model model = fdem::build_scene(spec);
+    fdem::RunOptions opt;
+    opt.quiet = true;
+    opt.threads = 1;
+    fdem::Simulation sim(spec, std::move(model), opt);
+    Outcome o;
+    o.dt = sim.dt();
+    o.dt_separate = 0.8 * std::min(fdem::triangle_step_limit(sim.spec(), sim.model()).dt, sim.interactions().stable_dt(sim.model()));
+    try {
+        sim.begin_stage(0);
+        for (int i = 0; i < 30000; ++i) sim.step();
+        sim.begin_stage(1);
+        for (int i = 1; i <= 70000; ++i) {
+            sim.step();
+            if (i % 1000 == 0) o.balance = std::max(o.balance, std::fabs(sim.energies().balance_error()));
+        }
+    } catch (const std::exception& e) {
+        o.stopped = true;
+        o.what = e.what();
+    }
+    return o;
+}
+
+}  // namespace
+
+// One scene over the grid of E and k_n (one test per scene, so that ctest runs them in parallel).
+static void grid(const char* scene) {
+    int n = 0;
+    for (double E : {1e9, 1e10, 1e11, 1e12})
+        for (double kn : {1e9, 1e10, 1e11, 1e12, 1e13}) {
+            const Outcome o = run_scene(scene, E, kn);
+            std::printf("[stable step] %-5s E %.0e k_n %.0e: dt %.3e s (separate limits' rule %.3e s), balance %.2e %%%s%s\n",
+                        scene, E, kn, o.dt, o.dt_separate, 100 * o.balance, o.stopped ? ", STOPPED: " : "", o.what.c_str());
+            CHECK_FALSE(o.stopped);
+            CHECK(o.balance < 0.005);
+            // The assembled bound is never above the separate limits' rule it replaced.
+            CHECK(o.dt <= o.dt_separate * (1 + 1e-12));
+            ++n;
+        }
+    CHECK(n == 20);
+}
+
+TEST_CASE("time step: a block on a base with E 1e9-1e12 Pa and k_n 1e9-1e13 Pa/m is stable for 10^5 steps at the "
+          "default safety, energy balance within 0.5 %",
+          "[engine][regression]") {
+    grid("block");
+}
+
+TEST_CASE("time step: a stack of 5 blocks with E 1e9-1e12 Pa and k_n 1e9-1e13 Pa/m is stable for 10^5 steps at the "
+          "default safety, energy balance within 0.5 %",
+          "[engine][regression]") {
+    grid("stack");
+}
+
+TEST_CASE("time step: a running-bond wall of 3 courses with E 1e9-1e12 Pa and k_n 1e9-1e13 Pa/m is stable for 10^5 "
+          "steps at the default safety, energy balance within 0.5 %",
+          "[engine][regression]") {
+    grid("wall");
+}
+
+TEST_CASE("time step: where triangles and contact springs have alike limits, the step is the assembled nodal bound, "
+          "below the smaller separate limit",
+          "[engine][regression]") {
+    // The 10-block stack of the header at E 1e11 Pa, k_n 3e12 Pa/m: separate limits within 1 % of each other.
+    const auto dir = testing::tmp_dir("stable_step_alike");
+    const std::string path = testing::write_text(dir / "case.toml", wall_case("stack10", 10, 1, "stack", 1e11, 3e12));
+    fdem::CaseSpec spec = fdem::load_case(path, {});
+    fdem::Model model = fdem::build_scene(spec);
+    fdem::RunOptions opt;
+    opt.quiet = true;
+    opt.threads = 1;
+    fdem::Simulation sim(spec, std::move(model), opt);
+    const double dt_t = fdem::triangle_step_limit(sim.spec(), sim.model()).dt;
+    const double dt_s = sim.interactions().stable_dt(sim.model());
+    const auto& L = sim.nodal_limit();
+    std::printf("[stable step alike] triangles %.4e s, springs %.4e s, nodal %.4e s (node %d: triangles %.3g, contact %.3g N/m)\n",
+                dt_t, dt_s, L.dt, L.node, L.k_tri, L.k_contact);
+    REQUIRE(std::fabs(dt_s / dt_t - 1) < 0.02);  // the premise
+    // Both shares matter at the node that sets it, and the bound lies below either separate limit by more than 20 %
+    // (sqrt(1/2) = 0.707 when they are equal at the same node).
+    CHECK(L.k_tri > 0.2 * (L.k_tri + L.k_contact));
+    CHECK(L.k_contact > 0.2 * (L.k_tri + L.k_contact));
+    CHECK(L.dt < 0.8 * std::min(dt_t, dt_s));
+    CHECK(sim.dt() == Approx(0.8 * L.dt).epsilon(1e-12));
+}
