@@ -56,6 +56,10 @@ LOAD_HEIGHT = 1.0   # m, the actuator node: the beam's left end at the top of th
 # counted one face and no other side), which asks 1.7 times the added mass at the default safety 0.8, where the
 # springs are made stable at 4/3 of the triangles' step; at 0.7 they are made stable at the triangles' step itself
 # (per_node_margin), about the added mass of before at 0.875 of the step.
+# Since 28 Nov (issue 50, RESULTS.md §45): per-node mass scaling raises each node until the assembled nodal bound (its
+# triangles' share plus its springs' row sums) reaches the triangles' limit, whatever the safety; the step is safety x
+# that limit. Safety 0.7 stays for accuracy, not stability: at the default 0.8 (step x 1.14) the default run's curve
+# moved +1.05 % at 10 mm against +0.01 % at 0.7 (total inertial mass x 2.69 over x 15 with the new rule, 2.38 before).
 # Since 28 Nov (issue 48 §2): the shear stage runs past its peak ([[stages]] past_peak: it ends when the base shear,
 # averaged over 0.5 mm of travel, has stayed PAST_PEAK_DROP below its largest average for PAST_PEAK_TRAVEL of travel)
 # or to 30 mm (3 % drift), whichever comes first; before, it stopped at 10 mm (K25) or 8 mm (DEC) while still rising.
@@ -72,7 +76,7 @@ K25 = dict(mesh=0.025, penalty=1.0e10, contact_penalty=1.0e9, rate=0.01, until=U
 # Since 27 Nov (RESULTS.md §33): mass scaling 15 per node ([numerics] mass_scaling = "per_node": the triangles' step,
 # the nodes whose joint penalty would need a smaller one made heavier) instead of 100 uniform: 20,812 steps against
 # 21,779, peak +0.81 % and K_e -2.0 % against the converged curve instead of +2.3 % and -7.1 %. Since RESULTS.md §34
-# at safety 0.7 (as the family): 23,480 steps.
+# at safety 0.7 (as the family): 23,480 steps. Since RESULTS.md §45 (the nodal bound's masses): 23,769 steps.
 K25_QUICK = dict(K25, mass_scale=15, until=0.010, past_peak=False)  # the preview stops at 10 mm, before its peak
 # 3DEC family: local damping 0.8 in the shear stage, as 3DEC's default (Itasca's local damping 0.8), signed by the
 # velocity minus its moving mean over 0.1 s, and contact dashpots at 0.3 of critical: without the filter the damping
@@ -368,16 +372,16 @@ def k25_case(r, quick=False):
 #   contact dashpots {s['contact_damping']}, shear-stage local damping {s['damping']}, {s['rate']} m/s to {s['until'] * 1000:g} mm after a
 #   {s['drive_ramp']} s ramp) with per-node mass scaling ([numerics] mass_scale = {s['mass_scale']}, mass_scaling = "per_node"; gravity keeps
 #   the physical mass): every inertial mass x {s['mass_scale']}, the time step {s['safety']} of the triangles' limit at that, and the
-#   nodes whose contact springs (the joint penalty) would need a smaller step made heavier until they do not (total
-#   inertial mass x 2.4 over x {s['mass_scale']}): 24,073 steps. Against this wall's converged curve with this set-up (uniform
-#   mass scaling 10 at half the rate, RESULTS.md §43): peak +0.03 %, K_e +2.8 %, P_y -0.1 %, ductility +3.0 %, whole
-#   curve 0-10 mm RMS 0.85 % of the peak, largest difference 2.8 % (§42: the same measures with the set-up of
-#   seeds/004). It stops at {s['until'] * 1000:g} mm, before the wall's peak (about 47.5 kN near 16 mm, k25_N100.toml): the run
+#   nodes whose triangles and contact springs (the joint penalty) together would need a smaller step made heavier until
+#   they do not (total inertial mass x 2.69 over x {s['mass_scale']}): 23,769 steps. Against this wall's converged curve with
+#   this set-up (uniform mass scaling 10 at half the rate, RESULTS.md §43, §45): peak +0.04 %, K_e +3.0 %, P_y -0.0 %,
+#   ductility +2.9 %, whole curve 0-10 mm RMS 0.88 % of the peak (§42: the same measures with the set-up of seeds/004). It stops at {s['until'] * 1000:g} mm, before the wall's peak (about 47.5 kN near 16 mm, k25_N100.toml): the run
 #   says so. The family report is the validation; this is its fast preview."""
     else:
         settings_text = f"""# Mass scaling: per node ([numerics] mass_scale = {s['mass_scale']}, mass_scaling = "per_node"; gravity keeps the physical
 #   mass): every inertial mass x {s['mass_scale']}, the time step {s['safety']} of the triangles' limit at that (~4e-5 s instead of
-#   ~5.4e-6 s unscaled), and the nodes whose contact springs would need a smaller step made heavier until they do not
+#   ~5.4e-6 s unscaled), and the nodes whose triangles and contact springs together would need a smaller step made
+#   heavier until they do not
 #   (RESULTS.md §33, §34; uniform x 10, the setting before, needed 2.2-2.6 times the steps for the same curve). Shear stage: contact dashpots at {s['contact_damping']} of critical (stage key
 #   contact_damping): without them the contacts chatter at the step's frequency and the blocks' vibrations make the
 #   joints creep, so the load kept falling as the rate was halved (RESULTS.md §5). And local damping {s['damping']}: the
@@ -491,9 +495,11 @@ shear_stiffness = {ks:.4g}    # Pa/m
 
 # Single stone in tension (cases/README.md §A2): the joint penalty must satisfy the fracture-energy check at the coarsest
 # mesh (100 mm: p_j > 4 h f_t^2 / (3 G_I) = 2.3e10 Pa for its 141 mm diagonal edges), so the study uses 3e10 Pa at
-# every size. The time step is the automatic one at safety 0.7 (0.7 x the stable limit of each mesh, which scales with
-# h: node mass ~ h^2, spring p_j t). Until 28 Nov each case fixed numerics.dt = 0.7 x an estimate of its own mesh's
-# limit, which a mesh study (--set geometry.mesh_size) then kept at the finer sizes, beyond their limit (issue 51).
+# every size. The time step is the automatic one at the default safety (0.8 x the stable limit of each mesh, which
+# scales with h: node mass ~ h^2, spring p_j t). Until 28 Nov each case fixed numerics.dt = 0.7 x an estimate of its
+# own mesh's limit, which a mesh study (--set geometry.mesh_size) then kept at the finer sizes, beyond their limit
+# (issue 51); then safety 0.7 of the separate limits, and since the assembled nodal bound (issue 50) the default: the
+# peaks moved by less than 0.001 % at all four sizes, with 7-8 % fewer steps (RESULTS.md §45).
 # Local damping 0.8 in the pull: the bar stores f_t^2 V / (2E) = 35.6 J at peak, 16 x G_I A, and a displacement-driven
 # bar this much longer than its characteristic length snaps back; undamped, the released energy shattered it (many
 # broken elements, the 10 mm mesh inverting a triangle; RESULTS.md E4). Damped, one crack forms and the damping takes
@@ -513,7 +519,7 @@ def stone_case(h, tag):
 #   G_I 110 N/m, G_II 770 N/m, friction 35 deg), left edge fixed, right edge pulled at {STONE['rate']} m/s to
 #   {STONE['until'] * 1000:g} mm (the elastic elongation at peak is f_t L / E = 0.96 mm).
 # Assumed values: E = 768 MPa (the [K25] modulus of the 100 kN wall), Poisson 0.2, density 2400 kg/m^3, joint penalty
-#   p_j = {STONE['penalty']:g} Pa at every size (see make_cases.py), time step 0.7 x the stable limit, local damping {STONE['damping']}: the bar
+#   p_j = {STONE['penalty']:g} Pa at every size (see make_cases.py), the automatic time step, local damping {STONE['damping']}: the bar
 #   stores f_t^2 V / (2E) = 35.6 J at peak, 16 x G_I A, and snaps back after the peak; the damping takes that energy
 #   so that one crack forms (undamped, the release shattered the bar: RESULTS.md E4 and §10).
 # Report per size: peak of R_left (N), D_frac at the end (J, history.csv), run time (measured: RESULTS.md §10;
@@ -559,9 +565,6 @@ name = "R_left"          # N
 type = "reaction"
 group = "left"
 component = "x"
-
-[numerics]
-safety = 0.7             # the automatic step: 0.7 x this mesh's stable limit (see make_cases.py)
 
 [output]
 history_interval = 0.0005  # s
