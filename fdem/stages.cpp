@@ -237,9 +237,10 @@ void Simulation::begin_stage(int s) {
         for (std::size_t i = 0; i < spec_.monitors.size(); ++i)
             if (spec_.monitors[i].name == *st.until_monitor) until_monitor_ = static_cast<int>(i);
         until_start_ = monitor_value(until_monitor_);
-        // A target behind a driven displacement can never be reached.
+        // A target behind a driven displacement can never be reached (unless the monitor is already at or beyond it:
+        // the stage then ends at once, stage_finished).
         const MonitorSpec& m = spec_.monitors[until_monitor_];
-        if (m.type == "displacement")
+        if (m.type == "displacement" && !until_holds(st.until_value, until_start_))
             for (const auto& sp : st.supports)
                 if (sp.group == m.group && sp.mode[m.component] == DofMode::velocity &&
                     (st.until_value - until_start_) * sp.velocity[m.component] <= 0 && !st.max_duration && !st.duration)
@@ -371,6 +372,13 @@ void Simulation::update_servos() {
     }
 }
 
+// Whether a stage's until condition holds already: the monitor (a quantity measured from its reference, zero at the
+// start of the run) at or beyond the target as seen from zero, m / value >= 1 (for value 0: m = 0). Past it, the
+// direction rule of stage_finished (towards the target from the start value) would wait for the monitor to come back.
+bool Simulation::until_holds(double value, double m) {
+    return value == 0 ? m == 0 : m / value >= 1;
+}
+
 bool Simulation::stage_finished() {
     const StageSpec& st = spec_.stages[stage_];
     const double ts = time_ - stage_t0_;
@@ -381,6 +389,11 @@ bool Simulation::stage_finished() {
     if (st.duration && ts + 0.5 * dt_ >= *st.duration) return finish("duration");
     if (until_monitor_ >= 0) {
         const double m = monitor_value(until_monitor_);
+        if (steps_ == stage_steps0_ && until_holds(st.until_value, m)) {
+            log("stage " + std::to_string(stage_ + 1) + " '" + st.name + "': its until condition already holds at its start (" +
+                *st.until_monitor + " = " + sci(m) + ", at or beyond " + sci(st.until_value) + "): it ends at once");
+            return finish("until");
+        }
         const double dir = st.until_value >= until_start_ ? 1.0 : -1.0;
         if (dir * (m - st.until_value) >= 0) return finish("until");
     }
