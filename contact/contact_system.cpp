@@ -262,7 +262,7 @@ void ContactSystem::release_vertex_of(int node) {
     r = 1;
 }
 
-std::vector<double> ContactSystem::node_stiffness(const double* x) const {
+std::vector<double> ContactSystem::node_stiffness(const double* x, const std::uint8_t* held) const {
     // Per material: the stiffest stiffness-law slope (Pa/m) and the largest penalty (Pa) it can meet.
     std::vector<double> k_max(n_mat_, 0.0), p_max(n_mat_, 0.0);
     auto account = [&](int m, int li) {
@@ -292,6 +292,7 @@ std::vector<double> ContactSystem::node_stiffness(const double* x) const {
         const double slope = std::max(k_max[material_[t]], 6.0 * p_max[material_[t]] / h);  // Pa/m
         for (int e = 0; e < 3; ++e) {
             if (!((continuum_faces_[t] >> e) & 1)) continue;
+            if (held && ((held[t] >> e) & 1)) continue;
             const int e1 = (e + 1) % 3;
             const double kf = slope * thickness_ * std::hypot(T[2 * e1] - T[2 * e], T[2 * e1 + 1] - T[2 * e + 1]);  // N/m
             k[tri_[3 * t + e]] += kf;

@@ -92,8 +92,9 @@ public:
     void required_mass(const double* x, double dt, double* need) const;
     // k of stable_dt per node (N/m): over the edges at the node that are or may become faces, the stiffest slope
     // the triangle's material can meet times t times the edge's length (the engine adds it to the triangles' and
-    // joints' row sums for the step of the assembled system).
-    std::vector<double> node_stiffness(const double* x) const;
+    // joints' row sums for the step of the assembled system). held (optional): per triangle, bit e set when its edge e
+    // (from node e to node e + 1) is held by an intact cohesive element, which keeps it out of contact until it breaks.
+    std::vector<double> node_stiffness(const double* x, const std::uint8_t* held = nullptr) const;
 
     // One step: re-detects when 2 * (sum of dt max|v| since the last detection) would exceed the buffer, then
     // evaluates all pairs and adds the contact forces (N) to f. dt in s. v2max >= 0: the caller's largest |v|^2 over

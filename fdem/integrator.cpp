@@ -148,10 +148,10 @@ void Simulation::compute_dt() {
     // booked ten times the work they did: the balance was off by 33 %.)
     dt_contact_ = inter_.contact_stable_dt(model_);
     dt_springs_ = inter_.stable_dt(model_, xi_max, mass, rep);
-    // The assembled bound: triangles and springs at each node together (the springs' own limit dt_springs_ ignores
-    // the triangles at the same nodes and was taken alone until 28 Nov).
+    // The assembled bound: triangles and springs at each node together. The springs' own limit dt_springs_ (logged)
+    // ignores the triangles at the same nodes and counts the faces of intact joints, which cannot touch yet; it was
+    // taken alone until 28 Nov.
     dt_nodal_ = nodal_step_limit(mass ? mass : model_.mass.data(), rep, xi_max);
-    if (dt_springs_ < dt_limit_) dt_limit_ = dt_springs_, dt_element_ = -1;
     if (dt_nodal_.dt < dt_limit_) dt_limit_ = dt_nodal_.dt, dt_element_ = -1;
     dt_ = spec_.dt_override ? *spec_.dt_override : spec_.safety * dt_limit_;
 }
@@ -276,15 +276,14 @@ void Simulation::reduce_dt_after_insertion() {
     const int* rep = tie_rep_.empty() ? nullptr : tie_rep_.data();
     // The contact dashpots keep their coefficient beta = xi dt_contact_ of the copies' masses (compute_dt): at most
     // xi of critical on any node, so xi bounds the damped step.
-    const double springs = std::min(inter_.stable_dt(model_, xi_max_, mass, rep),
-                                    nodal_step_limit(mass ? mass : model_.mass.data(), rep, xi_max_).dt);
+    const double springs = nodal_step_limit(mass ? mass : model_.mass.data(), rep, xi_max_).dt;
     const double dt = spec_.safety * std::min(dt_triangles_, springs);
     if (!(dt < dt_)) return;
     dt_ = dt;
     if (springs < dt_limit_) dt_limit_ = springs, dt_springs_ = springs, dt_element_ = -1;
     if (dt_ < 0.9 * dt_logged_) {
         dt_logged_ = dt_;
-        log("time step: " + sci(dt_) + " s from t = " + sci(time_) + " s (cracks inserted, nodes untied)");
+        log("time step: " + sci(dt_) + " s from t = " + sci(time_) + " s (cracks inserted or joints broken: new faces for contact)");
     }
 }
 
@@ -618,6 +617,7 @@ void Simulation::step() {
     if (inter_.has_joints()) {
         const int broke = inter_.after_step(time_, control_displacement(), model_.x.data());
         broken_total_ += broke;
+        if (broke > 0) reduce_dt_after_insertion();  // broken elements' faces join the contact count
     }
 
     // Outputs.

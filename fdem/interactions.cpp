@@ -244,7 +244,27 @@ void Interactions::add_node_stiffness(const Model& model, double xi_contact, con
     }
     if (contact_) {
         const double damped = xi_contact > 0 ? std::sqrt(1 + xi_contact * xi_contact) - xi_contact : 1.0;
-        const std::vector<double> k = contact_->node_stiffness(model.X.data());
+        // The faces of intact intrinsic cohesive elements cannot touch until the element breaks (its two triangles are
+        // an excluded pair, and the edge is inside the body): not counted; the engine checks the step again when
+        // elements break (reduce_dt_after_insertion).
+        std::vector<std::uint8_t> held;
+        if (joints_) {
+            held.assign(model.n_triangles(), 0);
+            auto mark = [&](int t, int a, int b) {
+                if (t < 0) return;
+                for (int e = 0; e < 3; ++e) {
+                    const int p = model.mesh.tri[3 * t + e], q = model.mesh.tri[3 * t + (e + 1) % 3];
+                    if ((p == a && q == b) || (p == b && q == a)) held[t] |= static_cast<std::uint8_t>(1u << e);
+                }
+            };
+            for (int e = 0; e < joints_->size(); ++e) {
+                if (!joints_->holds_faces(e)) continue;
+                const auto& el = joints_->element(e);
+                mark(el.tri_a, el.n[0], el.n[1]);
+                mark(el.tri_b, el.n[2], el.n[3]);
+            }
+        }
+        const std::vector<double> k = contact_->node_stiffness(model.X.data(), held.empty() ? nullptr : held.data());
         // A tied group (rep) takes its stiffest copy's, not the sum: each copy's count holds the faces a crack could
         // open at it, which are no faces while the group is tied (summed, the default wall's groups asked 4 times the
         // mass); once an insertion unties the copies, reduce_dt_after_insertion checks the step again.

@@ -97,6 +97,7 @@ public:
     const CaseSpec& spec() const { return spec_; }
     double time() const { return time_; }
     long steps() const { return steps_; }
+    long broken_total() const { return broken_total_; }  // cohesive elements broken since the start
     double monitor_value(int i) const;
     Energies energies() const;  // computes the elastic energy now (contact energy: see energy_every_step)
     // Contact energy is evaluated only on reported steps unless this is on (for tests reading every step).

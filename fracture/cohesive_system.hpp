@@ -95,6 +95,9 @@ class CohesiveSystem {
   int dormant_count() const { return dormant_count_; }
   int extrinsic_count() const;  // elements of extrinsic classes, dormant or not
   bool dormant(int e) const { return dormant_[e] != 0; }
+  // Whether element e keeps its two faces out of contact: an intact element of an intrinsic class (an extrinsic one
+  // is counted as its copies' faces from the start: the engine sets their masses once, before any insertion).
+  bool holds_faces(int e) const { return !props_[elems_[e].props].extrinsic && !broken_[e] && !pending_[e]; }
   bool reaches_strength(int e, double sigma, double tau) const {
     const JointLaw& L = law_[e];
     return reaches_peak_surface(sigma, tau, L.tensile_strength, L.cohesion, L.tan_friction);
