@@ -499,7 +499,7 @@ shear_stiffness = {ks:.4g}    # Pa/m
 # scales with h: node mass ~ h^2, spring p_j t). Until 28 Nov each case fixed numerics.dt = 0.7 x an estimate of its
 # own mesh's limit, which a mesh study (--set geometry.mesh_size) then kept at the finer sizes, beyond their limit
 # (issue 51); then safety 0.7 of the separate limits, and since the assembled nodal bound (issue 50) the default: the
-# peaks moved by less than 0.001 % at all four sizes, with 7-8 % fewer steps (RESULTS.md §45).
+# peaks moved by less than 0.001 % at all four sizes, with 30-38 % fewer steps (RESULTS.md §45).
 # Local damping 0.8 in the pull: the bar stores f_t^2 V / (2E) = 35.6 J at peak, 16 x G_I A, and a displacement-driven
 # bar this much longer than its characteristic length snaps back; undamped, the released energy shattered it (many
 # broken elements, the 10 mm mesh inverting a triangle; RESULTS.md E4). Damped, one crack forms and the damping takes
