@@ -39,7 +39,7 @@ max_duration = 1.0
 
 }  // namespace
 
-TEST_CASE("stages: an until condition that already holds at the stage's start ends the stage at once; one ahead is "
+TEST_CASE("stages: an until condition that already holds at the stage's start ends the stage at once, and one ahead is "
           "reached by the drive",
           "[unit][stages]") {
     // Already past: 5 mm and 0.1 mm behind the monitor's 0.01 m (the first stage ends within dt x 0.01 m/s of 1 s).
