@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "fdem/version.hpp"
 #include "fdem/case.hpp"
 #include "fdem/omp_env.hpp"
 #include "fdem/errors.hpp"
@@ -144,7 +145,7 @@ int main(int argc, char** argv) {
             return 0;
         }
         if (argc >= 2 && !std::strcmp(argv[1], "--version")) {
-            std::cout << "fdem " FDEM_VERSION "\n";
+            std::cout << "fdem " FDEM_VERSION " (build " << fdem::build_id() << ")\n";
             return 0;
         }
         const Args a = parse_args(argc, argv);

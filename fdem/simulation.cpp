@@ -3,6 +3,7 @@
 // integrator.cpp, the stages (supports, loads, protocols, servos, their endings) in stages.cpp, the run loop with its
 // progress, signals and failures in run.cpp; sim_detail.hpp holds what they share.
 #include "fdem/simulation.hpp"
+#include "fdem/version.hpp"
 
 #include <omp.h>
 #include <unistd.h>
@@ -565,6 +566,12 @@ void Simulation::write_summary(const std::string& status, const std::string& mes
     j["status"] = status;
     j["message"] = message;
     j["fdem_version"] = FDEM_VERSION;
+    j["build"] = build_id();
+    {
+        char hex[17];
+        std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(spec_.resolved_hash));
+        j["case_hash"] = std::string(hex);  // the case as resolved (its TOML after --set), CaseSpec::resolved_hash
+    }
     Json cols = Json::object();
     cols["time"] = "s";
     cols["step"] = "-";

@@ -366,7 +366,8 @@ def draw(run_dir: str, prefix: str, time: float | None = None, displacement: flo
     else:
         ax.text(0.5, 0.02, f"no {what.replace(' and ', ' or ')} at this time", transform=ax.transAxes, ha="center",
                 fontsize=9)
-    files = save(fig, prefix)
+    from .figures import run_stamp
+    files = save(fig, prefix, run_stamp([run.summary]))
     return files, {"time": time, "snapshot": snap[1] if snap else None, "counts": counts,
                    "matched_reference_midpoints": matched if keep.any() else None}
 

@@ -29,16 +29,42 @@ def new_figure(*args, **kwargs):
         return plt.subplots(*args, **kwargs)
 
 
-def save(fig, prefix: str) -> list:
-    """Writes prefix.png and prefix.svg, closes the figure and returns both paths."""
+def run_stamp(summaries) -> str:
+    """What made a figure, in one line: the fdem release and build (summary.json "fdem_version", "build": the
+    source tree's commit when fdem was built) and each run's case with its hash ("case_hash": the case as resolved,
+    its TOML after --set). A figure committed next to its case can then be checked against both. Runs written
+    before these keys existed say "build unknown" / "no hash"."""
+    builds, cases = [], []
+    for s in summaries:
+        if not s:
+            continue
+        b = f"fdem {s.get('fdem_version', '?')} build {s.get('build', 'unknown')}"
+        if b not in builds:
+            builds.append(b)
+        c = f"{s.get('case', '?')} [{s.get('case_hash', 'no hash')}]"
+        if c not in cases:
+            cases.append(c)
+    if not builds:
+        return ""
+    if len(cases) > 4:
+        cases = cases[:4] + [f"and {len(cases) - 4} more"]
+    return "; ".join(builds) + " | " + ", ".join(cases)
+
+
+def save(fig, prefix: str, stamp: str = "") -> list:
+    """Writes prefix.png and prefix.svg, closes the figure and returns both paths. stamp (run_stamp): written small
+    in the figure's bottom-left corner and into both files' metadata ("Source")."""
     d = os.path.dirname(os.path.abspath(prefix))
     os.makedirs(d, exist_ok=True)
     paths = []
     with plt.rc_context(STYLE):
+        if stamp:
+            fig.text(0.003, 0.003, stamp, fontsize=5.5, color="0.45", ha="left", va="bottom")
         fig.tight_layout()
         for ext in ("png", "svg"):
             p = f"{prefix}.{ext}"
-            fig.savefig(p, bbox_inches="tight")  # keeps legends placed outside the axes
+            meta = {"Source": stamp} if stamp else None
+            fig.savefig(p, bbox_inches="tight", metadata=meta)  # keeps legends placed outside the axes
             paths.append(p)
     plt.close(fig)
     return paths

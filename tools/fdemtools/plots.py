@@ -42,7 +42,7 @@ def run_labels(paths: list, runs: list) -> list:
 
 
 def plot_curves(curves: list, experiments: list, prefix: str, xu=("mm", 1e-3), yu=("kN", 1e3),
-                load_sign: str = "auto") -> list:
+                load_sign: str = "auto", stamp: str = "") -> list:
     """Every run and experiment, each load with the tools' one sign rule (common.resolve_sign; experiments too).
     A turned load is labelled so and a note printed."""
     from .figures import new_figure, save
@@ -63,11 +63,11 @@ def plot_curves(curves: list, experiments: list, prefix: str, xu=("mm", 1e-3), y
     ax.axhline(0, color="0.6", lw=0.6)
     ax.legend(fontsize=8)
     ax.set_title("load against displacement", fontsize=9)
-    return save(fig, prefix)
+    return save(fig, prefix, stamp)
 
 
 def plot_energy(run, label: str, prefix: str) -> list:
-    from .figures import new_figure, save
+    from .figures import new_figure, run_stamp, save
     h = run.history
     if not h.has("time"):
         raise ToolError(f"{run.path}: history.csv has no 'time' column")
@@ -96,7 +96,7 @@ def plot_energy(run, label: str, prefix: str) -> list:
         b.set_xlabel("time (s)")
     else:
         ax.set_xlabel("time (s)")
-    return save(fig, prefix)
+    return save(fig, prefix, run_stamp([run.summary]))
 
 
 def dry_joint_record(run_dir: str):
@@ -115,7 +115,7 @@ def dry_joint_record(run_dir: str):
 
 
 def plot_damage(run, label: str, prefix: str, xu=("mm", 1e-3), yu=("kN", 1e3), load_sign: str = "auto") -> list:
-    from .figures import new_figure, save
+    from .figures import new_figure, run_stamp, save
     h = run.history
     missing = [c for cols in BROKEN.values() for c in cols if not h.has(c)]
     dry = dry_joint_record(run.path)
@@ -157,7 +157,7 @@ def plot_damage(run, label: str, prefix: str, xu=("mm", 1e-3), yu=("kN", 1e3), l
     handles = ax.get_lines()[:1] + lines
     ax.legend(handles, [hh.get_label() for hh in handles], fontsize=8, loc="upper left")
     ax.set_title(f"{label}: damage progression", fontsize=9)
-    return save(fig, prefix)
+    return save(fig, prefix, run_stamp([run.summary]))
 
 
 def cmd_plot(args):
@@ -180,7 +180,9 @@ def cmd_plot(args):
         exps = []
         for e in args.experiment or []:
             exps.append(load_curve(e, args.exp_x, args.exp_y, args.exp_x_unit, args.exp_y_unit))
-        files += plot_curves(curves, exps, os.path.join(out, "curves"), xu, yu, load_sign=sign_arg)
+        from .figures import run_stamp
+        files += plot_curves(curves, exps, os.path.join(out, "curves"), xu, yu, load_sign=sign_arg,
+                             stamp=run_stamp([r.summary for r in runs]))
     single = len(runs) == 1
     for run, lab in zip(runs, labels):
         suffix = "" if single else "_" + _safe(lab)
