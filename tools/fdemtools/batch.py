@@ -17,6 +17,7 @@ import hashlib
 import itertools
 import json
 import os
+import re
 import shlex
 import shutil
 import subprocess
@@ -171,11 +172,23 @@ def case_fingerprint(case: str, overrides: list) -> dict:
 
 
 def build_fingerprint(fdem: str) -> dict:
-    """The engine's part: the sha256 of the fdem executable (a rebuild that changes it changes the fingerprint)."""
+    """The engine's part: the sha256 of the fdem executable (a rebuild that changes it changes the fingerprint), with
+    the build id the executable embeds (fdem/version.hpp: the source tree's commit, which changes with every commit,
+    also one that only touches documents) blanked out first, so that only a change of the code itself reruns runs."""
     try:
-        return {"path": fdem, "sha256": _sha256_file(fdem)}
+        with open(fdem, "rb") as f:
+            data = f.read()
     except OSError:
         return {"path": fdem, "sha256": None}
+    try:
+        v = subprocess.run([fdem, "--version"], capture_output=True, text=True, timeout=30).stdout
+        m = re.search(r"\(build ([^)]+)\)", v)
+        if m:
+            bid = m.group(1).encode()
+            data = data.replace(bid, b"\0" * len(bid))
+    except (OSError, subprocess.SubprocessError):
+        pass
+    return {"path": fdem, "sha256": hashlib.sha256(data).hexdigest()}
 
 
 def fingerprint_changes(old: dict | None, new: dict) -> list:
