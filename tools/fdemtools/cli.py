@@ -48,6 +48,13 @@ def _curve(args):
     return c
 
 
+def _stamp(source: str) -> str:
+    """The figure stamp (figures.run_stamp) of a run folder; a CSV names nothing."""
+    from .common import is_run_folder, read_summary
+    from .figures import run_stamp
+    return run_stamp([read_summary(source)]) if is_run_folder(source) else ""
+
+
 def _ru(args):
     return (args.report_x_unit, LENGTH_UNITS[args.report_x_unit]), (args.report_y_unit, FORCE_UNITS[args.report_y_unit])
 
@@ -159,7 +166,7 @@ def cmd_eeep(args):
                        "envelope": per, "sign_y": sign, **common})
         files = [write_json(prefix + ".json", report)]
         if not args.no_plot:
-            files += eeep.plot_cyclic(signed_x, y, fits, prefix, c.label, (xu, fx), (yu, fy))
+            files += eeep.plot_cyclic(signed_x, y, fits, prefix, c.label, (xu, fx), (yu, fy), stamp=_stamp(args.source))
         print(f"{c.label}: cyclic record (the displacement reverses by {100 * report['reversal']:.0f} % of its "
               "largest value): EEEP of the envelope of each direction (ASTM E2126)")
         for name, r in per.items():
@@ -181,7 +188,7 @@ def cmd_eeep(args):
                    "sign_y": res["sign_y"] * sign, **common})
     files = [write_json(prefix + ".json", report)]
     if not args.no_plot:
-        files += eeep.plot(x, y, res, prefix, c.label, (xu, fx), (yu, fy))
+        files += eeep.plot(x, y, res, prefix, c.label, (xu, fx), (yu, fy), stamp=_stamp(args.source))
     print(_eeep_line(c.label, report, xu, yu))
     print(f"  curve: columns {c.x_name}, {c.y_name} ({c.columns_rule}); {stage_note}; load sign {sign:+g} "
           f"({sign_rule})"
@@ -283,7 +290,7 @@ def cmd_hysteresis(args):
                               "k_d, E_i, E_d and E_h"}
     files = [write_json(prefix + ".json", report), write_csv(prefix + ".csv", header, rows)]
     if not args.no_plot:
-        files += hysteresis.plot(c.x, c.y, res, prefix, c.label, (xu, fx), (yu, fy))
+        files += hysteresis.plot(c.x, c.y, res, prefix, c.label, (xu, fx), (yu, fy), stamp=_stamp(args.source))
     print(f"{c.label}: {res['n_cycles']} complete cycles"
           + (f" (+ {res['n_partial']} partial, not counted)" if res["n_partial"] else "")
           + f", k_el = {report['k_el']:.5g} {yu}/{xu}, E_total = {res['E_total']:.5g} J; load sign {sign:+g} "

@@ -282,11 +282,12 @@ def figure(curve_d, curve_p, res: dict, label: str, x_unit=("mm", 1e-3), y_unit=
     return fig, ax
 
 
-def plot(curve_d, curve_p, res: dict, prefix: str, label: str, x_unit=("mm", 1e-3), y_unit=("kN", 1e3)) -> list:
+def plot(curve_d, curve_p, res: dict, prefix: str, label: str, x_unit=("mm", 1e-3), y_unit=("kN", 1e3),
+         stamp: str = "") -> list:
     """The curve, its EEEP bilinear idealisation and the markers of yield, peak and ultimate points."""
     from .figures import save
     fig, _ = figure(curve_d, curve_p, res, label, x_unit, y_unit)
-    return save(fig, prefix)
+    return save(fig, prefix, stamp)
 
 
 def figure_cyclic(d, p, fits: dict, label: str, x_unit=("mm", 1e-3), y_unit=("kN", 1e3)):
@@ -313,7 +314,8 @@ def figure_cyclic(d, p, fits: dict, label: str, x_unit=("mm", 1e-3), y_unit=("kN
     return fig, ax
 
 
-def plot_cyclic(d, p, fits: dict, prefix: str, label: str, x_unit=("mm", 1e-3), y_unit=("kN", 1e3)) -> list:
+def plot_cyclic(d, p, fits: dict, prefix: str, label: str, x_unit=("mm", 1e-3), y_unit=("kN", 1e3),
+         stamp: str = "") -> list:
     from .figures import save
     fig, _ = figure_cyclic(d, p, fits, label, x_unit, y_unit)
-    return save(fig, prefix)
+    return save(fig, prefix, stamp)

@@ -154,7 +154,8 @@ def analyse(d, p, k_el: float | None = None, e_h: float | None = None, deadband:
     }
 
 
-def plot(d, p, res: dict, prefix: str, label: str, x_unit=("mm", 1e-3), y_unit=("kN", 1e3)) -> list:
+def plot(d, p, res: dict, prefix: str, label: str, x_unit=("mm", 1e-3), y_unit=("kN", 1e3),
+         stamp: str = "") -> list:
     from .figures import new_figure, save
     sx, sy = 1.0 / x_unit[1], 1.0 / y_unit[1]
     fig, axs = new_figure(1, 2, figsize=(11, 4.4))
@@ -182,4 +183,4 @@ def plot(d, p, res: dict, prefix: str, label: str, x_unit=("mm", 1e-3), y_unit=(
     ax.set_title(f"$k_{{el}}$ = {res['k_el'] * sy / sx:.4g} {y_unit[0]}/{x_unit[0]}, $E_h$ = {res['E_h']:.4g} J",
                  fontsize=9)
     ax.legend(fontsize=8)
-    return save(fig, prefix)
+    return save(fig, prefix, stamp)

@@ -48,6 +48,8 @@ def test_plot_of_a_real_run_names_its_build_and_case_hash(tmp_path, cli):
     assert runs["a"]["case_hash"] != runs["b"]["case_hash"]  # a --set changes the resolved case
     rc, out, err = cli("plot", str(tmp_path / "a"), "--figures", "curves,energy")
     assert rc == 0, err
-    for name in ("curves", "energy"):
+    rc, out, err = cli("eeep", str(tmp_path / "a"))
+    assert rc == 0, err
+    for name in ("curves", "energy", "eeep"):
         src = Image.open(tmp_path / "a" / "post" / f"{name}.png").info.get("Source", "")
         assert runs["a"]["case_hash"] in src and runs["a"]["build"] in src, src
