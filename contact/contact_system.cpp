@@ -310,12 +310,6 @@ double ContactSystem::stable_dt(const double* x, const double* node_mass) const 
     return dt;
 }
 
-void ContactSystem::required_mass(const double* x, double dt, double* need) const {
-    const std::vector<double> k = node_stiffness(x);
-    const double q = 0.25 * dt * dt;  // 2 sqrt(m / k) >= dt  <=>  m >= k dt^2 / 4
-    for (int v = 0; v < n_nodes_; ++v) need[v] = std::max(need[v], k[v] * q);
-}
-
 double ContactSystem::effective_buffer(const double* x) const {
     if (buffer_ > 0.0) return buffer_;
     if (opt_.buffer > 0.0) return opt_.buffer;

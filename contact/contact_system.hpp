@@ -86,10 +86,6 @@ public:
     // become capable), (stiffest normal or tangential slope of the laws the triangle's material can meet, Pa/m) *
     // t * (edge length). x: positions (m) for the element sizes.
     double stable_dt(const double* x, const double* node_mass) const;
-    // The same bound solved for the mass (per-node mass scaling, [numerics] mass_scaling = "per_node"): every node
-    // of a triangle that can touch needs m >= k dt^2 / 4 for its springs to be stable at step dt; need[node] (kg) is
-    // raised to that, never lowered.
-    void required_mass(const double* x, double dt, double* need) const;
     // k of stable_dt per node (N/m): over the edges at the node that are or may become faces, the stiffest slope
     // the triangle's material can meet times t times the edge's length (the engine adds it to the triangles' and
     // joints' row sums for the step of the assembled system). held (optional): per triangle, bit e set when its edge e

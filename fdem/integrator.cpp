@@ -76,6 +76,8 @@ void Simulation::scale_node_masses() {
     // and the sum bounded by Weyl's inequality, which asked more mass wherever the springs dominate.)
     const double dt = triangle_step_limit(spec_, model_).dt;
     const int* rep = ties_ ? tie_rep_.data() : nullptr;
+    // The shares of nodal_step_limit, the triangles' summed per triangle into the groups (nodal_step_limit sums its
+    // per-node cache instead: the same values up to rounding, and each order is the one the committed results hold).
     std::vector<double> kt(nn, 0.0), kj(nn, 0.0), kc(nn, 0.0);
     add_triangle_node_stiffness(spec_, model_, rep, kt.data());
     inter_.add_node_stiffness(model_, contact_xi_max(), rep, kj.data(), kc.data());

@@ -228,14 +228,6 @@ double Interactions::stable_dt(const Model& model, double xi_contact, const doub
     return dt;
 }
 
-void Interactions::required_mass(const Model& model, double xi_contact, double dt, const int* rep, double* need) const {
-    if (joints_) joints_->required_mass(dt, rep, need);
-    if (contact_) {
-        const double damped = xi_contact > 0 ? std::sqrt(1 + xi_contact * xi_contact) - xi_contact : 1.0;
-        contact_->required_mass(model.X.data(), dt / damped, need);
-    }
-}
-
 void Interactions::add_node_stiffness(const Model& model, double xi_contact, const int* rep, double* k_joint,
                                       double* k_contact) const {
     if (joints_) {

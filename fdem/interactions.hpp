@@ -30,9 +30,6 @@ public:
     // mass, rep (optional): the nodal masses to use instead of the model's, and a representative per node for nodes
     // that move as one (tied copies: mass holds the group's mass; fracture/cohesive_system.hpp).
     double stable_dt(const Model& model, double xi_contact = 0.0, const double* mass = nullptr, const int* rep = nullptr) const;
-    // stable_dt solved for the masses (per-node mass scaling): need[k] (kg) is raised to the least mass node k (for
-    // joints with rep: its representative) needs for the joint and contact springs to be stable at step dt.
-    void required_mass(const Model& model, double xi_contact, double dt, const int* rep, double* need) const;
     // The springs' share of the assembled system's nodal bound: adds to k_joint and k_contact (per node, or per
     // representative with rep) the Gershgorin row sums of the intact joints and of the contact springs (N/m), the
     // contact's divided by (sqrt(1 + xi^2) - xi)^2 for its dashpots at xi_contact of critical.

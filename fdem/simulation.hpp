@@ -171,7 +171,6 @@ private:
     double rotation_deg(const std::vector<int>& nodes, double lag) const;  // deg, positions x - lag v
 
     void compute_dt();
-    static bool until_holds(double value, double m);  // stages.cpp
     NodalLimit nodal_step_limit(const double* mass, const int* rep, double xi_contact);  // (see NodalLimit)
     // Extrinsic insertion (fracture/cohesive_system.hpp): the copies joined by dormant cohesive elements move as one
     // node. build_ties groups them (union-find over the dormant elements' node pairs; groups in order of their first

@@ -27,6 +27,17 @@
 
 namespace fdem {
 
+namespace {
+
+// Whether a stage's until condition holds already: the monitor (a quantity measured from its reference, zero at the
+// start of the run) at or beyond the target as seen from zero, m / value >= 1 (for value 0: m = 0). Past it, the
+// direction rule of stage_finished (towards the target from the start value) would wait for the monitor to come back.
+bool until_holds(double value, double m) {
+    return value == 0 ? m == 0 : m / value >= 1;
+}
+
+}  // namespace
+
 using namespace sim_detail;
 
 double Simulation::protocol_displacement(const ActiveSupport& s, double tau) const {
@@ -370,13 +381,6 @@ void Simulation::update_servos() {
         s.servo_r_max = std::max(s.servo_r_max, s.servo_rbar);
         s.servo_f_min = std::min(s.servo_f_min, s.servo_factor);
     }
-}
-
-// Whether a stage's until condition holds already: the monitor (a quantity measured from its reference, zero at the
-// start of the run) at or beyond the target as seen from zero, m / value >= 1 (for value 0: m = 0). Past it, the
-// direction rule of stage_finished (towards the target from the start value) would wait for the monitor to come back.
-bool Simulation::until_holds(double value, double m) {
-    return value == 0 ? m == 0 : m / value >= 1;
 }
 
 bool Simulation::stage_finished() {

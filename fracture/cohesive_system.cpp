@@ -228,12 +228,6 @@ double CohesiveSystem::stable_dt(const double* node_mass, const int* rep) const 
   return dt;
 }
 
-void CohesiveSystem::required_mass(double dt, const int* rep, double* need) const {
-  const std::vector<double> k_node = node_stiffness(rep);
-  const double q = 0.25 * dt * dt;  // 2 sqrt(m / k) >= dt  <=>  m >= k dt^2 / 4
-  for (int v = 0; v < num_nodes_; ++v) need[v] = std::max(need[v], k_node[v] * q);
-}
-
 void CohesiveSystem::add_forces(const double* x, double* f) {
   const int na = int(active_.size());
   const int rows = int(gather_node_.size());

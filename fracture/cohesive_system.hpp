@@ -120,9 +120,6 @@ class CohesiveSystem {
   // rep (optional): a representative per node for nodes that move as one (the engine's tied copies; node_mass then
   // holds the group's mass): the stiffnesses are summed per representative. Dormant elements do not act.
   double stable_dt(const double* node_mass, const int* rep = nullptr) const;
-  // The same bound solved for the mass (per-node mass scaling): need[v] (kg, v a node or, with rep, a
-  // representative) is raised to k dt^2 / 4 where that is larger, so its joint springs are stable at step dt.
-  void required_mass(double dt, const int* rep, double* need) const;
   // k of stable_dt per node (or representative, with rep): the Gershgorin row sums of its intact elements, N/m
   // (the engine adds them to the triangles' and contact springs' for the step of the assembled system).
   std::vector<double> node_stiffness(const int* rep) const;

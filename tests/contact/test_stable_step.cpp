@@ -62,6 +62,16 @@ const char* kBlockGeo =
     "MeshSize{ PointsOf{ Surface{1}; } } = 0.1;\nMeshSize{ PointsOf{ Surface{2}; } } = 0.05;\n"
     "Physical Surface(\"base\") = {1};\nPhysical Surface(\"units\") = {2};\n";
 
+// The quiet one-thread Simulation of a case file (its scene built with topology, as `fdem run` does).
+fdem::Simulation simulation_of(const std::string& path) {
+    fdem::CaseSpec spec = fdem::load_case(path, {});
+    fdem::Model model = fdem::build_scene(spec);
+    fdem::RunOptions opt;
+    opt.quiet = true;
+    opt.threads = 1;
+    return fdem::Simulation(spec, std::move(model), opt);
+}
+
 struct Outcome {
     double dt = 0, dt_separate = 0;  // s: the step, and the old rule's (0.8 x the smaller separate limit)
     double balance = 0;              // largest |balance error| over the undamped steps
@@ -81,12 +91,7 @@ Outcome run_scene(const std::string& scene, double E, double kn) {
         text = wall_case("wall", 3, 3, "running", E, kn);
     }
     const std::string path = testing::write_text(dir / "case.toml", text);
-    fdem::CaseSpec spec = fdem::load_case(path, {});
-    fdem::Model model = fdem::build_scene(spec);
-    fdem::RunOptions opt;
-    opt.quiet = true;
-    opt.threads = 1;
-    fdem::Simulation sim(spec, std::move(model), opt);
+    fdem::Simulation sim = simulation_of(path);
     Outcome o;
     o.dt = sim.dt();
     o.dt_separate = 0.8 * std::min(fdem::triangle_step_limit(sim.spec(), sim.model()).dt, sim.interactions().stable_dt(sim.model()));
@@ -148,12 +153,7 @@ TEST_CASE("time step: where triangles and contact springs have alike limits, the
     // The 10-block stack of the header at E 1e11 Pa, k_n 3e12 Pa/m: separate limits within 1 % of each other.
     const auto dir = testing::tmp_dir("stable_step_alike");
     const std::string path = testing::write_text(dir / "case.toml", wall_case("stack10", 10, 1, "stack", 1e11, 3e12));
-    fdem::CaseSpec spec = fdem::load_case(path, {});
-    fdem::Model model = fdem::build_scene(spec);
-    fdem::RunOptions opt;
-    opt.quiet = true;
-    opt.threads = 1;
-    fdem::Simulation sim(spec, std::move(model), opt);
+    fdem::Simulation sim = simulation_of(path);
     const double dt_t = fdem::triangle_step_limit(sim.spec(), sim.model()).dt;
     const double dt_s = sim.interactions().stable_dt(sim.model());
     const auto& L = sim.nodal_limit();
@@ -176,12 +176,7 @@ TEST_CASE("time step: the faces of intact cohesive elements join the contact cou
     // inside the body), so the start step is above the one that counts every inner edge as a contact face (the rule
     // before 28 Nov); once elements break, the step is checked again and shrinks (measured: 3 broken, from 2.08e-6 to
     // 1.66e-6 s).
-    fdem::CaseSpec spec = fdem::load_case(std::string(FDEM_CASES_DIR) + "/lourenco2005/stone_tension_50mm.toml", {});
-    fdem::Model model = fdem::build_scene(spec);
-    fdem::RunOptions opt;
-    opt.quiet = true;
-    opt.threads = 1;
-    fdem::Simulation sim(spec, std::move(model), opt);
+    fdem::Simulation sim = simulation_of(std::string(FDEM_CASES_DIR) + "/lourenco2005/stone_tension_50mm.toml");
     REQUIRE(sim.interactions().has_joints());
     const double dt0 = sim.dt();
     const double dt_all_faces = 0.8 * sim.interactions().stable_dt(sim.model());  // every inner edge a contact face
