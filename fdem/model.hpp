@@ -71,8 +71,10 @@ StepLimit triangle_step_limit(const CaseSpec& spec, const Model& model);
 // The triangles' share of the assembled system's nodal bound (README.md 'Time step'): adds to k[node] (or to
 // k[rep[node]] when rep is given: tied copies that move as one) sum over the node's triangles of omega_e^2 m_e / 3
 // (N/m), omega_e the triangle's highest frequency (damped: divided by sqrt(1 + xi^2) - xi) and m_e / 3 its lumped
-// share at mass_scale. With u^T K_e u <= omega_e^2 u^T M_e u per triangle, u^T K u <= sum_i k_i u_i^2 for the triangles,
-// so the node's k / m bounds omega^2 together with the springs' Gershgorin row sums.
+// share at mass_scale. With u^T K_e u <= omega_e^2 u^T M_e u per triangle (the element eigenvalue inequality behind
+// the element step bound, Belytschko, Liu & Moran, Nonlinear Finite Elements for Continua and Structures, 2000, §6.3),
+// u^T K u <= sum_i k_i u_i^2 for the triangles, so the node's k / m bounds omega^2 (Rayleigh quotient) together with
+// the springs' Gershgorin row sums.
 void add_triangle_node_stiffness(const CaseSpec& spec, const Model& model, const int* rep, double* k);
 
 // omega_e^2 (1/s^2) of triangle n (node indices into the coordinates p) of material m at the given mass scaling.
