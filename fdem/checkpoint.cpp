@@ -136,7 +136,7 @@ void Simulation::save_state(StateWriter& w) const {
 #if defined(__x86_64__) && defined(__GLIBCXX__)
     // (not saved: the energy audit's sums, a diagnostic of one process; after a restart it starts over; the node
     // loop's speeds block_v2_ and v2max_, which load_state marks unknown)
-    static_assert(sizeof(Simulation) == 5152, "Simulation changed: update save_state/load_state (fdem/checkpoint.cpp) and this size");
+    static_assert(sizeof(Simulation) == 5160, "Simulation changed: update save_state/load_state (fdem/checkpoint.cpp) and this size");
     static_assert(sizeof(ActiveSupport) == 376, "ActiveSupport changed: update save_state/load_state and this size");
     static_assert(sizeof(ActiveLoad) == 296, "ActiveLoad changed: update save_state/load_state and this size");
 #endif
@@ -278,6 +278,7 @@ void Simulation::load_state(StateReader& r) {
 
     r.section("damping");
     r.pod(alpha_), r.pod(tau_ld_), r.vec(v_ref_), r.pod(beta_mass_), r.pod(xi_contact_);
+    set_step_limits(alpha_, false);  // the current stage's limits (a later insertion compares against them)
     if (!v_ref_.empty() && v_ref_.size() != nd) throw StateError("velocity filter of another mesh");
     if (tau_ld_ > 0 && v_ref_.size() != nd) throw StateError("velocity filter missing");
     inter_.set_contact_dashpot(std::isfinite(dt_contact_) ? xi_contact_ * dt_contact_ : 0.0);  // the contact state holds it too

@@ -80,7 +80,7 @@ void Simulation::scale_node_masses() {
     // per-node cache instead: the same values up to rounding, and each order is the one the committed results hold).
     std::vector<double> kt(nn, 0.0), kj(nn, 0.0), kc(nn, 0.0);
     add_triangle_node_stiffness(spec_, model_, rep, kt.data());
-    inter_.add_node_stiffness(model_, contact_xi_max(), rep, kj.data(), kc.data());
+    inter_.add_node_stiffness(model_, contact_xi_max(), 0.0, rep, kj.data(), kc.data());
     // m >= k dt^2 / 4, with a relative margin of 1e-12 so that rounding leaves the nodal bound at or above dt_t.
     const double q = 0.25 * dt * dt * (1 + 1e-12);
     std::vector<double> need(nn, 0.0);
@@ -115,15 +115,16 @@ void Simulation::scale_node_masses() {
     if (raised > 0) build_ties();  // the groups' masses and the copies' shares
 }
 
-Simulation::NodalLimit Simulation::nodal_step_limit(const double* mass, const int* rep, double xi_contact) {
+Simulation::NodalLimit Simulation::nodal_step_limit(const double* mass, const int* rep, double xi_contact, double alpha) {
     const int nn = model_.n_nodes();
-    if (tri_node_k_.size() != static_cast<std::size_t>(nn)) {
+    if (tri_node_k_.size() != static_cast<std::size_t>(nn) || tri_node_k_alpha_ != alpha) {
         tri_node_k_.assign(nn, 0.0);
-        add_triangle_node_stiffness(spec_, model_, nullptr, tri_node_k_.data());
+        add_triangle_node_stiffness(spec_, model_, nullptr, tri_node_k_.data(), alpha);
+        tri_node_k_alpha_ = alpha;
     }
     std::vector<double> kt(nn, 0.0), kj(nn, 0.0), kc(nn, 0.0);
     for (int k = 0; k < nn; ++k) kt[rep ? rep[k] : k] += tri_node_k_[k];
-    inter_.add_node_stiffness(model_, xi_contact, rep, kj.data(), kc.data());
+    inter_.add_node_stiffness(model_, xi_contact, alpha, rep, kj.data(), kc.data());
     NodalLimit lim;
     double w2max = 0;  // 1/s^2
     for (int k = 0; k < nn; ++k) {
@@ -135,8 +136,31 @@ Simulation::NodalLimit Simulation::nodal_step_limit(const double* mass, const in
     return lim;
 }
 
+double Simulation::stage_alpha(int s) const {
+    double alpha = 0;  // a stage without local_damping keeps the one before it
+    for (int i = 0; i <= s && i < static_cast<int>(spec_.stages.size()); ++i)
+        if (spec_.stages[i].local_damping) alpha = *spec_.stages[i].local_damping;
+    return alpha;
+}
+
+void Simulation::set_step_limits(double alpha, bool set_dt) {
+    const StepLimit lim = triangle_step_limit(spec_, model_, alpha);
+    const double* mass = eff_mass_.empty() ? nullptr : eff_mass_.data();
+    const int* rep = tie_rep_.empty() ? nullptr : tie_rep_.data();
+    dt_triangles_ = lim.dt;
+    dt_nodal_ = nodal_step_limit(mass ? mass : model_.mass.data(), rep, xi_max_, alpha);
+    if (!set_dt) return;
+    dt_limit_ = lim.dt;
+    dt_element_ = lim.element;
+    if (dt_nodal_.dt < dt_limit_) dt_limit_ = dt_nodal_.dt, dt_element_ = -1;
+    dt_ = spec_.dt_override ? *spec_.dt_override : spec_.safety * dt_limit_;
+}
+
 void Simulation::compute_dt() {
-    const StepLimit lim = triangle_step_limit(spec_, model_);
+    // The first stage's local damping alpha: each stage that changes it sets the step again (begin_stage), as the
+    // damped limit depends on it (damped_step_factor, fdem/model.hpp).
+    const double alpha = stage_alpha(0);
+    const StepLimit lim = triangle_step_limit(spec_, model_, alpha);
     dt_limit_ = dt_triangles_ = lim.dt;
     dt_element_ = lim.element;
     const double xi_max = contact_xi_max();
@@ -149,11 +173,11 @@ void Simulation::compute_dt() {
     // unties. (From the groups' masses beta grew 1.45-fold on the default wall and a roughened wall's dashpots then
     // booked ten times the work they did: the balance was off by 33 %.)
     dt_contact_ = inter_.contact_stable_dt(model_);
-    dt_springs_ = inter_.stable_dt(model_, xi_max, mass, rep);
+    dt_springs_ = inter_.stable_dt(model_, xi_max, mass, rep, alpha);
     // The assembled bound: triangles and springs at each node together. The springs' own limit dt_springs_ (logged)
     // ignores the triangles at the same nodes and counts the faces of intact joints, which cannot touch yet; it was
     // taken alone until 28 Nov.
-    dt_nodal_ = nodal_step_limit(mass ? mass : model_.mass.data(), rep, xi_max);
+    dt_nodal_ = nodal_step_limit(mass ? mass : model_.mass.data(), rep, xi_max, alpha);
     if (dt_nodal_.dt < dt_limit_) dt_limit_ = dt_nodal_.dt, dt_element_ = -1;
     dt_ = spec_.dt_override ? *spec_.dt_override : spec_.safety * dt_limit_;
 }
@@ -278,7 +302,7 @@ void Simulation::reduce_dt_after_insertion() {
     const int* rep = tie_rep_.empty() ? nullptr : tie_rep_.data();
     // The contact dashpots keep their coefficient beta = xi dt_contact_ of the copies' masses (compute_dt): at most
     // xi of critical on any node, so xi bounds the damped step.
-    const double springs = nodal_step_limit(mass ? mass : model_.mass.data(), rep, xi_max_).dt;
+    const double springs = nodal_step_limit(mass ? mass : model_.mass.data(), rep, xi_max_, alpha_).dt;
     const double dt = spec_.safety * std::min(dt_triangles_, springs);
     if (!(dt < dt_)) return;
     dt_ = dt;

@@ -218,24 +218,25 @@ Interactions::Interactions(const CaseSpec& spec, const Model& model) {
         }
 }
 
-double Interactions::stable_dt(const Model& model, double xi_contact, const double* mass, const int* rep) const {
+double Interactions::stable_dt(const Model& model, double xi_contact, const double* mass, const int* rep, double alpha) const {
     double dt = std::numeric_limits<double>::infinity();
-    if (joints_) dt = std::min(dt, joints_->stable_dt(mass ? mass : model.mass.data(), rep));
+    if (joints_) dt = std::min(dt, joints_->stable_dt(mass ? mass : model.mass.data(), rep) * damped_step_factor(0.0, alpha));
     if (contact_) {
-        const double damped = xi_contact > 0 ? std::sqrt(1 + xi_contact * xi_contact) - xi_contact : 1.0;
+        const double damped = damped_step_factor(xi_contact, alpha);
         dt = std::min(dt, contact_stable_dt(model, mass) * damped);
     }
     return dt;
 }
 
-void Interactions::add_node_stiffness(const Model& model, double xi_contact, const int* rep, double* k_joint,
+void Interactions::add_node_stiffness(const Model& model, double xi_contact, double alpha, const int* rep, double* k_joint,
                                       double* k_contact) const {
     if (joints_) {
+        // (1 + alpha = 1 / damped_step_factor(0, alpha)^2: the joints' springs have no dashpots)
         const std::vector<double> k = joints_->node_stiffness(rep);
-        for (std::size_t v = 0; v < k.size(); ++v) k_joint[v] += k[v];
+        for (std::size_t v = 0; v < k.size(); ++v) k_joint[v] += k[v] * (1.0 + alpha);
     }
     if (contact_) {
-        const double damped = xi_contact > 0 ? std::sqrt(1 + xi_contact * xi_contact) - xi_contact : 1.0;
+        const double damped = damped_step_factor(xi_contact, alpha);
         // The faces of intact intrinsic cohesive elements cannot touch until the element breaks (its two triangles are
         // an excluded pair, and the edge is inside the body): not counted; the engine checks the step again when
         // elements break (reduce_dt_after_insertion).

@@ -24,16 +24,20 @@ public:
     bool has_joints() const { return joints_ != nullptr; }
 
     // Stable step bound of joint and contact springs (s); +inf when there are none. With contact dashpots at a
-    // fraction xi_contact of critical on the stiffest contact spring, the contact bound is multiplied by the damped
-    // central-difference factor sqrt(1 + xi^2) - xi (dt <= (2 / omega)(sqrt(1 + xi^2) - xi), Belytschko, Liu & Moran,
-    // Nonlinear Finite Elements for Continua and Structures, 2000, §6.3).
+    // fraction xi_contact of critical on the stiffest contact spring and local damping alpha, the contact bound is
+    // multiplied by the damped central-difference factor damped_step_factor(xi, alpha) (fdem/model.hpp; at alpha = 0
+    // dt <= (2 / omega)(sqrt(1 + xi^2) - xi), Belytschko, Liu & Moran, Nonlinear Finite Elements for Continua and
+    // Structures, 2000, §6.3), the joints' by damped_step_factor(0, alpha).
     // mass, rep (optional): the nodal masses to use instead of the model's, and a representative per node for nodes
     // that move as one (tied copies: mass holds the group's mass; fracture/cohesive_system.hpp).
-    double stable_dt(const Model& model, double xi_contact = 0.0, const double* mass = nullptr, const int* rep = nullptr) const;
+    double stable_dt(const Model& model, double xi_contact = 0.0, const double* mass = nullptr, const int* rep = nullptr,
+                     double alpha = 0.0) const;
     // The springs' share of the assembled system's nodal bound: adds to k_joint and k_contact (per node, or per
-    // representative with rep) the Gershgorin row sums of the intact joints and of the contact springs (N/m), the
-    // contact's divided by (sqrt(1 + xi^2) - xi)^2 for its dashpots at xi_contact of critical.
-    void add_node_stiffness(const Model& model, double xi_contact, const int* rep, double* k_joint, double* k_contact) const;
+    // representative with rep) the Gershgorin row sums of the intact joints and of the contact springs (N/m), each
+    // divided by damped_step_factor(xi, alpha)^2: xi_contact of critical for the contact's dashpots, 0 for the
+    // joints', alpha the local damping.
+    void add_node_stiffness(const Model& model, double xi_contact, double alpha, const int* rep, double* k_joint,
+                            double* k_contact) const;
     // Undamped stable step of the contact springs alone (s), +inf without contact: beta = xi * this.
     double contact_stable_dt(const Model& model, const double* mass = nullptr) const;
     void set_contact_dashpot(double beta_s) {

@@ -209,11 +209,10 @@ double triangle_omega2(const double* p, const int* n, const Material& m, Plane p
     return 3.0 * lmax / (m.density * mass_scale);
 }
 
-void add_triangle_node_stiffness(const CaseSpec& spec, const Model& model, const int* rep, double* k) {
+void add_triangle_node_stiffness(const CaseSpec& spec, const Model& model, const int* rep, double* k, double alpha) {
     for (int e = 0; e < model.n_triangles(); ++e) {
         const Material& m = spec.materials[model.tri_material[e]];
-        const double xi = m.viscous_damping;
-        const double f = std::sqrt(1 + xi * xi) - xi;
+        const double f = damped_step_factor(m.viscous_damping, alpha);
         const double w2 = triangle_omega2(model.X.data(), model.tris[e].n, m, spec.plane, spec.mass_scale) / (f * f);
         const double m3 = m.density * spec.mass_scale * model.tris[e].A0t / 3.0;  // kg
         for (int j = 0; j < 3; ++j) {
@@ -223,16 +222,16 @@ void add_triangle_node_stiffness(const CaseSpec& spec, const Model& model, const
     }
 }
 
-StepLimit triangle_step_limit(const CaseSpec& spec, const Model& model) {
+StepLimit triangle_step_limit(const CaseSpec& spec, const Model& model, double alpha) {
     StepLimit lim;
     lim.dt = 1e300;
-    // Damped central difference: dt <= (2 / omega) (sqrt(1 + xi^2) - xi). With lumped masses the assembled model's
-    // highest frequency is at most the highest element frequency, so the minimum over the triangles is a safe limit.
+    // Damped central difference: dt <= (2 / omega) damped_step_factor(xi, alpha). With lumped masses the assembled
+    // model's highest frequency is at most the highest element frequency, so the minimum over the triangles is a safe
+    // limit.
     for (int e = 0; e < model.n_triangles(); ++e) {
         const Material& m = spec.materials[model.tri_material[e]];
-        const double xi = m.viscous_damping;
         const double w2 = triangle_omega2(model.X.data(), model.tris[e].n, m, spec.plane, spec.mass_scale);
-        const double dt = 2.0 / std::sqrt(w2) * (std::sqrt(1 + xi * xi) - xi);
+        const double dt = 2.0 / std::sqrt(w2) * damped_step_factor(m.viscous_damping, alpha);
         if (dt < lim.dt) lim.dt = dt, lim.element = e;
     }
     return lim;

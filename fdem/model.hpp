@@ -9,6 +9,7 @@
 //   Cold data (names, groups, regions) stays in `mesh`.
 #pragma once
 
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -60,22 +61,32 @@ Model build_model(const CaseSpec& spec, mesh::Mesh mesh);
 Model build_model(const CaseSpec& spec, mesh::Topology topo);
 
 // Stable time step of the triangles alone: min over triangles of 2 / omega_e, omega_e the exact highest frequency of the
-// lumped-mass constant-strain triangle (triangle_omega2), reduced for viscous damping by (sqrt(1 + xi^2) - xi) ([M04]
-// ch. 4). Returns the limit (s) and the triangle that sets it.
+// lumped-mass constant-strain triangle (triangle_omega2), reduced for viscous damping and local damping alpha by
+// damped_step_factor(xi, alpha) ([M04] ch. 4). Returns the limit (s) and the triangle that sets it.
+// The damped factor of the central-difference step: dt <= (2 / omega) damped_step_factor(xi, alpha) for a mode of
+// frequency omega with viscous damping at a fraction xi of critical, its force lagged half a step as the engine
+// evaluates it, under local damping alpha ([C79]: -alpha |f| sign(v)). In the highest (alternating) mode,
+// x^n = (-1)^n a, the lagged viscous force -c v^{n-1/2} has the sign of the elastic force -k x^n, both oppose
+// v^{n-1/2}, and the local damping force then adds alpha |f| to them: v^{n+1/2} = v^{n-1/2} + (1 + alpha) f dt / m,
+// stable while (1 + alpha)(omega^2 dt^2 + 4 xi omega dt) <= 4, that is omega dt <= 2 (sqrt(xi^2 + 1 / (1 + alpha)) -
+// xi). alpha = 0 gives the damped limit sqrt(1 + xi^2) - xi (Belytschko, Liu & Moran 2000, §6.3); xi = 0 gives
+// 1 / sqrt(1 + alpha) (0.745 at alpha = 0.8: at the default safety 0.8 the undamped mode at the bound would grow).
+inline double damped_step_factor(double xi, double alpha) { return std::sqrt(xi * xi + 1.0 / (1.0 + alpha)) - xi; }
+
 struct StepLimit {
     double dt = 0;  // s
     int element = -1;
 };
-StepLimit triangle_step_limit(const CaseSpec& spec, const Model& model);
+StepLimit triangle_step_limit(const CaseSpec& spec, const Model& model, double alpha = 0.0);
 
 // The triangles' share of the assembled system's nodal bound (README.md 'Time step'): adds to k[node] (or to
 // k[rep[node]] when rep is given: tied copies that move as one) sum over the node's triangles of omega_e^2 m_e / 3
-// (N/m), omega_e the triangle's highest frequency (damped: divided by sqrt(1 + xi^2) - xi) and m_e / 3 its lumped
+// (N/m), omega_e the triangle's highest frequency (damped: divided by damped_step_factor(xi, alpha)) and m_e / 3 its lumped
 // share at mass_scale. With u^T K_e u <= omega_e^2 u^T M_e u per triangle (the element eigenvalue inequality behind
 // the element step bound, Belytschko, Liu & Moran, Nonlinear Finite Elements for Continua and Structures, 2000, §6.3),
 // u^T K u <= sum_i k_i u_i^2 for the triangles, so the node's k / m bounds omega^2 (Rayleigh quotient) together with
 // the springs' Gershgorin row sums.
-void add_triangle_node_stiffness(const CaseSpec& spec, const Model& model, const int* rep, double* k);
+void add_triangle_node_stiffness(const CaseSpec& spec, const Model& model, const int* rep, double* k, double alpha = 0.0);
 
 // omega_e^2 (1/s^2) of triangle n (node indices into the coordinates p) of material m at the given mass scaling.
 double triangle_omega2(const double* p, const int* n, const Material& m, Plane plane, double mass_scale);

@@ -162,7 +162,7 @@ void Simulation::run() {
              pct(L.k_contact) + " of its stiffness";
     }
     log("time step: " + sci(dt_) + " s = " + (spec_.dt_override ? std::string("fixed by numerics.dt") : sci(spec_.safety) + " x stable limit") +
-        " " + sci(dt_limit_) + " s (set by " + by + ")" +
+        " " + sci(dt_limit_) + " s (set by " + by + ((resumed_ ? alpha_ : stage_alpha(0)) > 0 ? ", at local damping " + sci(resumed_ ? alpha_ : stage_alpha(0)) : std::string()) + ")" +
         (std::isfinite(dt_springs_) ? "; joint/contact springs alone " + sci(dt_springs_) + " s" : std::string()));
     if (!model_.has_topology && model_.mesh.n_bodies() > 1)
         log("no interface or fracture rules: the " + std::to_string(model_.mesh.n_bodies()) + " bodies of the mesh are tied into one continuum");

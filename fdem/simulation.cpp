@@ -85,12 +85,22 @@ Simulation::Simulation(CaseSpec spec, Model model, RunOptions options)
                          " s: expected a finite step > 0 (check materials.*.E and density, case.thickness, numerics.mass_scale and numerics.dt)");
     // A fixed step (numerics.dt) beyond the stable limit of this mesh would blow up the run after some steps: refused
     // here, so that `fdem check` says it (issue 51: a mesh study of a case with a fixed step at finer sizes).
-    if (spec_.dt_override && *spec_.dt_override > dt_limit_)
-        throw InputError(spec_.file + ": key 'numerics.dt': a fixed time step of " + sci(*spec_.dt_override) +
-                         " s exceeds the stable limit of this mesh, " + sci(dt_limit_) + " s (triangles " +
-                         sci(dt_triangles_) + " s, joint and contact springs " + sci(dt_springs_) +
-                         " s): expected at most " + sci(dt_limit_) + " s, or no numerics.dt (the automatic step, "
-                         "numerics.safety x the limit, follows the mesh)");
+    // The limit is that of the stage with the most local damping (the lowest).
+    if (spec_.dt_override) {
+        double alpha_max = 0;
+        for (int s = 0; s < static_cast<int>(spec_.stages.size()); ++s) alpha_max = std::max(alpha_max, stage_alpha(s));
+        set_step_limits(alpha_max, false);
+        const double limit = std::min(dt_triangles_, dt_nodal_.dt);
+        const double tri = dt_triangles_, springs = dt_nodal_.dt;
+        set_step_limits(stage_alpha(0), false);
+        if (*spec_.dt_override > limit)
+            throw InputError(spec_.file + ": key 'numerics.dt': a fixed time step of " + sci(*spec_.dt_override) +
+                             " s exceeds the stable limit of this mesh, " + sci(limit) + " s (triangles " + sci(tri) +
+                             " s, nodes with their joint and contact springs " + sci(springs) + " s" +
+                             (alpha_max > 0 ? ", at local damping " + sci(alpha_max) : std::string()) +
+                             "): expected at most " + sci(limit) + " s, or no numerics.dt (the automatic step, "
+                             "numerics.safety x the limit, follows the mesh)");
+    }
     wall_start_ = wall_clock();
     cpu_start_ = cpu_clock();
     last_checkpoint_wall_ = wall_start_;

@@ -171,7 +171,11 @@ private:
     double rotation_deg(const std::vector<int>& nodes, double lag) const;  // deg, positions x - lag v
 
     void compute_dt();
-    NodalLimit nodal_step_limit(const double* mass, const int* rep, double xi_contact);  // (see NodalLimit)
+    // The triangles' and the nodal limits at local damping alpha (dt_triangles_, dt_nodal_); with set_dt also
+    // dt_limit_ and the step (begin_stage, when a stage changes the local damping).
+    void set_step_limits(double alpha, bool set_dt);
+    double stage_alpha(int s) const;  // the local damping in force in stage s (a stage without the key keeps it)
+    NodalLimit nodal_step_limit(const double* mass, const int* rep, double xi_contact, double alpha);  // (see NodalLimit)
     // Extrinsic insertion (fracture/cohesive_system.hpp): the copies joined by dormant cohesive elements move as one
     // node. build_ties groups them (union-find over the dormant elements' node pairs; groups in order of their first
     // node, members ascending); check_ties refuses a support that holds only some copies of a group.
@@ -270,6 +274,7 @@ private:
     double dt_triangles_ = 0;                // s, the triangles' stable limit (does not change with the ties)
     NodalLimit dt_nodal_;                    // the assembled bound at the start (for the log)
     std::vector<double> tri_node_k_;         // N/m, per node: the triangles' share of the nodal bound (set-up, not saved)
+    double tri_node_k_alpha_ = 0;            // the local damping tri_node_k_ was folded with
     double xi_max_ = 0;                      // largest contact dashpot fraction of any stage
     int mass_raised_nodes_ = 0;              // per-node mass scaling: nodes made heavier, and the total inertial
     double mass_raised_ratio_ = 1;           // mass after it over the total before

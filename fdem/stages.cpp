@@ -105,7 +105,20 @@ void Simulation::begin_stage(int s) {
     stage_ramp_end_ = time_;
     const int nn = model_.n_nodes();
 
-    if (st.local_damping) alpha_ = *st.local_damping;
+    if (st.local_damping && *st.local_damping != alpha_) {
+        // The stable step depends on the local damping (damped_step_factor, fdem/model.hpp): a stage that changes it
+        // sets the step again from the current model (faces that cracks opened included).
+        alpha_ = *st.local_damping;
+        if (!spec_.dt_override) {
+            const double before = dt_;
+            set_step_limits(alpha_, true);
+            if (dt_ != before) {
+                dt_logged_ = dt_;
+                log("time step: " + sci(dt_) + " s = " + sci(spec_.safety) + " x stable limit " + sci(dt_limit_) +
+                    " s at local damping " + sci(alpha_) + " (stage '" + st.name + "')");
+            }
+        }
+    }
     if (st.local_damping_filter) {
         // The moving mean starts from the current velocities, so switching the filter on does not kick the motion.
         if (*st.local_damping_filter > 0 && !(tau_ld_ > 0)) {

@@ -174,12 +174,13 @@ TEST_CASE("time step: the faces of intact cohesive elements join the contact cou
     // cases/lourenco2005/stone_tension_50mm.toml: a 0.2 x 0.1 m stone (50 mm mesh), every inner edge an intrinsic cohesive
     // element, pulled apart until one crack crosses it. Intact, an element's two faces cannot touch (an excluded pair,
     // inside the body), so the start step is above the one that counts every inner edge as a contact face (the rule
-    // before 28 Nov); once elements break, the step is checked again and shrinks (measured: 3 broken, from 2.08e-6 to
-    // 1.66e-6 s).
+    // before 28 Nov); once elements break, the step is checked again and shrinks (measured at the pull stage's local
+    // damping 0.8: 3 broken, from 1.55e-6 to 1.24e-6 s).
     fdem::Simulation sim = simulation_of(std::string(FDEM_CASES_DIR) + "/lourenco2005/stone_tension_50mm.toml");
     REQUIRE(sim.interactions().has_joints());
     const double dt0 = sim.dt();
-    const double dt_all_faces = 0.8 * sim.interactions().stable_dt(sim.model());  // every inner edge a contact face
+    // every inner edge a contact face, at the pull stage's local damping 0.8 as the step
+    const double dt_all_faces = 0.8 * sim.interactions().stable_dt(sim.model(), 0.0, nullptr, nullptr, 0.8);
     sim.run();
     std::printf("[stable step cohesive] start %.4e s (every inner edge counted: %.4e s), end %.4e s, broken %ld, "
                 "balance %.3g %%\n",
@@ -188,4 +189,101 @@ TEST_CASE("time step: the faces of intact cohesive elements join the contact cou
     CHECK(sim.broken_total() > 0);
     CHECK(sim.dt() < dt0);
     CHECK(std::fabs(sim.energies().balance_error()) < 0.01);
+}
+
+// LOCAL DAMPING AND THE STEP (fdem/model.hpp damped_step_factor). In the highest mode the [C79] local damping force
+// -alpha |f| sign(v^{n-1/2}) adds alpha |f| to the force (f opposes v^{n-1/2} there), so the step is stable only
+// while omega dt <= 2 (sqrt(xi^2 + 1 / (1 + alpha)) - xi), xi the viscous fraction of critical. Until 28 Nov the
+// step ignored alpha: a lone triangle pulled at a corner with local damping 0.7 inverted at step 750 at the default
+// safety (0.8 > 1 / sqrt(1.7) = 0.767), and a 4-triangle block with viscous_damping 0.3 under local damping 0.8
+// inverted at step 29.
+namespace {
+
+// A lone triangle, free, pulled at its apex (no supports: its highest mode is the element's, at the bound).
+std::string lone_triangle_case(double alpha, double safety, const std::string& dir) {
+    testing::write_text(std::filesystem::path(dir) / "tri.geo",
+                        "Point(1) = {0, 0, 0, 1.0};\nPoint(2) = {0.1, 0, 0, 1.0};\nPoint(3) = {0.03, 0.09, 0, 1.0};\n"
+                        "Line(1) = {1, 2};\nLine(2) = {2, 3};\nLine(3) = {3, 1};\nCurve Loop(1) = {1, 2, 3};\n"
+                        "Plane Surface(1) = {1};\nPhysical Surface(\"body\") = {1};\nPhysical Point(\"apex\") = {3};\n");
+    std::ostringstream c;
+    c.precision(17);
+    c << "[case]\nname = \"lone\"\nthickness = 0.1\n[geometry]\ntype = \"gmsh\"\nfile = \"tri.geo\"\n"
+      << "[materials.m]\nE = 1e10\nnu = 0.2\ndensity = 2000.0\n[regions]\nbody = \"m\"\n[numerics]\nsafety = " << safety
+      << "\n[[stages]]\nname = \"pull\"\nduration = 100.0\nlocal_damping = " << alpha
+      << "\n  [[stages.loads]]\n  group = \"apex\"\n  force = [3000.0, -5000.0]\n"
+      << "[[stages]]\nname = \"free\"\nduration = 100.0\nlocal_damping = 0.0\n";
+    return c.str();
+}
+
+// Steps of the pull stage; false when the run stopped (an inverted triangle, energy grown without work).
+bool pull_lone_triangle(double alpha, double safety, int steps, double* dt = nullptr) {
+    const auto dir = testing::tmp_dir("stable_step_lone");
+    fdem::Simulation sim = simulation_of(testing::write_text(dir / "case.toml", lone_triangle_case(alpha, safety, dir.string())));
+    if (dt) *dt = sim.dt();
+    try {
+        sim.begin_stage(0);
+        for (int i = 0; i < steps; ++i) sim.step();
+    } catch (const std::exception&) {
+        return false;
+    }
+    return true;
+}
+
+}  // namespace
+
+TEST_CASE("time step: local damping lowers the stable limit by 1 / sqrt(1 + alpha), and the limit is the exact one "
+          "for a lone triangle",
+          "[engine][regression]") {
+    // At the default safety every alpha in [0, 1) holds 2e4 steps.
+    for (double alpha : {0.0, 0.5, 0.7, 0.8, 0.95}) {
+        INFO("local damping " << alpha);
+        CHECK(pull_lone_triangle(alpha, 0.8, 20000));
+    }
+    // The limit is tight: the lone triangle's highest mode is at its element bound, so at 0.95 of the limit it holds
+    // (measured: 9e4 steps at 0.95 and 1.02) and above it the mode grows until the triangle inverts (alpha 0.8;
+    // measured: at 1.05 after 21,416 steps, at 1.1 after 3,498, at the old rule's 0.8 sqrt(1.8) = 1.073 after 5,247).
+    CHECK(pull_lone_triangle(0.8, 0.95, 50000));
+    CHECK_FALSE(pull_lone_triangle(0.8, 0.8 * std::sqrt(1.8), 20000));
+    CHECK_FALSE(pull_lone_triangle(0.8, 1.1, 20000));
+    // The step of a stage at alpha 0.8 against the next stage's at 0: sqrt(1.8) apart.
+    const auto dir = testing::tmp_dir("stable_step_lone_stages");
+    fdem::Simulation sim = simulation_of(testing::write_text(dir / "case.toml", lone_triangle_case(0.8, 0.8, dir.string())));
+    sim.begin_stage(0);
+    const double dt_damped = sim.dt();
+    sim.step();
+    sim.begin_stage(1);
+    CHECK(sim.dt() / dt_damped == Approx(std::sqrt(1.8)).epsilon(1e-12));
+}
+
+TEST_CASE("time step: viscous element damping with local damping 0.8 is stable at the default safety and settles to "
+          "the static answer",
+          "[engine][regression]") {
+    // A 0.1 x 0.1 m block (4 triangles) fixed at its base under a body load; static elastic energy W / 2.
+    const auto dir = testing::tmp_dir("stable_step_viscous");
+    testing::write_text(dir / "b.geo",
+                        "SetFactory(\"OpenCASCADE\");\nRectangle(1) = {0, 0, 0, 0.1, 0.1};\n"
+                        "MeshSize{ PointsOf{ Surface{1}; } } = 0.2;\nPhysical Surface(\"body\") = {1};\n"
+                        "Physical Curve(\"bottom\") = {1};\n");
+    for (double xi : {0.3, 0.5, 1.0}) {
+        std::ostringstream c;
+        c << "[case]\nname = \"visc\"\nthickness = 0.1\n[geometry]\ntype = \"gmsh\"\nfile = \"b.geo\"\n"
+          << "[materials.m]\nE = 1e10\nnu = 0.2\ndensity = 2000.0\nviscous_damping = " << xi << "\n[regions]\nbody = \"m\"\n"
+          << "[[stages]]\nname = \"load\"\nduration = 100.0\nlocal_damping = 0.8\ngravity = [3000.0, -9810.0]\n"
+          << "  [[stages.supports]]\n  group = \"bottom\"\n  fix = \"xy\"\n";
+        fdem::Simulation sim = simulation_of(testing::write_text(dir / "case.toml", c.str()));
+        INFO("viscous_damping " << xi);
+        bool stopped = false;
+        try {
+            sim.begin_stage(0);
+            for (int i = 0; i < 20000; ++i) sim.step();
+        } catch (const std::exception&) {
+            stopped = true;
+        }
+        REQUIRE_FALSE(stopped);
+        const fdem::Energies e = sim.energies();
+        std::printf("[stable step viscous] xi %.1f: dt %.4e s, elastic %.6e J, work %.6e J, kinetic %.2e J\n", xi, sim.dt(),
+                    e.elastic, e.external, e.kinetic);
+        CHECK(e.elastic == Approx(0.5 * e.external).epsilon(1e-3));
+        CHECK(e.kinetic < 1e-9 * e.elastic);
+    }
 }
