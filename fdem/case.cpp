@@ -1079,6 +1079,13 @@ CaseSpec load_case(const std::string& path, const std::vector<std::string>& over
         s.duration = r.number("duration", false, "a duration > 0 in s", positive);
         s.max_duration = r.number("max_duration", false, "a time limit > 0 in s", positive);
         s.equilibrium = r.number("equilibrium", false, "an unbalanced-force ratio in (0, 1)", [](double v) { return v > 0 && v < 1; });
+        if (const auto er = r.number("equilibrium_reactions", false,
+                                     "a relative imbalance of reactions and applied loads in (0, 1)",
+                                     [](double v) { return v > 0 && v < 1; })) {
+            s.equilibrium_reactions = *er;
+            if (!s.equilibrium)
+                ctx.error(p + ".equilibrium_reactions", s.line, "equilibrium_reactions needs equilibrium (an unbalanced-force ratio) in the same stage");
+        }
         if (const toml::table* u = r.table("until", false, "a table { monitor = NAME, value = V }")) {
             Reader ur(ctx, *u, p + ".until");
             s.until_monitor = ur.string("monitor", true, "the name of a monitor");

@@ -202,6 +202,10 @@ struct StageSpec {
     std::optional<std::string> until_monitor;
     double until_value = 0;              // in the monitor's unit
     std::optional<double> equilibrium;   // unbalanced-force ratio, -
+    // With equilibrium: the largest |sum of the supports' reactions + the applied loads| / |applied loads| (the
+    // resultants, gravity included) at which the stage may end: the supports carry what is applied, not only the
+    // forces' ratio is small (a wall bouncing on its base has a small ratio and a base reaction 6 % off its weight).
+    double equilibrium_reactions = 0.01;
     std::optional<double> max_duration;  // s, bound for until / equilibrium
     // past_peak = { load, displacement, drop, travel, smooth }: the stage also ends once the load monitor's
     // magnitude, averaged over `smooth` of displacement, has stayed below (1 - drop) times the largest value that

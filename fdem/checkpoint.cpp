@@ -35,7 +35,7 @@ namespace fdem {
 namespace {
 
 constexpr char kMagic[8] = {'F', 'D', 'E', 'M', 'C', 'K', 'P', 'T'};
-constexpr std::uint32_t kFormat = 1;
+constexpr std::uint32_t kFormat = 2;
 
 std::uint64_t fnv1a(const char* p, std::size_t n, std::uint64_t h = 1469598103934665603ull) {
     for (std::size_t i = 0; i < n; ++i) h = (h ^ static_cast<unsigned char>(p[i])) * 1099511628211ull;
@@ -136,7 +136,7 @@ void Simulation::save_state(StateWriter& w) const {
 #if defined(__x86_64__) && defined(__GLIBCXX__)
     // (not saved: the energy audit's sums, a diagnostic of one process; after a restart it starts over; the node
     // loop's speeds block_v2_ and v2max_, which load_state marks unknown)
-    static_assert(sizeof(Simulation) == 5160, "Simulation changed: update save_state/load_state (fdem/checkpoint.cpp) and this size");
+    static_assert(sizeof(Simulation) == 5168, "Simulation changed: update save_state/load_state (fdem/checkpoint.cpp) and this size");
     static_assert(sizeof(ActiveSupport) == 376, "ActiveSupport changed: update save_state/load_state and this size");
     static_assert(sizeof(ActiveLoad) == 296, "ActiveLoad changed: update save_state/load_state and this size");
 #endif
@@ -146,7 +146,7 @@ void Simulation::save_state(StateWriter& w) const {
     w.vec(model_.x), w.vec(model_.v), w.vec(model_.mass), w.vec(model_.inv_mass), w.vec(model_.grav_mass);
 
     w.section("clock");
-    w.pod(dt_initial_), w.pod(dt_), w.pod(dt_limit_), w.pod(dt_springs_), w.pod(dt_logged_), w.pod(time_), w.pod(steps_), w.pod(stage_), w.pod(stage_t0_), w.pod(stage_steps0_), w.pod(broken_total_);
+    w.pod(dt_initial_), w.pod(dt_), w.pod(dt_limit_), w.pod(dt_springs_), w.pod(dt_logged_), w.pod(time_), w.pod(steps_), w.pod(stage_), w.pod(stage_t0_), w.pod(stage_steps0_), w.pod(broken_total_), w.pod(eq_since_);
 
     w.section("supports");
     w.vec(dof_kind_), w.vec(dof_owner_), w.vec(dof_vel_), w.vec(reaction_);
@@ -231,7 +231,7 @@ void Simulation::load_state(StateReader& r) {
     if (dt != dt_initial_)
         throw StateError("time step " + std::to_string(dt) + " s, this case gives " + std::to_string(dt_initial_) + " s");
     r.pod(dt_), r.pod(dt_limit_), r.pod(dt_springs_), r.pod(dt_logged_);  // smaller than at the start after insertions
-    r.pod(time_), r.pod(steps_), r.pod(stage_), r.pod(stage_t0_), r.pod(stage_steps0_), r.pod(broken_total_);
+    r.pod(time_), r.pod(steps_), r.pod(stage_), r.pod(stage_t0_), r.pod(stage_steps0_), r.pod(broken_total_), r.pod(eq_since_);
     if (stage_ < 0 || stage_ >= static_cast<int>(spec_.stages.size())) throw StateError("stage index out of range");
 
     r.section("supports");

@@ -73,6 +73,10 @@ public:
     void begin_stage(int s);
     void step();
     bool stage_finished();  // evaluates the termination rule of the current stage
+    // |R + L| / |L| at t^n: R the resultant of the reactions of the fixed and driven DOFs (a rigid group is free as a
+    // whole and carries none), L that of the applied loads and gravity (N); 0 when nothing is applied.
+    double load_imbalance(double* applied = nullptr, double* reactions = nullptr) const;
+    double unbalanced_ratio() const { return unbalanced_ratio_; }  // of the last step (history.csv `unbalanced`)
 
     const Model& model() const { return model_; }
     // (a caller that may write v: the node loop's largest speed is forgotten, ContactSystem::step scans v again)
@@ -298,6 +302,7 @@ private:
     std::vector<double> block_v2_;
     double v2max_ = -1.0;
     double unbalanced_ratio_ = 1;
+    double eq_since_ = -1;  // s: since when the stage's equilibrium conditions hold without a break (-1: they do not)
     bool energy_every_step_ = false;  // tests that read energies after every step
     // Energy audit: per part (0 triangles, 1 cohesive joints, 2 contact) the work its forces did on the nodes, sum of
     // dt f . v_bar as the external work is booked (J), the last step's share past t^n, and what the part held and had

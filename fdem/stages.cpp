@@ -102,6 +102,7 @@ void Simulation::begin_stage(int s) {
     stage_ = s;
     stage_t0_ = time_;
     stage_steps0_ = steps_;
+    eq_since_ = -1;
     stage_ramp_end_ = time_;
     const int nn = model_.n_nodes();
 
@@ -396,6 +397,21 @@ void Simulation::update_servos() {
     }
 }
 
+double Simulation::load_imbalance(double* applied, double* reactions) const {
+    double L[2] = {0, 0}, R[2] = {0, 0};
+    const int nn = model_.n_nodes();
+    for (int k = 0; k < nn; ++k)
+        for (int c = 0; c < 2; ++c) {
+            const int d = 2 * k + c;
+            L[c] += f_ext_[d] + model_.grav_mass[k] * applied_gravity_[c];
+            if (dof_kind_[d] != 0 && dof_owner_[d] >= 0 && supports_[dof_owner_[d]].mode != DofMode::rigid) R[c] += reaction_[d];
+        }
+    if (applied) applied[0] = L[0], applied[1] = L[1];
+    if (reactions) reactions[0] = R[0], reactions[1] = R[1];
+    const double l = std::hypot(L[0], L[1]);
+    return l > 0 ? std::hypot(L[0] + R[0], L[1] + R[1]) / l : 0.0;
+}
+
 bool Simulation::stage_finished() {
     const StageSpec& st = spec_.stages[stage_];
     const double ts = time_ - stage_t0_;
@@ -415,8 +431,26 @@ bool Simulation::stage_finished() {
         if (dir * (m - st.until_value) >= 0) return finish("until");
     }
     if (st.past_peak && past_peak_reached(*st.past_peak)) return finish("past_peak");
-    if (st.equilibrium && time_ >= stage_ramp_end_ && steps_ - stage_steps0_ > 10 && unbalanced_ratio_ <= *st.equilibrium)
-        return finish("equilibrium");
+    // Equilibrium: the unbalanced-force ratio at most `equilibrium` and the reactions carrying the applied loads
+    // within `equilibrium_reactions`, both without a break for a quarter of the stage's time up to when they first
+    // held (at least 10 steps): a whole-body oscillation passes through zero imbalance twice a period, so one step
+    // within the bounds says nothing; by the time the ratio is small the stage has lasted several of its periods.
+    if (st.equilibrium && time_ >= stage_ramp_end_ && steps_ - stage_steps0_ > 10) {
+        double L[2], R[2];
+        const double imbalance = unbalanced_ratio_ <= *st.equilibrium ? load_imbalance(L, R) : 1.0;
+        if (unbalanced_ratio_ <= *st.equilibrium && imbalance <= st.equilibrium_reactions) {
+            if (!(eq_since_ >= 0)) eq_since_ = time_;
+            if (time_ - eq_since_ + 0.5 * dt_ >= std::max(10 * dt_, 0.25 * (eq_since_ - stage_t0_))) {
+                log("stage " + std::to_string(stage_ + 1) + " '" + st.name + "': equilibrium since t = " + sci(eq_since_) +
+                    " s: unbalanced-force ratio " + sci(unbalanced_ratio_) + ", the reactions (" + sci(R[0]) + ", " +
+                    sci(R[1]) + ") N carry the applied loads (" + sci(L[0]) + ", " + sci(L[1]) + ") N within " +
+                    sci(100 * imbalance) + " %");
+                return finish("equilibrium");
+            }
+        } else {
+            eq_since_ = -1;
+        }
+    }
     if (st.max_duration && ts + 0.5 * dt_ >= *st.max_duration) return finish("max_duration");
     return false;
 }
