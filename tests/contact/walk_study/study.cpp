@@ -25,7 +25,7 @@
 #include "fdem/simulation.hpp"
 
 struct P {
-    double E = 1e10, kn = 1e11, h = 0.05, safety = 0.8, xi = 0.0, mu = 0.8;
+    double E = 1e10, kn = 1e11, h = 0.05, safety = 0.8, xi = 0.0, mu = 0.8, vd = 0.0;
     double A = 1.02, omega = 1.0, T = 8.0;  // A in units of mu m g; F = A cos(omega t)
     double F = 0.0;                         // constant force (N), if > 0
     std::string where = "top";              // top | mid | bottom | all
@@ -44,7 +44,7 @@ int main(int argc, char** argv) {
     for (int i = 1; i + 1 < argc; i += 2) {
         std::string k = argv[i]; std::string v = argv[i + 1];
         if (k == "E") p.E = std::stod(v); else if (k == "kn") p.kn = std::stod(v); else if (k == "h") p.h = std::stod(v);
-        else if (k == "safety") p.safety = std::stod(v); else if (k == "xi") p.xi = std::stod(v);
+        else if (k == "safety") p.safety = std::stod(v); else if (k == "xi") p.xi = std::stod(v); else if (k == "vd") p.vd = std::stod(v);
         else if (k == "A") p.A = std::stod(v); else if (k == "omega") p.omega = std::stod(v); else if (k == "T") p.T = std::stod(v);
         else if (k == "F") p.F = std::stod(v); else if (k == "where") p.where = v; else if (k == "dt") p.dt = std::stod(v);
         else if (k == "bw") p.bw = std::stod(v); else if (k == "bh") p.bh = std::stod(v);
@@ -65,7 +65,7 @@ int main(int argc, char** argv) {
     const double eps = 1e-6;
     const double bx = p.x0;
     c << "[case]\nname = \"walk\"\nthickness = " << 1.0 / (2000.0 * p.bw * p.bh) << "\n[geometry]\ntype = \"gmsh\"\nfile = \"blocks.geo\"\n"
-      << "[materials.m]\nE = " << p.E << "\nnu = 0.2\ndensity = 2000.0\n[regions]\nbase = \"m\"\nblock = \"m\"\n"
+      << "[materials.m]\nE = " << p.E << "\nnu = 0.2\ndensity = 2000.0\nviscous_damping = " << p.vd << "\n[regions]\nbase = \"m\"\nblock = \"m\"\n"
       << "[groups.mid]\nbox = [" << bx - eps << ", " << 0.5 * p.bh - eps << ", " << bx + p.bw + eps << ", " << 0.5 * p.bh + eps << "]\nwithin = \"block\"\n"
       << "[groups.bottom]\nbox = [" << bx - eps << ", " << -eps << ", " << bx + p.bw + eps << ", " << eps << "]\nwithin = \"block\"\n"
       << "[[interfaces]]\nregions = [\"base\", \"block\"]\nkind = \"dry\"\nfriction = " << std::atan(p.mu) * 180 / M_PI
