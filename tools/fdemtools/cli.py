@@ -75,7 +75,8 @@ def last_stage(source: str, partial: bool) -> int | None:
 def _eeep_fields(res: dict, fx: float, fy: float) -> dict:
     """An eeep result in report units (displacements / fx, loads / fy, stiffness fy/fx), with its rules and flags."""
     return {
-        "K_e": res["K_e"] * fx / fy,
+        "method": res.get("method_name", "eeep"), "method_source": res.get("method_source", ""),
+        "K_e": res["K_e"] * fx / fy, "K_e_branch": res["K_e_branch"] * fx / fy,
         "P_peak": res["P_peak"] / fy, "Delta_peak": res["Delta_peak"] / fx,
         "Delta_u": res["Delta_u"] / fx, "P_u": res["P_u"] / fy,
         "P_y": res["P_y"] / fy, "Delta_y": res["Delta_y"] / fx,
@@ -92,7 +93,7 @@ def _eeep_fields(res: dict, fx: float, fy: float) -> dict:
 
 
 def _eeep_line(name: str, r: dict, xu: str, yu: str) -> str:
-    return (f"{name}: K_e = {r['K_e']:.5g} {yu}/{xu}, P_peak = {r['P_peak']:.5g} {yu}, "
+    return (f"{name}: " + (f"[{r['method_source']}] " if r.get("method", "eeep") != "eeep" else "") + "K_e = {r['K_e']:.5g} {yu}/{xu}, P_peak = {r['P_peak']:.5g} {yu}, "
             f"P_y = {r['P_y']:.5g} {yu}, Delta_y = {r['Delta_y']:.5g} {xu}, "
             f"Delta_u = {r['Delta_u']:.5g} {xu}, ductility = {r['ductility']:.4g}"
             + (" (lower bound)" if r["ductility_is_lower_bound"] else ""))
@@ -131,7 +132,14 @@ def cmd_eeep(args):
         stage_note = f"stage {args.stage}" if args.stage is not None else "all rows"
     (xu, fx), (yu, fy) = _ru(args)
     prefix = output_prefix(args.source, "eeep", args.out)
-    opts = dict(fraction=args.limit, ultimate=args.ultimate, drop=args.drop, stiffness=args.stiffness, load_sign=1.0)
+    opts = dict(eeep.method_options(args.method, args.limit, args.stiffness, args.ultimate, args.drop), load_sign=1.0)
+    label = {"eeep": "EEEP", "astm": "EEEP (ASTM E2126)", "tomazevic": "Tomazevic bilinear", "ec8": "EC8 bilinear"}[args.method]
+
+    def fit(xs, ys, source):
+        res = eeep.eeep(xs, ys, source=source, **opts)
+        res.update(method_name=args.method, method_label=label, method_source=eeep.METHODS[args.method]["source"])
+        return res
+
     report = {"source": c.source, "x_column": c.x_name, "y_column": c.y_name,
               "units": {"displacement": xu, "load": yu, "stiffness": f"{yu}/{xu}", "energy": "J"}}
     common = {"columns_rule": c.columns_rule, "load_sign_rule": sign_rule, "curve_rows": stage_note, "smooth_mm": args.smooth,
@@ -148,7 +156,7 @@ def cmd_eeep(args):
                 per[name] = {"error": "the record does not go this way"}
                 continue
             try:
-                res = eeep.eeep(xe, ye, source=f"{c.source} ({name} envelope)", **opts)
+                res = fit(xe, ye, f"{c.source} ({name} envelope)")
             except ToolError as e:
                 per[name] = {"error": str(e)}
                 fits[name] = (xe, ye, None)
@@ -183,7 +191,7 @@ def cmd_eeep(args):
         return
     if args.smooth > 0:
         y = smooth_curve(abs(x - x[0]), y, args.smooth * 1e-3)
-    res = eeep.eeep(x, y, source=c.source, **opts)
+    res = fit(x, y, c.source)
     report.update({"cyclic": False, **_eeep_fields(res, fx, fy), "sign_x": res["sign_x"],
                    "sign_y": res["sign_y"] * sign, **common})
     files = [write_json(prefix + ".json", report)]
@@ -352,13 +360,18 @@ def build_parser():
     p.add_argument("--smooth", type=float, default=0.0, metavar="MM",
                    help="take the curve on the load averaged over MM mm of control displacement centred on each row, "
                         "as validate --smooth (default 0: raw)")
-    p.add_argument("--limit", type=float, default=0.7,
+    p.add_argument("--method", choices=["eeep", "astm", "tomazevic", "ec8"], default="eeep",
+                   help="bilinear idealisation: eeep (default: the rules below), astm (ASTM E2126: secant at 0.4 "
+                        "peak, ultimate at the drop to 0.8 peak), tomazevic (secant at 0.7 peak, ultimate at the drop "
+                        "to 0.8 peak, equal energy), ec8 (EN 1998-1 Annex B: yield force = peak, stiffness from the "
+                        "equal area; ultimate at the drop to 0.8 peak unless --ultimate is given)")
+    p.add_argument("--limit", type=float, default=None,
                    help="regression limit: fit K_e to the ascending branch up to this fraction of the peak (default 0.7)")
-    p.add_argument("--stiffness", choices=["regression", "secant"], default="regression",
+    p.add_argument("--stiffness", choices=["regression", "secant"], default=None,
                    help="K_e by least squares through the origin (default) or as the secant at LIMIT x peak")
-    p.add_argument("--ultimate", choices=["peak", "drop"], default="peak",
+    p.add_argument("--ultimate", choices=["peak", "drop"], default=None,
                    help="ultimate displacement: at peak load ([K25], default) or at the post-peak drop (ASTM E2126)")
-    p.add_argument("--drop", type=float, default=0.8, help="post-peak load level for --ultimate drop (default 0.8)")
+    p.add_argument("--drop", type=float, default=None, help="post-peak load level for --ultimate drop (default 0.8)")
     p.add_argument("--no-plot", action="store_true", help="write the JSON only")
     p.set_defaults(func=cmd_eeep)
 

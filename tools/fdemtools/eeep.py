@@ -17,6 +17,14 @@ P_y is evaluated as 2 A / (Delta_u + sqrt(Delta_u^2 - 2 A / K_e)), the same valu
 the difference form. When Delta_u^2 < 2 A / K_e (the curve holds more energy than any elastic-plastic line
 of stiffness K_e can), ASTM E2126 allows P_y = 0.85 P_peak; that fallback is used, flagged (`fallback`), printed
 by the command line and drawn in the figure.
+Other bilinear idealisations (METHODS, the command's --method): "astm" is the EEEP above with ASTM E2126's rules
+(secant at 0.4 P_peak, Delta_u at the post-peak drop to 0.8 P_peak); "tomazevic" the idealisation of Tomazevic
+(Earthquake-Resistant Design of Masonry Buildings, 1999) in the form used for masonry shear walls by Frumento,
+Magenes, Morandi & Calvi (2009): the effective stiffness as the secant at 0.7 P_peak, Delta_u at the drop to
+0.8 P_peak, the resistance P_y by the same equal energy; "ec8" the elasto-perfectly plastic idealisation of
+EN 1998-1:2004 Annex B (the N2 method's): the yield force equals the largest load, P_y = P_peak, and the stiffness
+follows from the equal area, Delta_y = 2 (Delta_u - A / P_y), K_e = P_y / Delta_y (Delta_u by --ultimate; the
+Annex's Delta_m, the displacement at the formation of the mechanism, taken at the drop to 0.8 P_peak by default).
 Signs: the displacement is mirrored when its largest excursion is negative; the load takes the tools' one sign rule
 (common.resolve_sign: given, else the case's, else the sign whose loading work is positive), so a softening curve is
 never turned and a reaction is.
@@ -40,6 +48,19 @@ from .common import ToolError, loading_work_sign
 PAST_PEAK_DROP = 0.05  # the load at the end this far (fraction of the peak) below the peak: a post-peak branch
 REVERSAL = 0.10        # a retreat of the displacement beyond this fraction of its largest |value|: a reversing record
 NO_POST_PEAK = "no post-peak branch: ductility is a lower bound"
+# The bilinear idealisations: the rules each fixes (None: the caller's) and what the result names as its source.
+METHODS = {
+    "eeep": {"fraction": None, "stiffness": None, "ultimate": None, "drop": None,
+             "source": "EEEP ([K25] Eq. 14)"},
+    "astm": {"fraction": 0.4, "stiffness": "secant", "ultimate": "drop", "drop": 0.8,
+             "source": "EEEP, ASTM E2126 (secant at 0.4 P_peak, ultimate at 0.8 P_peak after the peak)"},
+    "tomazevic": {"fraction": 0.7, "stiffness": "secant", "ultimate": "drop", "drop": 0.8,
+                  "source": "Tomazevic 1999 bilinear (secant at 0.7 P_peak, ultimate at 0.8 P_peak after the peak, "
+                            "equal energy)"},
+    "ec8": {"fraction": None, "stiffness": None, "ultimate": None, "drop": None,
+            "defaults": {"ultimate": "drop"},
+            "source": "EN 1998-1 Annex B (P_y = P_peak, stiffness by equal energy)"},
+}
 
 
 def reversal(d) -> float:
@@ -74,6 +95,26 @@ def envelope(d, p, direction: float = 1.0) -> tuple:
     return np.concatenate(([0.0], xb[keep])), np.concatenate(([0.0], yb[keep]))
 
 
+def method_options(method: str, fraction=None, stiffness=None, ultimate=None, drop=None) -> dict:
+    """The eeep() keyword options of a bilinear idealisation of METHODS: its fixed rules, the caller's where it fixes
+    none (else the defaults 0.7, regression, peak, 0.8). A caller's rule that contradicts the method is an error."""
+    if method not in METHODS:
+        raise ToolError(f"bilinear idealisation must be one of {', '.join(METHODS)}, got '{method}'")
+    m = METHODS[method]
+    given = {"fraction": fraction, "stiffness": stiffness, "ultimate": ultimate, "drop": drop}
+    default = {"fraction": 0.7, "stiffness": "regression", "ultimate": "peak", "drop": 0.8, **m.get("defaults", {})}
+    opts = {}
+    for key, value in given.items():
+        fixed = m[key]
+        if fixed is not None and value is not None and value != fixed:
+            flag = {"fraction": "--limit"}.get(key, "--" + key)
+            raise ToolError(f"--method {method} fixes {flag} {fixed}; got {flag} {value} (leave it out, or use "
+                            "--method eeep with your rules)")
+        opts[key] = fixed if fixed is not None else (value if value is not None else default[key])
+    opts["method"] = "ec8" if method == "ec8" else "eeep"
+    return opts
+
+
 def _interp_x(x0, y0, x1, y1, y):
     """x where the segment (x0,y0)-(x1,y1) reaches load y."""
     if y1 == y0:
@@ -82,9 +123,12 @@ def _interp_x(x0, y0, x1, y1, y):
 
 
 def eeep(d, p, fraction: float = 0.7, ultimate: str = "peak", drop: float = 0.8, stiffness: str = "regression",
-         source: str = "curve", load_sign: float | None = None) -> dict:
+         source: str = "curve", load_sign: float | None = None, method: str = "eeep") -> dict:
     """EEEP analysis of the curve (d, p). Returns a dict of results (same units as the input).
 
+    method: "eeep" (the rules below) or "ec8" (P_y = P_peak, K_e from the equal area; fraction and stiffness then
+    only give the branch's stiffness for reference, `K_e_branch`). The presets of METHODS are applied by the caller
+    (method_options).
     fraction: regression limit as a fraction of the peak load (0 < fraction <= 1).
     ultimate: "peak" ([K25]) or "drop" (ASTM E2126: post-peak drop to `drop` x peak).
     stiffness: "regression" (least squares through the origin) or "secant" (at fraction x peak).
@@ -98,6 +142,8 @@ def eeep(d, p, fraction: float = 0.7, ultimate: str = "peak", drop: float = 0.8,
         raise ToolError(f"ultimate displacement rule must be 'peak' or 'drop', got '{ultimate}'")
     if stiffness not in ("regression", "secant"):
         raise ToolError(f"stiffness rule must be 'regression' or 'secant', got '{stiffness}'")
+    if method not in ("eeep", "ec8"):
+        raise ToolError(f"idealisation must be 'eeep' or 'ec8' here, got '{method}'")
     d = np.asarray(d, dtype=float)
     p = np.asarray(p, dtype=float)
     if d.shape != p.shape or d.ndim != 1:
@@ -181,21 +227,35 @@ def eeep(d, p, fraction: float = 0.7, ultimate: str = "peak", drop: float = 0.8,
     if k_e <= 0:
         raise ToolError(f"{source}: the elastic stiffness from the ascending branch is not positive ({k_e:g})")
 
-    disc = d_u * d_u - 2.0 * area / k_e
-    if disc >= 0:
-        p_y = 2.0 * area / (d_u + np.sqrt(disc))
-        yield_note = "equal energy ([K25] Eq. 14)"
+    k_branch = k_e
+    if method == "ec8":
+        # EN 1998-1 Annex B: F_y = F_max; the area under the bilinear equals A: F_y (Delta_u - Delta_y / 2) = A.
+        p_y = p_peak
+        d_y = 2.0 * (d_u - area / p_y)
+        if not d_y > 0:
+            raise ToolError(f"{source}: the curve holds the whole area P_peak x Delta_u (rigid-plastic): no EN 1998-1 "
+                            "Annex B yield displacement")
+        k_e = p_y / d_y
+        yield_note = "P_y = P_peak, Delta_y = 2 (Delta_u - A / P_y) (EN 1998-1 Annex B)"
         fallback = False
     else:
-        p_y = 0.85 * p_peak
-        yield_note = "0.85 x peak load (ASTM E2126 when Delta_u^2 < 2 A / K_e): EEEP area differs from A"
-        fallback = True
-    d_y = p_y / k_e
+        disc = d_u * d_u - 2.0 * area / k_e
+        if disc >= 0:
+            p_y = 2.0 * area / (d_u + np.sqrt(disc))
+            yield_note = "equal energy ([K25] Eq. 14)"
+            fallback = False
+        else:
+            p_y = 0.85 * p_peak
+            yield_note = "0.85 x peak load (ASTM E2126 when Delta_u^2 < 2 A / K_e): EEEP area differs from A"
+            fallback = True
+        d_y = p_y / k_e
     mu = d_u / d_y
     eeep_area = p_y * d_u - 0.5 * p_y * d_y
 
     return {
         "K_e": k_e,
+        "K_e_branch": k_branch,
+        "method": method,
         "P_peak": p_peak,
         "Delta_peak": d_peak,
         "Delta_u": d_u,
@@ -225,10 +285,12 @@ def eeep(d, p, fraction: float = 0.7, ultimate: str = "peak", drop: float = 0.8,
 
 
 def _draw_fit(ax, res: dict, sx: float, sy: float, x_unit, y_unit, direction: float = 1.0, colour="#d62728",
-              name: str = "EEEP") -> None:
+              name: str | None = None) -> None:
     """The bilinear EEEP line of res, its yield point, the peak and Delta_u on ax (direction -1: drawn turned, in
     the negative quadrant)."""
     s = direction
+    if name is None:
+        name = res.get("method_label", "EEEP")
     bx = s * np.array(res["bilinear"]["x"]) * sx
     by = s * np.array(res["bilinear"]["y"]) * sy
     ax.plot(bx, by, color=colour, lw=1.8, ls="--",
@@ -304,7 +366,7 @@ def figure_cyclic(d, p, fits: dict, label: str, x_unit=("mm", 1e-3), y_unit=("kN
         ax.plot(s * np.asarray(xe) * sx, s * np.asarray(ye) * sy, color="0.15", lw=1.4,
                 label=f"{name} envelope" if name == "positive" else f"{name} envelope (drawn with its sign)")
         if res is not None:
-            _draw_fit(ax, res, sx, sy, x_unit, y_unit, s, colours[name], f"EEEP {name}")
+            _draw_fit(ax, res, sx, sy, x_unit, y_unit, s, colours[name], f"{res.get('method_label', 'EEEP')} {name}")
             done.append((name, res))
     ax.axhline(0, color="0.4", lw=0.6)
     ax.axvline(0, color="0.4", lw=0.6)

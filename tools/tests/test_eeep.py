@@ -305,3 +305,65 @@ def test_eeep_figure_labels_do_not_overlap():
     assert not boxes["title"].overlaps(boxes["axes"])
     import matplotlib.pyplot as plt
     plt.close(fig)
+
+
+# Other bilinear idealisations (issue 51: EC8 / Tomazevic beside EEEP).
+def test_ec8_returns_an_elastic_perfectly_plastic_curve_itself():
+    k, dy, du = 3.7e6, 1.3e-3, 11.9e-3
+    d, p = epp_curve(k, dy, du)
+    r = eeep.eeep(d, p, **eeep.method_options("ec8", ultimate="peak"))
+    assert r["P_y"] == pytest.approx(k * dy, rel=1e-12)
+    assert r["Delta_y"] == pytest.approx(dy, rel=1e-9)
+    assert r["K_e"] == pytest.approx(k, rel=1e-9)
+    assert r["ductility"] == pytest.approx(du / dy, rel=1e-9)
+
+
+def test_ec8_closed_form_on_a_trilinear_curve():
+    # 0 -> (1, 10) -> (3, 14) -> (5, 11.2): peak 14 at 3, drop to 0.8 x 14 = 11.2 at 5 exactly.
+    d = np.array([0.0, 1.0, 3.0, 5.0])
+    p = np.array([0.0, 10.0, 14.0, 11.2])
+    r = eeep.eeep(d, p, **eeep.method_options("ec8"))
+    area = 0.5 * 10 * 1 + 0.5 * (10 + 14) * 2 + 0.5 * (14 + 11.2) * 2  # 54.2
+    assert r["Delta_u"] == pytest.approx(5.0)
+    assert r["area"] == pytest.approx(area)
+    assert r["P_y"] == pytest.approx(14.0)
+    assert r["Delta_y"] == pytest.approx(2 * (5.0 - area / 14.0))
+    assert r["ductility"] == pytest.approx(5.0 / (2 * (5.0 - area / 14.0)))
+    assert r["eeep_area"] == pytest.approx(area)  # the bilinear holds the curve's area
+    assert r["K_e_branch"] == pytest.approx(10.0)  # the branch's own regression, for reference
+
+
+def test_tomazevic_and_astm_presets_are_their_rules():
+    d = np.array([0.0, 1.0, 3.0, 5.0, 6.0])
+    p = np.array([0.0, 10.0, 14.0, 11.2, 8.0])
+    t = eeep.eeep(d, p, **eeep.method_options("tomazevic"))
+    assert t["K_e"] == pytest.approx(0.7 * 14.0 / 0.98)  # the secant at 9.8 = 0.7 x 14, on the first branch at 0.98
+    assert t["Delta_u"] == pytest.approx(5.0)
+    e = eeep.eeep(d, p, fraction=0.7, stiffness="secant", ultimate="drop", drop=0.8)
+    assert t["P_y"] == e["P_y"] and t["ductility"] == e["ductility"]
+    a = eeep.eeep(d, p, **eeep.method_options("astm"))
+    assert a["K_e"] == pytest.approx(10.0)  # secant at 0.4 x 14 on the first branch
+    assert a["eeep_area"] == pytest.approx(a["area"])
+
+
+def test_a_preset_refuses_a_contradicting_rule():
+    with pytest.raises(ToolError, match="--method astm fixes --limit 0.4"):
+        eeep.method_options("astm", fraction=0.7)
+    with pytest.raises(ToolError, match="must be one of"):
+        eeep.method_options("fema")
+
+
+def test_cli_method_ec8_names_its_source(tmp_path, cli):
+    d = np.array([0.0, 1.0, 3.0, 5.0, 6.0])
+    p = np.array([0.0, 10.0, 14.0, 11.2, 8.0])
+    f = tmp_path / "c.csv"
+    f.write_text("d_mm,F_kN\n" + "".join(f"{a!r},{b!r}\n" for a, b in zip(d, p)))
+    rc, out, err = cli("eeep", f, "--x", "d_mm", "--y", "F_kN", "--x-unit", "mm", "--y-unit", "kN", "--method", "ec8")
+    assert rc == 0, err
+    assert "EN 1998-1 Annex B" in out
+    res = json.loads((tmp_path / "c_eeep.json").read_text())
+    assert res["method"] == "ec8"
+    assert res["P_y"] == pytest.approx(14.0)
+    assert res["Delta_u"] == pytest.approx(5.0)
+    rc, out, err = cli("eeep", f, "--x", "d_mm", "--y", "F_kN", "--method", "astm", "--limit", "0.7")
+    assert rc != 0 and "fixes --limit 0.4" in (out + err)
