@@ -53,9 +53,18 @@ void array_header(std::string& xml, const VtuArray& a, std::uint64_t offset) {
 }
 }  // namespace
 
-std::string vtu_field_data(const std::vector<VtuStrings>& field_data) {
-    if (field_data.empty()) return "";
+std::string vtu_field_data(const std::vector<VtuStrings>& field_data, double time) {
+    if (field_data.empty() && !std::isfinite(time)) return "";
     std::string xml = "      <FieldData>\n";
+    if (std::isfinite(time)) {
+        // TimeValue: the snapshot's time, which ParaView and VTK's readers take as the dataset's time (one file
+        // opened alone, or a series without run.pvd, then animates in seconds).
+        char buf[40];
+        std::snprintf(buf, sizeof buf, "%.17g", time);
+        xml += "        <DataArray type=\"Float64\" Name=\"TimeValue\" NumberOfTuples=\"1\" format=\"ascii\">\n          ";
+        xml += buf;
+        xml += "\n        </DataArray>\n";
+    }
     for (const auto& f : field_data) {
         xml += "        <DataArray type=\"String\" Name=\"" + f.name + "\" NumberOfTuples=\"" +
                std::to_string(f.values.size()) + "\" format=\"ascii\">\n         ";
@@ -98,13 +107,13 @@ int remove_previous_snapshots(const std::string& out_dir) {
 
 std::string vtu_document(const std::vector<double>& xy, const std::vector<int>& triangles, const std::vector<int>& lines,
                          const std::vector<VtuArray>& point_data, const std::vector<VtuArray>& cell_data,
-                         const std::vector<VtuStrings>& field_data) {
+                         const std::vector<VtuStrings>& field_data, double time) {
     const std::size_t np = xy.size() / 2, ntri = triangles.size() / 3, nline = lines.size() / 2, nc = ntri + nline;
     std::string xml, blob;
     xml += "<?xml version=\"1.0\"?>\n";
     xml += "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n";
     xml += "  <UnstructuredGrid>\n";
-    xml += vtu_field_data(field_data);
+    xml += vtu_field_data(field_data, time);
     xml += "    <Piece NumberOfPoints=\"" + std::to_string(np) + "\" NumberOfCells=\"" + std::to_string(nc) + "\">\n";
     auto add = [&](const VtuArray& a) {
         array_header(xml, a, blob.size());

@@ -5,6 +5,7 @@
 //   JSON: a minimal writer for summary.json.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <map>
 #include <string>
@@ -35,13 +36,14 @@ struct VtuStrings {
 
 // Triangles (3 node indices each) with point coordinates xy (2 per point); z is written as 0.
 // Optional line cells (2 node indices each) follow the triangles. field_data: string arrays in FieldData (ASCII,
-// VTK's encoding of a string array: each character's code, each string ended by 0).
+// VTK's encoding of a string array: each character's code, each string ended by 0). time (s, finite): written as the
+// FieldData array TimeValue, the dataset's time for ParaView (NaN: none).
 std::string vtu_document(const std::vector<double>& xy, const std::vector<int>& triangles, const std::vector<int>& lines,
                          const std::vector<VtuArray>& point_data, const std::vector<VtuArray>& cell_data,
-                         const std::vector<VtuStrings>& field_data = {});
+                         const std::vector<VtuStrings>& field_data = {}, double time = std::nan(""));
 
 // The FieldData block of a VTU file (also used by mesh/vtu.cpp's ASCII writer): "" when there is nothing.
-std::string vtu_field_data(const std::vector<VtuStrings>& field_data);
+std::string vtu_field_data(const std::vector<VtuStrings>& field_data, double time = std::nan(""));
 
 // Stress measures of a triangle from its in-plane Cauchy stress (sxx, syy, sxy) and the out-of-plane szz (0 in
 // plane stress): principal stresses s1 >= s2 (Mohr's circle: (sxx + syy)/2 +- sqrt(((sxx - syy)/2)^2 + sxy^2)) and

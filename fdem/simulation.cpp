@@ -506,7 +506,7 @@ void Simulation::write_snapshot() {
     VtuStrings region_names{"region_names", model_.mesh.regions}, material_names{"material_names", {}};
     for (const auto& m : spec_.materials) material_names.values.push_back(m.name);
     write_file_atomic((std::filesystem::path(opt_.out_dir) / name).string(),
-                      vtu_document(model_.X, tri, lines, {disp, vel}, cells, {region_names, material_names}));
+                      vtu_document(model_.X, tri, lines, {disp, vel}, cells, {region_names, material_names}, time_));
     snapshots_.emplace_back(time_, name);
     write_file_atomic((std::filesystem::path(opt_.out_dir) / "run.pvd").string(), pvd_document(snapshots_));
 }

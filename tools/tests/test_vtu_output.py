@@ -178,3 +178,24 @@ def test_rerun_into_the_same_folder_keeps_only_its_own_snapshots(tmp_path):
     on_disk = sorted("snapshots/" + f for f in os.listdir(run / "snapshots") if f.endswith(".vtu"))
     assert on_disk == sorted(second)
     assert (run / "snapshots" / "my_notes.txt").read_text() == "kept"
+
+
+def test_snapshots_carry_their_time(tmp_path):
+    """Each snapshot holds its time as FieldData TimeValue (ParaView's dataset time), equal to run.pvd's timestep."""
+    case = _write_case(tmp_path, 0.001)
+    run = tmp_path / "run"
+    _fdem_run("run", case, "--quiet", "--threads", "1", "--out", run, cwd=tmp_path)
+    pvd = (run / "run.pvd").read_text()
+    pairs = re.findall(r'timestep="([^"]+)"[^>]*file="([^"]+)"', pvd)
+    assert len(pairs) >= 4
+    for t, f in pairs:
+        grid = _read(run / f)
+        a = grid.GetFieldData().GetArray("TimeValue")
+        assert a is not None and a.GetNumberOfTuples() == 1, f
+        assert a.GetValue(0) == pytest.approx(float(t), rel=1e-12, abs=1e-15)
+    # the reader reports it as the dataset's time too
+    reader = vtk.vtkXMLUnstructuredGridReader()
+    reader.SetFileName(str(run / pairs[-1][1]))
+    reader.UpdateInformation()
+    reader.Update()
+    assert reader.GetOutput().GetFieldData().GetArray("TimeValue").GetValue(0) > 0
