@@ -89,6 +89,7 @@ def _eeep_fields(res: dict, fx: float, fy: float) -> dict:
         "ultimate_note": res["ultimate_note"], "yield_note": res["yield_note"],
         "origin_added": res["origin_added"], "fallback": res["fallback"],
         "si": {k: res[k] for k in ("K_e", "P_peak", "Delta_peak", "Delta_u", "P_y", "Delta_y", "area")},
+        **{k: res[k] for k in ("drift_height_m", "drift_y_pct", "drift_u_pct") if k in res},
     }
 
 
@@ -96,7 +97,9 @@ def _eeep_line(name: str, r: dict, xu: str, yu: str) -> str:
     return (f"{name}: " + (f"[{r['method_source']}] " if r.get("method", "eeep") != "eeep" else "") + "K_e = {r['K_e']:.5g} {yu}/{xu}, P_peak = {r['P_peak']:.5g} {yu}, "
             f"P_y = {r['P_y']:.5g} {yu}, Delta_y = {r['Delta_y']:.5g} {xu}, "
             f"Delta_u = {r['Delta_u']:.5g} {xu}, ductility = {r['ductility']:.4g}"
-            + (" (lower bound)" if r["ductility_is_lower_bound"] else ""))
+            + (" (lower bound)" if r["ductility_is_lower_bound"] else "")
+            + (f"; drift ratios {r['drift_y_pct']:.3g} % at yield, {r['drift_u_pct']:.3g} % at Delta_u "
+               f"(H = {r['drift_height_m']:g} m)" if "drift_u_pct" in r else ""))
 
 
 def _eeep_flags(r: dict, indent: str = "  ", yu: str = "") -> list:
@@ -115,6 +118,8 @@ def cmd_eeep(args):
     from .validate import smooth_curve
     if not args.smooth >= 0:
         raise ToolError(f"--smooth must be a window >= 0 mm, got {args.smooth}")
+    if args.drift_height is not None and not args.drift_height > 0:
+        raise ToolError(f"--drift-height must be a height > 0 in m, got {args.drift_height}")
     run_folder = is_run_folder(args.source)
     if run_folder and args.stage is None and not args.all_stages:
         # the same curve validate measures: the last stage, displacement from its start, the one load sign rule
@@ -138,6 +143,9 @@ def cmd_eeep(args):
     def fit(xs, ys, source):
         res = eeep.eeep(xs, ys, source=source, **opts)
         res.update(method_name=args.method, method_label=label, method_source=eeep.METHODS[args.method]["source"])
+        if args.drift_height:
+            res.update(drift_height_m=args.drift_height, drift_y_pct=100 * res["Delta_y"] / args.drift_height,
+                       drift_u_pct=100 * res["Delta_u"] / args.drift_height)
         return res
 
     report = {"source": c.source, "x_column": c.x_name, "y_column": c.y_name,
@@ -174,7 +182,8 @@ def cmd_eeep(args):
                        "envelope": per, "sign_y": sign, **common})
         files = [write_json(prefix + ".json", report)]
         if not args.no_plot:
-            files += eeep.plot_cyclic(signed_x, y, fits, prefix, c.label, (xu, fx), (yu, fy), stamp=_stamp(args.source))
+            files += eeep.plot_cyclic(signed_x, y, fits, prefix, c.label, (xu, fx), (yu, fy), stamp=_stamp(args.source),
+                                      drift_height=args.drift_height)
         print(f"{c.label}: cyclic record (the displacement reverses by {100 * report['reversal']:.0f} % of its "
               "largest value): EEEP of the envelope of each direction (ASTM E2126)")
         for name, r in per.items():
@@ -196,7 +205,8 @@ def cmd_eeep(args):
                    "sign_y": res["sign_y"] * sign, **common})
     files = [write_json(prefix + ".json", report)]
     if not args.no_plot:
-        files += eeep.plot(x, y, res, prefix, c.label, (xu, fx), (yu, fy), stamp=_stamp(args.source))
+        files += eeep.plot(x, y, res, prefix, c.label, (xu, fx), (yu, fy), stamp=_stamp(args.source),
+                           drift_height=args.drift_height)
     print(_eeep_line(c.label, report, xu, yu))
     print(f"  curve: columns {c.x_name}, {c.y_name} ({c.columns_rule}); {stage_note}; load sign {sign:+g} "
           f"({sign_rule})"
@@ -372,6 +382,9 @@ def build_parser():
     p.add_argument("--ultimate", choices=["peak", "drop"], default=None,
                    help="ultimate displacement: at peak load ([K25], default) or at the post-peak drop (ASTM E2126)")
     p.add_argument("--drop", type=float, default=None, help="post-peak load level for --ultimate drop (default 0.8)")
+    p.add_argument("--drift-height", type=float, metavar="H",
+                   help="height H in m over which the drift is taken: drift ratios of Delta_y and Delta_u in the JSON "
+                        "and the output, a drift-ratio axis on the figure")
     p.add_argument("--no-plot", action="store_true", help="write the JSON only")
     p.set_defaults(func=cmd_eeep)
 

@@ -327,9 +327,10 @@ def _finish(fig, ax, title: str, notes: list):
     ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.14), fontsize=8, ncol=1)
 
 
-def figure(curve_d, curve_p, res: dict, label: str, x_unit=("mm", 1e-3), y_unit=("kN", 1e3)):
-    """The figure of a monotonic fit (matplotlib figure and axes, not saved)."""
-    from .figures import new_figure
+def figure(curve_d, curve_p, res: dict, label: str, x_unit=("mm", 1e-3), y_unit=("kN", 1e3),
+           drift_height: float | None = None):
+    """The figure of a monotonic fit (matplotlib figure and axes, not saved); drift_height (m): a drift-ratio axis."""
+    from .figures import add_drift_axis, new_figure
     sx, sy = 1.0 / x_unit[1], 1.0 / y_unit[1]
     fig, ax = new_figure(figsize=(6.4, 6.2))
     ax.plot(res["sign_x"] * np.asarray(curve_d) * sx, res["sign_y"] * np.asarray(curve_p) * sy, color="0.2", lw=1.4,
@@ -339,20 +340,24 @@ def figure(curve_d, curve_p, res: dict, label: str, x_unit=("mm", 1e-3), y_unit=
     ax.set_ylabel(f"load ({y_unit[0]})" + (" [sign reversed]" if res["sign_y"] < 0 else ""))
     ax.set_xlim(left=0)
     ax.set_ylim(bottom=0)
-    _finish(fig, ax, f"EEEP idealisation, ultimate: {res['ultimate_rule']}, regression to "
-                     f"{res['regression_limit']:g} P_peak", _notes([("", res)]))
+    _finish(fig, ax, f"{res.get('method_label', 'EEEP')} idealisation, ultimate: {res['ultimate_rule']}, "
+                     + ("P_y = P_peak" if res.get("method") == "ec8" else
+                        f"{res['stiffness_rule']} to {res['regression_limit']:g} P_peak"), _notes([("", res)]))
+    if drift_height:
+        add_drift_axis(ax, x_unit[1], drift_height)
     return fig, ax
 
 
 def plot(curve_d, curve_p, res: dict, prefix: str, label: str, x_unit=("mm", 1e-3), y_unit=("kN", 1e3),
-         stamp: str = "") -> list:
+         stamp: str = "", drift_height: float | None = None) -> list:
     """The curve, its EEEP bilinear idealisation and the markers of yield, peak and ultimate points."""
     from .figures import save
-    fig, _ = figure(curve_d, curve_p, res, label, x_unit, y_unit)
+    fig, _ = figure(curve_d, curve_p, res, label, x_unit, y_unit, drift_height)
     return save(fig, prefix, stamp)
 
 
-def figure_cyclic(d, p, fits: dict, label: str, x_unit=("mm", 1e-3), y_unit=("kN", 1e3)):
+def figure_cyclic(d, p, fits: dict, label: str, x_unit=("mm", 1e-3), y_unit=("kN", 1e3),
+                  drift_height: float | None = None):
     """A reversing record (d signed, p with its load sign) in grey, the envelope of each direction and its EEEP fit
     (fits: {"positive": (x_env, y_env, res or None), "negative": ...})."""
     from .figures import new_figure
@@ -373,11 +378,14 @@ def figure_cyclic(d, p, fits: dict, label: str, x_unit=("mm", 1e-3), y_unit=("kN
     ax.set_xlabel(f"displacement ({x_unit[0]})")
     ax.set_ylabel(f"load ({y_unit[0]})")
     _finish(fig, ax, "EEEP of the envelope of each direction (ASTM E2126), cyclic record", _notes(done))
+    if drift_height:
+        from .figures import add_drift_axis
+        add_drift_axis(ax, x_unit[1], drift_height)
     return fig, ax
 
 
 def plot_cyclic(d, p, fits: dict, prefix: str, label: str, x_unit=("mm", 1e-3), y_unit=("kN", 1e3),
-         stamp: str = "") -> list:
+         stamp: str = "", drift_height: float | None = None) -> list:
     from .figures import save
-    fig, _ = figure_cyclic(d, p, fits, label, x_unit, y_unit)
+    fig, _ = figure_cyclic(d, p, fits, label, x_unit, y_unit, drift_height)
     return save(fig, prefix, stamp)

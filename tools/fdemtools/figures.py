@@ -29,6 +29,17 @@ def new_figure(*args, **kwargs):
         return plt.subplots(*args, **kwargs)
 
 
+def add_drift_axis(ax, unit_m: float, height_m: float):
+    """A second displacement axis on top of ax: the drift ratio d / H in %, for displacements plotted in a unit of
+    unit_m metres and a height H (m) over which the drift is taken (a wall's or a storey's)."""
+    if not height_m > 0:
+        raise ValueError("drift height must be > 0")
+    k = 100.0 * unit_m / height_m
+    sec = ax.secondary_xaxis("top", functions=(lambda x: x * k, lambda r: r / k))
+    sec.set_xlabel(f"drift ratio (%) over H = {height_m:g} m")
+    return sec
+
+
 def run_stamp(summaries) -> str:
     """What made a figure, in one line: the fdem release and build (summary.json "fdem_version", "build": the
     source tree's commit when fdem was built) and each run's case with its hash ("case_hash": the case as resolved,

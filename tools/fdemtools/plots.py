@@ -42,10 +42,10 @@ def run_labels(paths: list, runs: list) -> list:
 
 
 def plot_curves(curves: list, experiments: list, prefix: str, xu=("mm", 1e-3), yu=("kN", 1e3),
-                load_sign: str = "auto", stamp: str = "") -> list:
+                load_sign: str = "auto", stamp: str = "", drift_height: float | None = None) -> list:
     """Every run and experiment, each load with the tools' one sign rule (common.resolve_sign; experiments too).
-    A turned load is labelled so and a note printed."""
-    from .figures import new_figure, save
+    A turned load is labelled so and a note printed. drift_height (m): a drift-ratio axis on top."""
+    from .figures import add_drift_axis, new_figure, save
     fig, ax = new_figure()
     for c in experiments:
         s, rule = resolve_sign(c, load_sign)
@@ -63,6 +63,8 @@ def plot_curves(curves: list, experiments: list, prefix: str, xu=("mm", 1e-3), y
     ax.axhline(0, color="0.6", lw=0.6)
     ax.legend(fontsize=8)
     ax.set_title("load against displacement", fontsize=9)
+    if drift_height:
+        add_drift_axis(ax, xu[1], drift_height)
     return save(fig, prefix, stamp)
 
 
@@ -161,6 +163,8 @@ def plot_damage(run, label: str, prefix: str, xu=("mm", 1e-3), yu=("kN", 1e3), l
 
 
 def cmd_plot(args):
+    if args.drift_height is not None and not args.drift_height > 0:
+        raise ToolError(f"--drift-height must be a height > 0 in m, got {args.drift_height}")
     figs = [f.strip() for f in args.figures.split(",") if f.strip()]
     for f in figs:
         if f not in ("curves", "energy", "damage"):
@@ -182,7 +186,7 @@ def cmd_plot(args):
             exps.append(load_curve(e, args.exp_x, args.exp_y, args.exp_x_unit, args.exp_y_unit))
         from .figures import run_stamp
         files += plot_curves(curves, exps, os.path.join(out, "curves"), xu, yu, load_sign=sign_arg,
-                             stamp=run_stamp([r.summary for r in runs]))
+                             stamp=run_stamp([r.summary for r in runs]), drift_height=args.drift_height)
     single = len(runs) == 1
     for run, lab in zip(runs, labels):
         suffix = "" if single else "_" + _safe(lab)
@@ -226,5 +230,8 @@ def add_parser(sub):
                         "the loading work positive; a turned load is labelled so), 1 (as recorded) or -1 (turned)")
     p.add_argument("--raw-sign", action="store_true", help="same as --load-sign 1")
     p.add_argument("--partial", action="store_true", help="accept runs whose summary is not 'completed'")
+    p.add_argument("--drift-height", type=float, metavar="H",
+                   help="height H in m over which the drift is taken: the curves figure gets a top axis of drift ratio "
+                        "d / H in %%")
     p.add_argument("--out-dir", help="output folder (default RUN/post for one run, else ./fdem-plots)")
     p.set_defaults(func=cmd_plot)

@@ -367,3 +367,31 @@ def test_cli_method_ec8_names_its_source(tmp_path, cli):
     assert res["Delta_u"] == pytest.approx(5.0)
     rc, out, err = cli("eeep", f, "--x", "d_mm", "--y", "F_kN", "--method", "astm", "--limit", "0.7")
     assert rc != 0 and "fixes --limit 0.4" in (out + err)
+
+
+def test_cli_drift_height_gives_drift_ratios_and_an_axis(tmp_path, cli):
+    k, dy, du = 4.0, 1.5, 12.0  # kN/mm, mm, mm
+    d, p = epp_curve(k, dy, du)
+    f = tmp_path / "w.csv"
+    f.write_text("d_mm,F_kN\n" + "".join(f"{a!r},{b!r}\n" for a, b in zip(d, p)))
+    rc, out, err = cli("eeep", f, "--x", "d_mm", "--y", "F_kN", "--x-unit", "mm", "--y-unit", "kN",
+                       "--drift-height", "1.2")
+    assert rc == 0, err
+    res = json.loads((tmp_path / "w_eeep.json").read_text())
+    assert res["drift_y_pct"] == pytest.approx(100 * 1.5e-3 / 1.2, rel=1e-9)
+    assert res["drift_u_pct"] == pytest.approx(1.0, rel=1e-9)  # 12 mm over 1.2 m
+    assert "drift ratios" in out
+    svg = (tmp_path / "w_eeep.svg").read_text()
+    assert "drift ratio (%)" in svg
+    rc, out, err = cli("eeep", f, "--drift-height", "0")
+    assert rc != 0 and "--drift-height must be" in (out + err)
+
+
+def test_drift_axis_maps_displacement_to_percent():
+    from fdemtools.figures import add_drift_axis, new_figure
+    fig, ax = new_figure()
+    ax.plot([0, 10], [0, 1])
+    sec = add_drift_axis(ax, 1e-3, 2.5)  # mm over 2.5 m: 10 mm = 0.4 %
+    fwd, inv = sec._functions
+    assert fwd(10.0) == pytest.approx(0.4)
+    assert inv(0.4) == pytest.approx(10.0)
