@@ -1,5 +1,6 @@
 // fdem command line: run, check, mesh. Exit codes (ARCHITECTURE.md): 0 done, 1 bad input, 2 run failed,
 // 3 internal error.
+#include <cstdio>
 #include <omp.h>
 #include <unistd.h>
 
@@ -168,7 +169,11 @@ int main(int argc, char** argv) {
             const fdem::Simulation sim(spec, fdem::build_scene(spec), quiet);
             std::cout << a.case_file << ": ok: " << sim.model().n_triangles() << " triangles, " << sim.model().n_nodes()
                       << " nodes, " << sim.model().cohesive.size() << " cohesive elements, " << spec.stages.size()
-                      << " stage(s), time step " << sim.dt() << " s\n";
+                      << " stage(s), time step " << sim.dt() << " s, case hash " << [&spec] {
+                             char hex[17];  // summary.json case_hash: the resolved case (its TOML after --set)
+                             std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(spec.resolved_hash));
+                             return std::string(hex);
+                         }() << "\n";
             for (const std::string& note : sim.interactions().penalty_notes()) std::cout << note << "\n";
             return 0;
         }

@@ -24,6 +24,7 @@ sys.path.insert(0, os.path.join(HERE, "..", "..", "tools"))
 sys.path.insert(0, HERE)
 
 from make_cases import read_reference  # noqa: E402  (reference.csv: the test and seeds/000's M-DEM numbers)
+from fdemtools.figures import savefig_stamped  # noqa: E402  (the runs' build and case hashes on the figures)
 
 _REF = read_reference()
 TEST = {p: dict(peak=float(r["experiment_kN"]), k_el=float(r["k_el_kN_per_mm"]), drift=float(r["drift_pct"]),
@@ -116,7 +117,7 @@ def main():
         ax.legend(fontsize=7)
         ax.grid(alpha=0.3)
     fig.tight_layout()
-    fig.savefig(a.out + ".png", dpi=130)
+    savefig_stamped(fig, a.out + ".png", a.runs, dpi=130)
     # run time against error: the CPU time (wall time where a run has none) against |peak error| and |k_el error|
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.5))
     for ax, key, name in ((axes[0], "peak_err", "|peak base shear - test| (% of the test)"),
@@ -138,7 +139,7 @@ def main():
     axes[0].set_title("macro-blocks (M): circles monotonic, triangles cyclic; micro-models: squares; "
                       "blue LW, red HW", fontsize=8)
     fig.tight_layout()
-    fig.savefig(a.out + "_speed.png", dpi=130)
+    savefig_stamped(fig, a.out + "_speed.png", a.runs, dpi=130)
     print(f"wrote {a.out}.csv, {a.out}.png, {a.out}_speed.png")
 
 

@@ -13,6 +13,7 @@ import sys
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "tools"))
 from fdemtools.study import curve_quantities  # noqa: E402
+from fdemtools.figures import savefig_stamped  # noqa: E402
 
 
 def main():
@@ -45,7 +46,7 @@ def main():
     ax[0].legend(fontsize=8)
     fig.suptitle(a.title, fontsize=10)
     fig.tight_layout()
-    fig.savefig(a.out, dpi=120)
+    savefig_stamped(fig, a.out, [spec.rpartition("=")[0] for spec in a.runs], dpi=120)
     print(f"wrote {a.out}")
 
 

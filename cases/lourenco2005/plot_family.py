@@ -15,6 +15,7 @@ import sys
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "tools"))
 from fdemtools.study import curve_quantities  # noqa: E402
 from fdemtools.validate import smooth_curve  # noqa: E402
+from fdemtools.figures import savefig_stamped  # noqa: E402
 
 
 def _f(v):
@@ -62,7 +63,7 @@ def main():
     ax.set_title(a.title, fontsize=9)
     ax.grid(alpha=0.3)
     fig.tight_layout()
-    fig.savefig(a.out, dpi=110)
+    savefig_stamped(fig, a.out, [os.path.join(a.report_dir, r["case"], "runs", "run") for r in rows], dpi=110)
     print("wrote", a.out)
 
 

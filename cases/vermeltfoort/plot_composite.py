@@ -15,6 +15,10 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+import sys  # noqa: E402
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "tools"))
+from fdemtools.figures import savefig_stamped  # noqa: E402  (the runs' build and case hashes on the figure)
 
 WALLS = [("0.30 MPa (J4D/J5D)", 50.0), ("1.21 MPa (J6D)", 120.0), ("2.12 MPa (J7D)", 175.0)]
 COLORS = ["tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple"]
@@ -86,7 +90,7 @@ def main():
         ax.set_ylim(bottom=0)
     fig.suptitle("Vermeltfoort walls, held top beam, law = \"composite\" (published values, no calibration)")
     fig.tight_layout()
-    fig.savefig(a.out, dpi=120)
+    savefig_stamped(fig, a.out, list(a.runs) + [e.partition("=")[2] for e in a.extra], dpi=120)
     print("wrote", a.out)
 
 

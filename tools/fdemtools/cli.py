@@ -14,7 +14,7 @@ from .common import (DEFAULT_X_UNIT, DEFAULT_Y_UNIT, FORCE_UNITS, LENGTH_UNITS, 
                      resolve_sign, stage_curve, write_json)
 
 PROG = "fdem-tools"
-COMMAND_MODULES = ["plots", "cracks", "batch", "study", "validate", "limit", "preview"]  # modules with an add_parser(subparsers) function
+COMMAND_MODULES = ["plots", "cracks", "batch", "study", "validate", "limit", "preview", "provenance"]  # modules with an add_parser(subparsers) function
 
 
 def _units_args(p, stage_help="keep only the rows of this stage (1-based; run folders)"):

@@ -62,6 +62,31 @@ def run_stamp(summaries) -> str:
     return "; ".join(builds) + " | " + ", ".join(cases)
 
 
+def stamp_of_runs(run_dirs) -> str:
+    """run_stamp of the summary.json files of these run folders (those without one are left out)."""
+    import json
+    summaries = []
+    for d in run_dirs:
+        try:
+            with open(os.path.join(d, "summary.json")) as f:
+                summaries.append(json.load(f))
+        except (OSError, ValueError):
+            continue
+    return run_stamp(summaries)
+
+
+def savefig_stamped(fig, path: str, run_dirs, **kwargs) -> str:
+    """fig.savefig(path, **kwargs) for a script's own figure, with the stamp of the runs it shows (stamp_of_runs) in
+    the bottom-left corner and in the file's metadata, as save() writes it. Returns the stamp ("" without runs)."""
+    stamp = stamp_of_runs(run_dirs)
+    if stamp:
+        fig.text(0.003, 0.003, stamp, fontsize=5.5, color="0.45", ha="left", va="bottom")
+        if path.lower().endswith((".png", ".svg")):
+            kwargs.setdefault("metadata", {"Source": stamp})
+    fig.savefig(path, **kwargs)
+    return stamp
+
+
 def save(fig, prefix: str, stamp: str = "") -> list:
     """Writes prefix.png and prefix.svg, closes the figure and returns both paths. stamp (run_stamp): written small
     in the figure's bottom-left corner and into both files' metadata ("Source")."""

@@ -323,9 +323,9 @@ def cmd_mesh(args):
     write_json(os.path.join(out, "mesh_study.json"), {"case": os.path.abspath(args.case), "key": args.key,
                                                      "variable": var, "finest": finest[var],
                                                      "convergence_order": orders, "runs": rows})
-    from .figures import save
+    from .figures import run_stamp, save
     fig, _ = mesh_figure(ok, qty, orders, var, var_label, var_scale, size_key, finest)
-    files = save(fig, os.path.join(out, "mesh_study"))
+    files = save(fig, os.path.join(out, "mesh_study"), run_stamp([r.get("summary") for r in recs]))
     print(format_rows(rows, [var, "status", "peak_load_kN", "reference_computed_shown", "reference_error", "D_frac_J",
                              "wall_time_s", "n_triangles"]))
     if ref_name:
@@ -546,8 +546,9 @@ def cmd_speed(args):
                                                       "reference": ref_src, "reference_quantity": ref_qty, "reference_run": ref_run,
                                                       "reference_curve": cref_src, "curve_to_m": u_to,
                                                       "curve_from_m": u_from, "front_error": args.error, "runs": rows})
+    from .figures import run_stamp
     files = plot_speed(rows, dims, ref_src if args.error == "peak" else cref_src, os.path.join(out, "speed_study"),
-                       measure, args.error, tkey)
+                       measure, args.error, tkey, stamp=run_stamp([r.get("summary") for r in recs]))
     print(format_rows(rows, [k for k, _, _ in dims] + ["status", "wall_time_s", "cpu_time_s", "peak_load_kN", "error", "curve_rms",
                                                        "curve_max"] + (["curve_max_smoothed"] if smooth > 0 else [])
                       + ["K_e_error", "ductility_error", "pareto"]))
@@ -594,7 +595,7 @@ def _show(v: float, unit: str) -> str:
     return f"{v * factor:.5g} {shown}".strip()
 
 
-def plot_speed(rows, dims, ref_src, prefix, measure="error", label="peak", tkey="wall_time_s"):
+def plot_speed(rows, dims, ref_src, prefix, measure="error", label="peak", tkey="wall_time_s", stamp: str = ""):
     from .figures import new_figure, save
     fig, ax = new_figure(figsize=(7.2, 5.0))
     rows = [{**r, "error": r[measure]} for r in rows]
@@ -643,7 +644,7 @@ def plot_speed(rows, dims, ref_src, prefix, measure="error", label="peak", tkey=
     if any(r["error"] == 0 for r in valid):
         ax.text(0.01, 0.01, "error 0 (the reference run) drawn at the bottom edge", transform=ax.transAxes,
                 fontsize=7, color="0.4")
-    return save(fig, prefix)
+    return save(fig, prefix, stamp)
 
 
 def _common(p):

@@ -53,3 +53,20 @@ def test_plot_of_a_real_run_names_its_build_and_case_hash(tmp_path, cli):
     for name in ("curves", "energy", "eeep"):
         src = Image.open(tmp_path / "a" / "post" / f"{name}.png").info.get("Source", "")
         assert runs["a"]["case_hash"] in src and runs["a"]["build"] in src, src
+
+
+def test_a_case_script_figure_is_stamped_with_its_runs(tmp_path):
+    """The cases' own plot scripts save through figures.savefig_stamped: the stamp of the runs they show."""
+    from fdemtools.figures import savefig_stamped
+    runs = []
+    for name, h in (("w1", "0123456789abcdef"), ("w2", "fedcba9876543210")):
+        d = tmp_path / name
+        d.mkdir()
+        (d / "summary.json").write_text(json.dumps({"fdem_version": "0.1.0", "build": "abc", "case": name, "case_hash": h}))
+        runs.append(str(d))
+    runs.append(str(tmp_path / "missing"))  # no summary: left out
+    fig, ax = new_figure()
+    ax.plot([0, 1], [0, 1])
+    stamp = savefig_stamped(fig, str(tmp_path / "f.png"), runs, dpi=50)
+    assert stamp == "fdem 0.1.0 build abc | w1 [0123456789abcdef], w2 [fedcba9876543210]"
+    assert Image.open(tmp_path / "f.png").info.get("Source") == stamp

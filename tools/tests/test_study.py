@@ -42,6 +42,9 @@ def test_mesh_study_logic_with_fake_fdem(tmp_path, cli):
         assert float(r["reference_computed"]) == pytest.approx(1e4 * (1 + h), rel=1e-12)
     for ext in ("png", "svg"):
         assert (out / f"mesh_study.{ext}").stat().st_size > 2000
+    # the figure names what made it (the fake's summaries carry no build or hash: said so, not left out)
+    from PIL import Image
+    assert Image.open(out / "mesh_study.png").info.get("Source") == "fdem ? build unknown | fake [no hash]"
     # q(h) = 10 kN (1 + h) converges with order 1 exactly, towards 10 kN
     j = json.loads((out / "mesh_study.json").read_text())
     o = j["convergence_order"]["peak_load_kN"]
@@ -90,6 +93,8 @@ def test_speed_study_logic_with_fake_fdem(tmp_path, cli):
     assert j["reference_peak_N"] == pytest.approx(11e3, rel=1e-12)
     runs = j["runs"]
     assert len(runs) == 8
+    from PIL import Image
+    assert Image.open(out / "speed_study.png").info.get("Source") == "fdem ? build unknown | fake [no hash]"
     for r in runs:
         h, rate, damp = float(r["geometry.mesh_size"]), float(r["rate"]), float(r["damping"])
         peak = 1e4 * (1 + h) * (1 + rate) * (1 + damp)

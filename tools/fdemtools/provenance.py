@@ -1,0 +1,139 @@
+"""provenance: which committed figures still match their cases (issue 51, 7).
+
+Every figure the tools write carries a stamp (figures.run_stamp): "fdem VERSION build BUILD | CASE [HASH], ...",
+small in a corner and as the PNG text chunk / SVG metadata "Source". This command reads the stamps of the PNG files
+under the given paths, finds each named case among the case files under --cases (by its [case] name), asks
+`fdem check` for the case's hash as it stands now, and reports per figure:
+  ok          every case it names hashes as when the figure was made;
+  stale       a case changed since (the figure must be regenerated: it no longer shows what the case gives);
+  unknown     a case it names is not found (renamed or removed);
+  unstamped   the figure carries no stamp (made before stamps, or by a script that does not stamp).
+The build each figure was made with is listed too (a commit: `git log BUILD..` shows what changed in the code
+since). Exit code 0 when every figure is ok, 2 otherwise (--strict), else 0 with the report.
+"""
+from __future__ import annotations
+
+import os
+import re
+import subprocess
+import sys
+
+from .batch import fdem_binary
+from .common import ToolError, write_csv
+
+STAMP = re.compile(r"^fdem (?P<version>\S+) build (?P<build>\S+)(?:; fdem .*?)? \| (?P<cases>.*)$")
+CASE = re.compile(r"(?P<name>[^,\[\]]+?) \[(?P<hash>[0-9a-f]{16}|no hash)\]")
+
+
+def read_stamp(png: str) -> str:
+    from PIL import Image
+    with Image.open(png) as im:
+        return (im.info.get("Source") or "").strip()
+
+
+def parse_stamp(stamp: str) -> dict | None:
+    """{"version", "build", "cases": [(name, hash or None)]} of a stamp, None if it is not one."""
+    m = STAMP.match(stamp)
+    if not m:
+        return None
+    cases = [(c.group("name").strip(), None if c.group("hash") == "no hash" else c.group("hash"))
+             for c in CASE.finditer(m.group("cases"))]
+    return {"version": m.group("version"), "build": m.group("build"), "cases": cases}
+
+
+def case_files(root: str) -> dict:
+    """[case] name -> case file, over the TOML files under root."""
+    import tomllib
+    out = {}
+    for d, _, files in os.walk(root):
+        for f in sorted(files):
+            if not f.endswith(".toml"):
+                continue
+            p = os.path.join(d, f)
+            try:
+                with open(p, "rb") as fh:
+                    name = (tomllib.load(fh).get("case") or {}).get("name")
+            except (OSError, tomllib.TOMLDecodeError):
+                continue
+            if isinstance(name, str):
+                out.setdefault(name, p)
+    return out
+
+
+def case_hash(fdem: str, path: str) -> str:
+    r = subprocess.run([fdem, "check", path], capture_output=True, text=True, cwd=os.path.dirname(os.path.abspath(path)))
+    m = re.search(r"case hash ([0-9a-f]{16})", r.stdout)
+    if r.returncode != 0 or not m:
+        raise ToolError(f"fdem check {path} gave no case hash (exit {r.returncode}): "
+                        + (r.stderr.strip().splitlines() or ["no output"])[-1])
+    return m.group(1)
+
+
+def check(paths: list, cases_root: str, fdem: str) -> list:
+    pngs = []
+    for p in paths:
+        if os.path.isdir(p):
+            for d, _, files in os.walk(p):
+                pngs += [os.path.join(d, f) for f in sorted(files) if f.endswith(".png")]
+        elif p.endswith(".png"):
+            pngs.append(p)
+        else:
+            raise ToolError(f"{p}: not a folder or a PNG file")
+    names = case_files(cases_root)
+    hashes = {}
+    rows = []
+    for png in sorted(pngs):
+        stamp = read_stamp(png)
+        parsed = parse_stamp(stamp) if stamp else None
+        if not parsed:
+            rows.append({"figure": png, "status": "unstamped", "build": "", "cases": "", "detail": ""})
+            continue
+        status, detail = "ok", []
+        for name, h in parsed["cases"]:
+            path = names.get(name)
+            if path is None:
+                status = "unknown" if status == "ok" else status
+                detail.append(f"{name}: no case of that name under {cases_root}")
+                continue
+            if path not in hashes:
+                hashes[path] = case_hash(fdem, path)
+            if h is None:
+                status = "stale" if status in ("ok", "unknown") else status
+                detail.append(f"{name}: the figure's run carried no hash")
+            elif hashes[path] != h:
+                status = "stale"
+                detail.append(f"{name}: made from [{h}], {os.path.relpath(path)} now hashes [{hashes[path]}]")
+        rows.append({"figure": png, "status": status, "build": parsed["build"],
+                     "cases": ", ".join(n for n, _ in parsed["cases"]), "detail": "; ".join(detail)})
+    return rows
+
+
+def cmd_provenance(args):
+    rows = check(args.paths, args.cases, fdem_binary(args.fdem))
+    if not rows:
+        raise ToolError("no PNG figure under " + ", ".join(args.paths))
+    width = max(len(os.path.relpath(r["figure"])) for r in rows)
+    for r in rows:
+        print(f"{os.path.relpath(r['figure']):<{width}}  {r['status']:<9}  {r['build'] or '-':<14}  "
+              + (r["detail"] or r["cases"]))
+    counts = {s: sum(r["status"] == s for r in rows) for s in ("ok", "stale", "unknown", "unstamped")}
+    print(", ".join(f"{n} {s}" for s, n in counts.items()) + f" of {len(rows)} figures")
+    if args.csv:
+        write_csv(args.csv, list(rows[0].keys()), [list(r.values()) for r in rows])
+        print(f"wrote {args.csv}")
+    return 2 if args.strict and counts["ok"] != len(rows) else 0
+
+
+def add_parser(sub):
+    p = sub.add_parser("provenance", help="which committed figures still match their cases (stamps against hashes)",
+                       description=__doc__.split("\n\n")[1] if __doc__ else None)
+    p.add_argument("paths", nargs="*", default=["cases"], metavar="PATH", help="folders or PNG files (default: cases)")
+    p.add_argument("--cases", default="cases", help="folder of the case files the stamps name (default: cases)")
+    p.add_argument("--fdem", help="fdem executable (default: $FDEM_BIN, else build/fdem/fdem)")
+    p.add_argument("--csv", help="also write the table to this CSV file")
+    p.add_argument("--strict", action="store_true", help="exit 2 unless every figure is ok")
+    p.set_defaults(func=cmd_provenance)
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit("run through fdem-tools provenance")

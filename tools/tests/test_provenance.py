@@ -1,0 +1,62 @@
+"""provenance (issue 51, 7): a committed figure is checked against its case through the stamp it carries: ok while
+the case hashes as when the figure was made, stale once the case changed, unstamped without a stamp."""
+import os
+import shutil
+import subprocess
+
+import pytest
+
+from fdemtools.figures import new_figure, save
+from fdemtools.provenance import parse_stamp
+
+REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+TINY = os.path.join(os.path.dirname(os.path.abspath(__file__)), "data", "tiny_shear.toml")
+
+
+def fdem_bin():
+    return os.environ.get("FDEM_BIN") or os.path.join(REPO, "build", "fdem", "fdem")
+
+
+def test_parse_stamp():
+    p = parse_stamp("fdem 0.1.0 build abc123 | w1 [00112233445566ff], old [no hash]")
+    assert p["build"] == "abc123" and p["cases"] == [("w1", "00112233445566ff"), ("old", None)]
+    p = parse_stamp("fdem 0.1.0 build a1; fdem 0.1.0 build b2 | w [0123456789abcdef]")
+    assert p["build"] == "a1" and p["cases"] == [("w", "0123456789abcdef")]
+    assert parse_stamp("made by hand") is None
+
+
+def test_figures_ok_then_stale_after_the_case_changes(tmp_path, cli):
+    if not os.access(fdem_bin(), os.X_OK):
+        pytest.fail(f"no fdem executable at {fdem_bin()} (build it or set FDEM_BIN)")
+    cases = tmp_path / "cases"
+    cases.mkdir()
+    case = cases / "tiny_shear.toml"
+    shutil.copy(TINY, case)
+    for f in os.listdir(os.path.dirname(TINY)):  # the case's geometry files beside it
+        if f.endswith(".geo") or f.endswith(".msh"):
+            shutil.copy(os.path.join(os.path.dirname(TINY), f), cases / f)
+    run = tmp_path / "run"
+    r = subprocess.run([fdem_bin(), "run", str(case), "--out", str(run), "--quiet"], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    rc, out, err = cli("plot", str(run), "--figures", "curves", "--out-dir", str(cases / "fig"))
+    assert rc == 0, err
+    fig, ax = new_figure()
+    ax.plot([0, 1], [0, 1])
+    save(fig, str(cases / "fig" / "hand"))  # no stamp
+    rc, out, err = cli("provenance", str(cases / "fig"), "--cases", str(cases), "--fdem", fdem_bin(), "--strict")
+    assert rc == 2, err  # the unstamped one
+    lines = {os.path.basename(ln.split()[0]): ln for ln in out.splitlines() if ln.split() and ln.split()[0].endswith(".png")}
+    assert " ok " in lines["curves.png"]
+    assert " unstamped " in lines["hand.png"]
+    # a comment alone leaves the resolved case, and so its hash, as it was
+    text = case.read_text()
+    case.write_text(text + "\n# a comment only\n")
+    rc, out, err = cli("provenance", str(cases / "fig" / "curves.png"), "--cases", str(cases), "--fdem", fdem_bin())
+    assert rc == 0 and " ok " in out, out + err
+    # the case changes (E doubled): its figure is stale, and says from which hash to which
+    import re
+    case.write_text(re.sub(r"\bE = ([0-9.eE+-]+)", lambda m: f"E = {2 * float(m.group(1))!r}", text, count=1))
+    rc, out, err = cli("provenance", str(cases / "fig" / "curves.png"), "--cases", str(cases), "--fdem", fdem_bin(),
+                       "--strict")
+    assert rc == 2
+    assert " stale " in out and "now hashes" in out
