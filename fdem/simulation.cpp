@@ -437,8 +437,10 @@ void Simulation::write_snapshot() {
     // Derived stress measures (Pa): von Mises with the out-of-plane stress (plane stress 0; plane strain, F_zz = 1,
     // the neo-Hookean law's s_zz = lambda ln J / J), and the in-plane principal stresses s1 >= s2.
     VtuArray von_mises{"von_mises", 1, {}, {}, false, {}}, principal{"principal_stress", 2, {}, {}, false, {"s1", "s2"}};
+    // principal_direction: the unit vector of s1 (angle theta = atan2(2 sxy, sxx - syy) / 2 from x), for glyphs.
+    VtuArray pdir{"principal_direction", 3, {}, {}, false, {"n1x", "n1y", "n1z"}};
     stress.f64.resize(3 * nt), mat.i32.resize(nt), region.i32.resize(nt), body.i32.resize(nt);
-    von_mises.f64.resize(nt), principal.f64.resize(2 * nt);
+    von_mises.f64.resize(nt), principal.f64.resize(2 * nt), pdir.f64.resize(3 * nt);
     std::vector<int> tri(3 * nt);
     for (int e = 0; e < nt; ++e) {
         const MaterialConst& mc = model_.mat[model_.tris[e].mat];
@@ -451,6 +453,8 @@ void Simulation::write_snapshot() {
         const double szz = spec_.plane == Plane::strain && J > 0 ? mc.lambda * std::log(J) / J : 0.0;
         const StressMeasures sm = stress_measures(s3[0], s3[1], s3[2], szz);
         von_mises.f64[e] = sm.von_mises, principal.f64[2 * e] = sm.s1, principal.f64[2 * e + 1] = sm.s2;
+        const double theta = 0.5 * std::atan2(2 * s3[2], s3[0] - s3[1]);
+        pdir.f64[3 * e] = std::cos(theta), pdir.f64[3 * e + 1] = std::sin(theta), pdir.f64[3 * e + 2] = 0;
         mat.i32[e] = model_.tri_material[e];
         region.i32[e] = model_.mesh.tri_region[e];
         body.i32[e] = model_.mesh.tri_body.empty() ? 0 : model_.mesh.tri_body[e];
@@ -468,9 +472,15 @@ void Simulation::write_snapshot() {
     // With a compressive cap (fracture/law.hpp): joint_crushing, the plastic closure of each cohesive element (m,
     // Simpson mean over its points; NaN on triangles and dry joints).
     VtuArray crushing{"joint_crushing", 1, {}, {}, false, {}};
+    // joint_normal_stress, joint_shear_stress: a cohesive element's mean traction at the last step (Pa, tension
+    // positive; CohesiveSystem::mean_traction); NaN on triangles, dry joints and dormant (not inserted) elements.
+    VtuArray jsn{"joint_normal_stress", 1, {}, {}, false, {}}, jss{"joint_shear_stress", 1, {}, {}, false, {}};
+    jsn.f64.assign(nt, std::nan("")), jss.f64.assign(nt, std::nan(""));
     kind.i32.assign(nt, 0), damage.f64.assign(nt, -1.0), state.i32.assign(nt, -1);
     opening.f64.assign(nt, std::nan("")), slip.f64.assign(nt, std::nan("")), crushing.f64.assign(nt, std::nan(""));
-    auto add_line = [&](const int* n, int cell_kind, double dmg, int st, double crush) {
+    auto add_line = [&](const int* n, int cell_kind, double dmg, int st, double crush, double sn, double ss) {
+        jsn.f64.push_back(sn), jss.f64.push_back(ss);
+        for (int c = 0; c < 3; ++c) pdir.f64.push_back(std::nan(""));
         lines.push_back(n[0]), lines.push_back(n[1]);
         kind.i32.push_back(cell_kind);
         damage.f64.push_back(dmg);
@@ -483,15 +493,20 @@ void Simulation::write_snapshot() {
         mat.i32.push_back(-1), region.i32.push_back(-1), body.i32.push_back(-1);
     };
     if (const fracture::CohesiveSystem* j = inter_.joints())
-        for (int e = 0; e < j->size(); ++e)
-            add_line(j->element(e).n, 1, j->damage(e), static_cast<int>(j->state(e)), j->crushing(e));
+        for (int e = 0; e < j->size(); ++e) {
+            double sn, ss;
+            j->mean_traction(e, model_.x.data(), sn, ss);
+            add_line(j->element(e).n, 1, j->damage(e), static_cast<int>(j->state(e)), j->crushing(e), sn, ss);
+        }
     for (int e = 0; e < inter_.dry_joint_count(); ++e)
-        add_line(inter_.dry_joints()[e].n.data(), 2, -1.0, inter_.dry_recorded(e) ? 1 : 0, std::nan(""));
+        add_line(inter_.dry_joints()[e].n.data(), 2, -1.0, inter_.dry_recorded(e) ? 1 : 0, std::nan(""), std::nan(""),
+                 std::nan(""));
     char name[64];
     std::snprintf(name, sizeof name, "snapshots/step_%09ld.vtu", steps_);
-    std::vector<VtuArray> cells{stress, von_mises, principal, mat, region, body, kind};
+    std::vector<VtuArray> cells{stress, von_mises, principal, pdir, mat, region, body, kind};
     if (!lines.empty())
         for (const auto* a : {&damage, &state, &opening, &slip}) cells.push_back(*a);
+    if (inter_.joints()) cells.push_back(jsn), cells.push_back(jss);
     if (inter_.joints() && inter_.joints()->has_cap()) cells.push_back(crushing);
     if (crush_.active()) {
         // block_crushing: kappa / kappa_u of each crushing triangle (0 intact, 1 no strength left; fdem/plasticity.hpp),

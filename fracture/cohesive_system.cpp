@@ -446,6 +446,26 @@ double CohesiveSystem::crush_damage(int e) const {
   return std::max(h[0].crush, std::max(h[1].crush, h[2].crush));
 }
 
+void CohesiveSystem::mean_traction(int e, const double* x, double& sigma, double& tau) const {
+  if (dormant(e)) {
+    sigma = tau = std::nan("");
+    return;
+  }
+  const int* n = elems_[e].n;
+  // the frame of add_forces: the mid-line of the two edges, n pointing from side A into side B
+  double tx = (x[2 * n[1]] + x[2 * n[3]]) - (x[2 * n[0]] + x[2 * n[2]]);
+  double ty = (x[2 * n[1] + 1] + x[2 * n[3] + 1]) - (x[2 * n[0] + 1] + x[2 * n[2] + 1]);
+  const double len = std::sqrt(tx * tx + ty * ty);
+  if (len > 0.0) tx /= len, ty /= len;
+  else tx = 1.0, ty = 0.0;
+  const double nx = ty, ny = -tx;
+  const double* fe = &force_[8 * std::size_t(e)];
+  const double fx = fe[0] + fe[2], fy = fe[1] + fe[3];
+  const double area = length_[e] * thickness_;
+  sigma = (fx * nx + fy * ny) / area;
+  tau = (fx * tx + fy * ty) / area;
+}
+
 JointState CohesiveSystem::state(int e) const {
   if (broken_[e]) return JointState::broken;
   return damage(e) > 0.0 ? JointState::damaged : JointState::intact;

@@ -146,6 +146,11 @@ class CohesiveSystem {
 
   // Output for VTU snapshots: damage per element = max over its points; state intact / damaged / broken.
   double damage(int e) const;
+  // The mean traction on element e at its last force evaluation (add_forces), in the frame of the positions x:
+  // sigma = F_A . n / (h t) (Pa, tension positive) and tau = F_A . t / (h t) (Pa, along edge A's direction), F_A the
+  // force the element put on its side-A nodes (the Simpson sum of its points' tractions). NaN for a dormant element
+  // (extrinsic, not inserted: the continuum carries that edge).
+  void mean_traction(int e, const double* x, double& sigma, double& tau) const;
   double point_damage(int e, int point) const { return history_[3 * e + point].damage; }
   JointState state(int e) const;
   // Compressive cap (law.hpp): the plastic closure of element e, Simpson mean of -o_c over its points (m, >= 0; 0

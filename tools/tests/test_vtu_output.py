@@ -6,6 +6,8 @@ import os
 import re
 import subprocess
 
+import numpy as np
+
 import pytest
 
 vtk = pytest.importorskip("vtk")
@@ -199,3 +201,86 @@ def test_snapshots_carry_their_time(tmp_path):
     reader.UpdateInformation()
     reader.Update()
     assert reader.GetOutput().GetFieldData().GetArray("TimeValue").GetValue(0) > 0
+
+
+BONDED = """[case]
+name = "bonded_blocks"
+thickness = 0.1
+plane = "stress"
+[geometry]
+type = "gmsh"
+file = "blocks.geo"
+[materials.stone]
+E = 1.0e9
+nu = 0.2
+density = 2000.0
+[regions]
+lower = "stone"
+upper = "stone"
+[[interfaces]]
+regions = ["lower", "upper"]
+kind = "bonded"
+tensile_strength = 1.0e7
+cohesion = 1.0e7
+friction = 30.0
+residual_friction = 30.0
+GI = 1000.0
+GII = 1000.0
+penalty = 1.0e11
+[output]
+snapshot_interval = 10.0
+[[stages]]
+name = "press"
+equilibrium = 1e-5
+max_duration = 2.0
+local_damping = 0.8
+  [[stages.supports]]
+  group = "lower_bottom"
+  fix = "xy"
+  [[stages.loads]]
+  group = "upper_top"
+  force = [2000.0, -20000.0]
+  ramp = 0.002
+"""
+
+
+def test_joint_tractions_and_principal_directions(tmp_path):
+    """A bonded joint carries the load on the block above it: the sum of joint_normal_stress x length x thickness over
+    its elements is the applied vertical load, that of joint_shear_stress the horizontal one (1 %); each triangle's
+    principal_direction is the unit vector at atan2(2 sxy, sxx - syy) / 2, and an eigenvector of its stress."""
+    (tmp_path / "blocks.geo").write_text(GEO)
+    case = tmp_path / "case.toml"
+    case.write_text(BONDED)
+    run = tmp_path / "run"
+    _fdem_run("run", case, "--quiet", "--threads", "1", "--out", run, cwd=tmp_path)
+    files = _pvd_files(run)
+    grid = _read(run / files[-1])
+    cd = grid.GetCellData()
+    kind = vtk_to_numpy(cd.GetArray("cell_kind"))
+    sn = vtk_to_numpy(cd.GetArray("joint_normal_stress"))
+    ss = vtk_to_numpy(cd.GetArray("joint_shear_stress"))
+    joint = kind == 1
+    assert joint.sum() >= 4
+    assert np.isnan(sn[kind == 0]).all() and np.isnan(ss[kind == 0]).all()
+    pts = vtk_to_numpy(grid.GetPoints().GetData())
+    disp = vtk_to_numpy(grid.GetPointData().GetArray("displacement"))
+    cur = pts + disp
+    N = T = 0.0
+    for c in np.nonzero(joint)[0]:
+        ids = grid.GetCell(int(c)).GetPointIds()
+        a, b = cur[ids.GetId(0)], cur[ids.GetId(1)]
+        length = float(np.hypot(*(b - a)[:2]))
+        N += sn[c] * length * 0.1
+        T += ss[c] * length * 0.1
+    assert N == pytest.approx(-20000.0, rel=0.01)   # compression: the load on the block above
+    assert abs(T) == pytest.approx(2000.0, rel=0.01)  # the horizontal load, along the joint
+    s = vtk_to_numpy(cd.GetArray("stress"))
+    pdir = vtk_to_numpy(cd.GetArray("principal_direction"))
+    p = vtk_to_numpy(cd.GetArray("principal_stress"))
+    assert np.isnan(pdir[joint]).all()
+    for (sxx, syy, sxy), (nx, ny, nz), (s1, _) in zip(s[kind == 0], pdir[kind == 0], p[kind == 0]):
+        assert nx * nx + ny * ny == pytest.approx(1.0, rel=1e-12) and nz == 0
+        scale = abs(sxx) + abs(syy) + abs(sxy)
+        # (sigma - s1 I) n = 0
+        assert (sxx - s1) * nx + sxy * ny == pytest.approx(0.0, abs=1e-9 * scale)
+        assert sxy * nx + (syy - s1) * ny == pytest.approx(0.0, abs=1e-9 * scale)
