@@ -35,7 +35,7 @@
 #include "contact/contact_law.hpp"
 #include "contact/nbs.hpp"
 #include "contact/potential.hpp"
-#include "fdem/state_io.hpp"
+#include "fdem/common/state_io.hpp"
 
 namespace fdem::contact {
 
@@ -137,7 +137,7 @@ public:
     const std::vector<int>& pair_b() const { return pair_b_; }
     const std::vector<double>& sliding_history() const { return hist_; }  // kHistPerPair per pair
 
-    // Checkpoint (fdem/state_io.hpp): everything that carries from one step to the next: the contact-capable set,
+    // Checkpoint (fdem/common/state_io.hpp): everything that carries from one step to the next: the contact-capable set,
     // excluded pairs and released vertices, the detection schedule (buffer, travel, dirty), the pair list with its
     // friction history (stick anchors and slips, kHistPerPair per pair), the energies and dissipations, the dashpot
     // coefficient and the counters. Not the wall-clock timings. load_state needs an object built from the same mesh.

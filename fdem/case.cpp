@@ -11,7 +11,7 @@
 #include <set>
 #include <sstream>
 
-#include "fdem/errors.hpp"
+#include "fdem/common/errors.hpp"
 
 namespace fdem {
 

@@ -1,5 +1,5 @@
 // fdem/checkpoint.cpp: checkpoint and restart of a run (Simulation::save_state, load_state, write_checkpoint,
-// restore). The state stream is fdem/state_io.hpp; each module writes its own part (Interactions, ContactSystem,
+// restore). The state stream is fdem/common/state_io.hpp; each module writes its own part (Interactions, ContactSystem,
 // CohesiveSystem).
 //
 // checkpoint.bin = header + payload:
@@ -27,7 +27,7 @@
 #include <set>
 #include <sstream>
 
-#include "fdem/errors.hpp"
+#include "fdem/common/errors.hpp"
 #include "fdem/simulation.hpp"
 
 namespace fdem {

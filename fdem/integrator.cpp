@@ -37,8 +37,7 @@
 #include <sstream>
 #include <type_traits>
 
-#include "fdem/errors.hpp"
-#include "fdem/scene.hpp"
+#include "fdem/common/errors.hpp"
 #include "fdem/sim_detail.hpp"
 
 namespace fdem {

@@ -11,7 +11,7 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "fdem/errors.hpp"
+#include "fdem/common/errors.hpp"
 
 namespace fdem {
 

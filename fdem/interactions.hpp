@@ -101,7 +101,7 @@ public:
     const contact::ContactSystem* contact() const { return contact_.get(); }
     const fracture::CohesiveSystem* joints() const { return joints_.get(); }
 
-    // Checkpoint (fdem/state_io.hpp): the crack record, the dry joint record, then the contact and cohesive systems'
+    // Checkpoint (fdem/common/state_io.hpp): the crack record, the dry joint record, then the contact and cohesive systems'
     // own states. load_state needs an object built from the same case and model.
     void save_state(StateWriter& w) const;
     void load_state(StateReader& r);

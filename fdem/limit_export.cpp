@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "fdem/errors.hpp"
+#include "fdem/common/errors.hpp"
 #include "fdem/output.hpp"
 
 namespace fdem {

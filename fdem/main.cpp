@@ -15,7 +15,7 @@
 #include "fdem/version.hpp"
 #include "fdem/case.hpp"
 #include "fdem/omp_env.hpp"
-#include "fdem/errors.hpp"
+#include "fdem/common/errors.hpp"
 #include "fdem/limit_export.hpp"
 #include "fdem/model.hpp"
 #include "fdem/scene.hpp"

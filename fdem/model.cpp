@@ -9,7 +9,7 @@
 
 #include <Eigen/Dense>
 
-#include "fdem/errors.hpp"
+#include "fdem/common/errors.hpp"
 
 namespace fdem {
 

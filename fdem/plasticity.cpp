@@ -6,7 +6,7 @@
 #include <sstream>
 
 #include "fdem/case.hpp"
-#include "fdem/errors.hpp"
+#include "fdem/common/errors.hpp"
 #include "fdem/model.hpp"
 
 namespace fdem {

@@ -7,8 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "fdem/errors.hpp"
-#include "fdem/simulation.hpp"
+#include "fdem/common/errors.hpp"
 #include "mesh/gmsh_source.hpp"
 #include "mesh/macro.hpp"
 #include "mesh/quality.hpp"

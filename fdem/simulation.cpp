@@ -23,8 +23,7 @@
 #include <set>
 #include <sstream>
 
-#include "fdem/errors.hpp"
-#include "fdem/scene.hpp"
+#include "fdem/common/errors.hpp"
 #include "fdem/sim_detail.hpp"
 
 namespace fdem {

@@ -14,7 +14,7 @@
 #include "fdem/model.hpp"
 #include "fdem/output.hpp"
 #include "fdem/plasticity.hpp"
-#include "fdem/state_io.hpp"
+#include "fdem/common/state_io.hpp"
 
 namespace fdem {
 

@@ -19,7 +19,7 @@
 #include <vector>
 
 #include "fracture/composite_law.hpp"
-#include "fdem/state_io.hpp"
+#include "fdem/common/state_io.hpp"
 #include "fracture/law.hpp"
 #include "fracture/properties.hpp"
 
@@ -166,7 +166,7 @@ class CohesiveSystem {
   const BreakCounts& counts() const { return counts_; }
   double residual_friction(int e) const;  // tan(phi_res) of element e's class
 
-  // Checkpoint (fdem/state_io.hpp): the point histories (damage, trial damage, slider slip, cap closure), forces,
+  // Checkpoint (fdem/common/state_io.hpp): the point histories (damage, trial damage, slider slip, cap closure), forces,
   // energies and dissipations per element, the pending and broken flags, the intact list, the node gather with its
   // stale slots (it fixes the summation order) and the break counts. load_state needs an object built from the same
   // elements and properties.

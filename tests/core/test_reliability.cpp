@@ -8,7 +8,7 @@
 #include <string>
 
 #include "engine_helpers.hpp"
-#include "fdem/errors.hpp"
+#include "fdem/common/errors.hpp"
 #include "fdem/triangle.hpp"
 #include "mesh/gmsh_source.hpp"
 

@@ -6,7 +6,7 @@
 #include <random>
 
 #include "engine_helpers.hpp"
-#include "fdem/errors.hpp"
+#include "fdem/common/errors.hpp"
 #include "fdem/model.hpp"
 #include "fdem/triangle.hpp"
 

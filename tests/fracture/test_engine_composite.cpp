@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "core/engine_helpers.hpp"
-#include "fdem/errors.hpp"
+#include "fdem/common/errors.hpp"
 #include "fdem/scene.hpp"
 #include "fracture/cohesive_system.hpp"
 

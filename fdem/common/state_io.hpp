@@ -1,4 +1,4 @@
-// fdem/state_io.hpp: the byte stream of a checkpoint (fdem/checkpoint.hpp). Header-only and without dependencies,
+// fdem/common/state_io.hpp: the byte stream of a checkpoint (fdem/checkpoint.hpp). Header-only and without dependencies,
 // so that the contact and fracture modules (leaves) serialise their own state with it: each subsystem has
 // save_state(StateWriter&) const and load_state(StateReader&), which write and read the same fields in the same order.
 //

@@ -1,4 +1,4 @@
-// fdem/errors.hpp: the error types that map onto the command's exit codes (ARCHITECTURE.md).
+// fdem/common/errors.hpp: the error types that map onto the command's exit codes (ARCHITECTURE.md).
 //   InputError  -> exit 1: bad case file, bad option, bad mesh; the message names file, line, key, expectation.
 //   RunError    -> exit 2: the run failed (instability, inverted element, NaN); says where and when.
 //   anything else -> exit 3: an internal error (a bug in fdem).
