@@ -111,16 +111,11 @@ void write_durable(const std::string& path, const std::string& content) {
     }
 }
 
-void save_fn(StateWriter& w, const TimeFunction& f) {
-    w.str(f.type);
-    w.pod(f.amplitude), w.pod(f.omega), w.pod(f.phase), w.pod(f.offset);
-    w.vec(f.t), w.vec(f.f);
-}
-
-void load_fn(StateReader& r, TimeFunction& f) {
-    r.str(f.type);
-    r.pod(f.amplitude), r.pod(f.omega), r.pod(f.phase), r.pod(f.offset);
-    r.vec(f.t), r.vec(f.f);
+template <class IO>
+void fn_io(IO& io, TimeFunction& f) {
+    io.str(f.type);
+    io.pod(f.amplitude), io.pod(f.omega), io.pod(f.phase), io.pod(f.offset);
+    io.vec(f.t), io.vec(f.f);
 }
 
 void check_index(int i, int n, const char* what) {
@@ -131,192 +126,151 @@ void check_index(int i, int n, const char* what) {
 
 std::string Simulation::checkpoint_path() const { return (std::filesystem::path(opt_.out_dir) / "checkpoint.bin").string(); }
 
-// Everything that changes during a run. The order is the format: load_state reads the same sequence.
+// Everything that changes during a run, in one list for both directions (state_io): the order is the format.
 void Simulation::save_state(StateWriter& w) const {
 #if defined(__x86_64__) && defined(__GLIBCXX__)
     // (not saved: the energy audit's sums, a diagnostic of one process; after a restart it starts over; the node
     // loop's speeds block_v2_ and v2max_, which load_state marks unknown)
-    static_assert(sizeof(Simulation) == 5168, "Simulation changed: update save_state/load_state (fdem/checkpoint.cpp) and this size");
-    static_assert(sizeof(ActiveSupport) == 376, "ActiveSupport changed: update save_state/load_state and this size");
-    static_assert(sizeof(ActiveLoad) == 296, "ActiveLoad changed: update save_state/load_state and this size");
+    static_assert(sizeof(Simulation) == 5168, "Simulation changed: update state_io (fdem/checkpoint.cpp) and this size");
+    static_assert(sizeof(ActiveSupport) == 376, "ActiveSupport changed: update state_io and this size");
+    static_assert(sizeof(ActiveLoad) == 296, "ActiveLoad changed: update state_io and this size");
 #endif
+    const_cast<Simulation*>(this)->state_io(w);  // (the writer only reads the fields)
+}
+
+void Simulation::load_state(StateReader& r) { state_io(r); }
+
+// IO = StateWriter (save) or StateReader (load): each field once; what only a load does (check lengths and indices,
+// resize, derive) under IO::loading.
+template <class IO>
+void Simulation::state_io(IO& io) {
+    constexpr bool load = IO::loading;
     const int nn = model_.n_nodes();
-    w.section("model");
-    w.pod(nn), w.pod(model_.n_triangles());
-    w.vec(model_.x), w.vec(model_.v), w.vec(model_.mass), w.vec(model_.inv_mass), w.vec(model_.grav_mass);
+    const std::size_t nd = 2 * static_cast<std::size_t>(nn);
+    io.section("model");
+    int n_nodes = nn, n_tri = model_.n_triangles();
+    io.pod(n_nodes), io.pod(n_tri);
+    if constexpr (load)
+        if (n_nodes != nn || n_tri != model_.n_triangles()) throw StateError("another mesh (node or triangle count)");
+    io.vec_sized(model_.x, nd, "positions");
+    io.vec_sized(model_.v, nd, "velocities");
+    if constexpr (load) v2max_ = -1.0;
+    io.vec_sized(model_.mass, static_cast<std::size_t>(nn), "masses");
+    io.vec_sized(model_.inv_mass, static_cast<std::size_t>(nn), "inverse masses");
+    io.vec_sized(model_.grav_mass, static_cast<std::size_t>(nn), "gravitational masses");
 
-    w.section("clock");
-    w.pod(dt_initial_), w.pod(dt_), w.pod(dt_limit_), w.pod(dt_springs_), w.pod(dt_logged_), w.pod(time_), w.pod(steps_), w.pod(stage_), w.pod(stage_t0_), w.pod(stage_steps0_), w.pod(broken_total_), w.pod(eq_since_);
+    io.section("clock");
+    double dt0 = dt_initial_;  // the case's step at the start: a load checks it
+    io.pod(dt0);
+    if constexpr (load)
+        if (dt0 != dt_initial_)
+            throw StateError("time step " + std::to_string(dt0) + " s, this case gives " + std::to_string(dt_initial_) + " s");
+    io.pod(dt_), io.pod(dt_limit_), io.pod(dt_springs_), io.pod(dt_logged_);  // smaller than at the start after insertions
+    io.pod(time_), io.pod(steps_), io.pod(stage_), io.pod(stage_t0_), io.pod(stage_steps0_), io.pod(broken_total_), io.pod(eq_since_);
+    if constexpr (load)
+        if (stage_ < 0 || stage_ >= static_cast<int>(spec_.stages.size())) throw StateError("stage index out of range");
 
-    w.section("supports");
-    w.vec(dof_kind_), w.vec(dof_owner_), w.vec(dof_vel_), w.vec(reaction_);
-    w.pod(static_cast<std::uint64_t>(supports_.size()));
-    for (const ActiveSupport& a : supports_) {
-        w.vec(a.nodes);
-        w.pod(a.comp), w.pod(a.mode);
-        w.pod(a.v_start), w.pod(a.v_target), w.pod(a.ramp), w.pod(a.t0), w.pod(a.v_common), w.pod(a.v_ref);
-        w.vec(a.pt), w.vec(a.pu), w.vec(a.pI);
-        save_fn(w, a.fn);
-        w.pod(a.servo_ratio), w.pod(a.servo_time), w.pod(a.servo_min), w.pod(a.servo_factor), w.pod(a.servo_rbar);
-        w.pod(a.servo_t), w.pod(a.servo_r_int), w.pod(a.servo_f_int), w.pod(a.servo_r_max), w.pod(a.servo_f_min);
-        w.str(a.group);
+    io.section("supports");
+    io.vec_sized(dof_kind_, nd, "DOF kinds");
+    io.vec_sized(dof_owner_, nd, "DOF owners");
+    io.vec_sized(dof_vel_, nd, "prescribed velocities");
+    io.vec_sized(reaction_, nd, "reactions");
+    io_count(io, supports_);
+    for (ActiveSupport& a : supports_) {
+        io.vec(a.nodes);
+        if constexpr (load)
+            for (int k : a.nodes) check_index(k, nn, "support node");
+        io.pod(a.comp), io.pod(a.mode);
+        io.pod(a.v_start), io.pod(a.v_target), io.pod(a.ramp), io.pod(a.t0), io.pod(a.v_common), io.pod(a.v_ref);
+        io.vec(a.pt), io.vec(a.pu), io.vec(a.pI);
+        fn_io(io, a.fn);
+        io.pod(a.servo_ratio), io.pod(a.servo_time), io.pod(a.servo_min), io.pod(a.servo_factor), io.pod(a.servo_rbar);
+        io.pod(a.servo_t), io.pod(a.servo_r_int), io.pod(a.servo_f_int), io.pod(a.servo_r_max), io.pod(a.servo_f_min);
+        io.str(a.group);
+    }
+    if constexpr (load)
+        for (int o : dof_owner_) check_index(o, static_cast<int>(supports_.size()), "DOF owner");
+
+    io.section("loads");
+    io_count(io, loads_);
+    for (ActiveLoad& l : loads_) {
+        io.vec(l.nodes), io.vec(l.weight), io.vec(l.edges);
+        if constexpr (load) {
+            for (int k : l.nodes) check_index(k, nn, "load node");
+            for (const auto& e : l.edges) check_index(e[0], nn, "load edge node"), check_index(e[1], nn, "load edge node");
+        }
+        io.pod(l.is_pressure), io.pod(l.is_spring), io.pod(l.comp);
+        io.pod(l.k), io.pod(l.v), io.pod(l.anchor0), io.pod(l.start), io.pod(l.target), io.pod(l.ramp), io.pod(l.t0);
+        fn_io(io, l.fn);
+        io.str(l.group);
+    }
+    io.vec_sized(f_ext_, nd, "applied loads");
+    io.vec(loaded_dofs_);
+    if constexpr (load) {
+        for (int d : loaded_dofs_) check_index(d, static_cast<int>(nd), "loaded DOF");
+        node_loaded_.assign(nd / 2, 0);
+        for (int d : loaded_dofs_) node_loaded_[d / 2] = 1;
     }
 
-    w.section("loads");
-    w.pod(static_cast<std::uint64_t>(loads_.size()));
-    for (const ActiveLoad& l : loads_) {
-        w.vec(l.nodes), w.vec(l.weight), w.vec(l.edges);
-        w.pod(l.is_pressure), w.pod(l.is_spring), w.pod(l.comp);
-        w.pod(l.k), w.pod(l.v), w.pod(l.anchor0), w.pod(l.start), w.pod(l.target), w.pod(l.ramp), w.pod(l.t0);
-        save_fn(w, l.fn);
-        w.str(l.group);
-    }
-    w.vec(f_ext_), w.vec(loaded_dofs_);
+    io.section("gravity");
+    io.pod(gravity_), io.pod(gravity_start_), io.pod(gravity_target_), io.pod(applied_gravity_);
+    io.pod(gravity_ramp_), io.pod(tilt_rate_), io.pod(tilt_deg_);
+    fn_io(io, gravity_fn_);
+    io.pod(gravity_fn_t0_);
 
-    w.section("gravity");
-    w.pod(gravity_), w.pod(gravity_start_), w.pod(gravity_target_), w.pod(applied_gravity_);
-    w.pod(gravity_ramp_), w.pod(tilt_rate_), w.pod(tilt_deg_);
-    save_fn(w, gravity_fn_);
-    w.pod(gravity_fn_t0_);
-
-    w.section("damping");
-    w.pod(alpha_), w.pod(tau_ld_), w.vec(v_ref_), w.pod(beta_mass_), w.pod(xi_contact_);
-
-    w.section("energy");
-    w.vec(f_mod_);
-    w.pod(kinetic_n_), w.pod(work_half_), w.pod(damp_half_), w.pod(mass_half_), w.pod(unbalanced_ratio_);
-    w.pod(W_ext_), w.pod(D_damp_), w.pod(D_visc_), w.pod(D_mass_);
-
-    w.section("stage");
-    w.pod(until_start_), w.pod(until_monitor_), w.pod(stage_ramp_end_);
-    w.pod(peak_load_monitor_), w.pod(peak_disp_monitor_), w.pod(peak_mean_), w.pod(peak_u_prev_), w.pod(peak_load_), w.pod(peak_disp_), w.pod(below_since_);
-    w.pod(static_cast<std::uint64_t>(stage_results_.size()));
-    for (const StageResult& r : stage_results_) {
-        w.str(r.name), w.str(r.ended_by);
-        w.pod(r.time), w.pod(r.steps);
+    io.section("damping");
+    io.pod(alpha_), io.pod(tau_ld_), io.vec(v_ref_), io.pod(beta_mass_), io.pod(xi_contact_);
+    if constexpr (load) {
+        set_step_limits(alpha_, false);  // the current stage's limits (a later insertion compares against them)
+        if (!v_ref_.empty() && v_ref_.size() != nd) throw StateError("velocity filter of another mesh");
+        if (tau_ld_ > 0 && v_ref_.size() != nd) throw StateError("velocity filter missing");
+        inter_.set_contact_dashpot(std::isfinite(dt_contact_) ? xi_contact_ * dt_contact_ : 0.0);  // the contact state holds it too
     }
 
-    w.section("outputs");
-    w.pod(last_row_step_);
-    w.vec(mon_ext_);
-    w.pod(mon_ext_init_);
-    w.vec(mon_first_peak_);
-    w.pod(next_history_), w.pod(next_snapshot_), w.pod(history_every_steps_), w.pod(next_checkpoint_);
-    w.pod(static_cast<std::uint64_t>(snapshots_.size()));
-    for (const auto& [t, name] : snapshots_) w.pod(t), w.str(name);
+    io.section("energy");
+    io.vec_sized(f_mod_, nd, "module forces");
+    io.pod(kinetic_n_), io.pod(work_half_), io.pod(damp_half_), io.pod(mass_half_), io.pod(unbalanced_ratio_);
+    io.pod(W_ext_), io.pod(D_damp_), io.pod(D_visc_), io.pod(D_mass_);
+
+    io.section("stage");
+    io.pod(until_start_), io.pod(until_monitor_), io.pod(stage_ramp_end_);
+    io.pod(peak_load_monitor_), io.pod(peak_disp_monitor_), io.pod(peak_mean_), io.pod(peak_u_prev_), io.pod(peak_load_), io.pod(peak_disp_), io.pod(below_since_);
+    if constexpr (load) {
+        const int nm = static_cast<int>(spec_.monitors.size());
+        check_index(until_monitor_, nm, "until monitor");
+        check_index(peak_load_monitor_, nm, "past_peak load monitor");
+        check_index(peak_disp_monitor_, nm, "past_peak displacement monitor");
+    }
+    io_count(io, stage_results_);
+    for (StageResult& r : stage_results_) {
+        io.str(r.name), io.str(r.ended_by);
+        io.pod(r.time), io.pod(r.steps);
+    }
+
+    io.section("outputs");
+    io.pod(last_row_step_);
+    io.vec_sized(mon_ext_, spec_.monitors.size(), "monitor extrema");
+    io.pod(mon_ext_init_);
+    io.vec_sized(mon_first_peak_, spec_.monitors.size(), "monitor first peaks");
+    io.pod(next_history_), io.pod(next_snapshot_), io.pod(history_every_steps_), io.pod(next_checkpoint_);
+    io_count(io, snapshots_);
+    for (auto& [t, name] : snapshots_) io.pod(t), io.str(name);
 
     // Crushing triangles (fdem/plasticity.hpp): plastic strain and softening variable per slot (the rest is set up
     // from the case).
-    w.section("crushing");
-    w.vec(crush_.Ep), w.vec(crush_.kappa);
+    io.section("crushing");
+    io.vec_sized(crush_.Ep, crush_.Ep.size(), "crushing plastic strains");
+    io.vec_sized(crush_.kappa, crush_.kappa.size(), "crushing softening variables");
 
-    inter_.save_state(w);
-    w.section("end");
-}
-
-void Simulation::load_state(StateReader& r) {
-    const int nn = model_.n_nodes();
-    const std::size_t nd = 2 * static_cast<std::size_t>(nn);
-    r.section("model");
-    if (r.get<int>() != nn || r.get<int>() != model_.n_triangles()) throw StateError("another mesh (node or triangle count)");
-    r.vec_sized(model_.x, nd, "positions");
-    r.vec_sized(model_.v, nd, "velocities");
-    v2max_ = -1.0;
-    r.vec_sized(model_.mass, static_cast<std::size_t>(nn), "masses");
-    r.vec_sized(model_.inv_mass, static_cast<std::size_t>(nn), "inverse masses");
-    r.vec_sized(model_.grav_mass, static_cast<std::size_t>(nn), "gravitational masses");
-
-    r.section("clock");
-    const double dt = r.get<double>();
-    if (dt != dt_initial_)
-        throw StateError("time step " + std::to_string(dt) + " s, this case gives " + std::to_string(dt_initial_) + " s");
-    r.pod(dt_), r.pod(dt_limit_), r.pod(dt_springs_), r.pod(dt_logged_);  // smaller than at the start after insertions
-    r.pod(time_), r.pod(steps_), r.pod(stage_), r.pod(stage_t0_), r.pod(stage_steps0_), r.pod(broken_total_), r.pod(eq_since_);
-    if (stage_ < 0 || stage_ >= static_cast<int>(spec_.stages.size())) throw StateError("stage index out of range");
-
-    r.section("supports");
-    r.vec_sized(dof_kind_, nd, "DOF kinds");
-    r.vec_sized(dof_owner_, nd, "DOF owners");
-    r.vec_sized(dof_vel_, nd, "prescribed velocities");
-    r.vec_sized(reaction_, nd, "reactions");
-    supports_.assign(static_cast<std::size_t>(r.get<std::uint64_t>()), ActiveSupport{});
-    for (ActiveSupport& a : supports_) {
-        r.vec(a.nodes);
-        for (int k : a.nodes) check_index(k, nn, "support node");
-        r.pod(a.comp), r.pod(a.mode);
-        r.pod(a.v_start), r.pod(a.v_target), r.pod(a.ramp), r.pod(a.t0), r.pod(a.v_common), r.pod(a.v_ref);
-        r.vec(a.pt), r.vec(a.pu), r.vec(a.pI);
-        load_fn(r, a.fn);
-        r.pod(a.servo_ratio), r.pod(a.servo_time), r.pod(a.servo_min), r.pod(a.servo_factor), r.pod(a.servo_rbar);
-        r.pod(a.servo_t), r.pod(a.servo_r_int), r.pod(a.servo_f_int), r.pod(a.servo_r_max), r.pod(a.servo_f_min);
-        r.str(a.group);
+    if constexpr (load) {
+        inter_.load_state(io);
+        build_ties();  // derived from the cohesive elements still dormant
+    } else {
+        inter_.save_state(io);
     }
-    for (int o : dof_owner_) check_index(o, static_cast<int>(supports_.size()), "DOF owner");
-
-    r.section("loads");
-    loads_.assign(static_cast<std::size_t>(r.get<std::uint64_t>()), ActiveLoad{});
-    for (ActiveLoad& l : loads_) {
-        r.vec(l.nodes), r.vec(l.weight), r.vec(l.edges);
-        for (int k : l.nodes) check_index(k, nn, "load node");
-        for (const auto& e : l.edges) check_index(e[0], nn, "load edge node"), check_index(e[1], nn, "load edge node");
-        r.pod(l.is_pressure), r.pod(l.is_spring), r.pod(l.comp);
-        r.pod(l.k), r.pod(l.v), r.pod(l.anchor0), r.pod(l.start), r.pod(l.target), r.pod(l.ramp), r.pod(l.t0);
-        load_fn(r, l.fn);
-        r.str(l.group);
-    }
-    r.vec_sized(f_ext_, nd, "applied loads");
-    r.vec(loaded_dofs_);
-    for (int d : loaded_dofs_) check_index(d, static_cast<int>(nd), "loaded DOF");
-    node_loaded_.assign(nd / 2, 0);
-    for (int d : loaded_dofs_) node_loaded_[d / 2] = 1;
-
-    r.section("gravity");
-    r.pod(gravity_), r.pod(gravity_start_), r.pod(gravity_target_), r.pod(applied_gravity_);
-    r.pod(gravity_ramp_), r.pod(tilt_rate_), r.pod(tilt_deg_);
-    load_fn(r, gravity_fn_);
-    r.pod(gravity_fn_t0_);
-
-    r.section("damping");
-    r.pod(alpha_), r.pod(tau_ld_), r.vec(v_ref_), r.pod(beta_mass_), r.pod(xi_contact_);
-    set_step_limits(alpha_, false);  // the current stage's limits (a later insertion compares against them)
-    if (!v_ref_.empty() && v_ref_.size() != nd) throw StateError("velocity filter of another mesh");
-    if (tau_ld_ > 0 && v_ref_.size() != nd) throw StateError("velocity filter missing");
-    inter_.set_contact_dashpot(std::isfinite(dt_contact_) ? xi_contact_ * dt_contact_ : 0.0);  // the contact state holds it too
-
-    r.section("energy");
-    r.vec_sized(f_mod_, nd, "module forces");
-    r.pod(kinetic_n_), r.pod(work_half_), r.pod(damp_half_), r.pod(mass_half_), r.pod(unbalanced_ratio_);
-    r.pod(W_ext_), r.pod(D_damp_), r.pod(D_visc_), r.pod(D_mass_);
-
-    r.section("stage");
-    r.pod(until_start_), r.pod(until_monitor_), r.pod(stage_ramp_end_);
-    check_index(until_monitor_, static_cast<int>(spec_.monitors.size()), "until monitor");
-    r.pod(peak_load_monitor_), r.pod(peak_disp_monitor_), r.pod(peak_mean_), r.pod(peak_u_prev_), r.pod(peak_load_), r.pod(peak_disp_), r.pod(below_since_);
-    check_index(peak_load_monitor_, static_cast<int>(spec_.monitors.size()), "past_peak load monitor");
-    check_index(peak_disp_monitor_, static_cast<int>(spec_.monitors.size()), "past_peak displacement monitor");
-    stage_results_.assign(static_cast<std::size_t>(r.get<std::uint64_t>()), StageResult{});
-    for (StageResult& s : stage_results_) {
-        r.str(s.name), r.str(s.ended_by);
-        r.pod(s.time), r.pod(s.steps);
-    }
-
-    r.section("outputs");
-    r.pod(last_row_step_);
-    r.vec_sized(mon_ext_, spec_.monitors.size(), "monitor extrema");
-    r.pod(mon_ext_init_);
-    r.vec_sized(mon_first_peak_, spec_.monitors.size(), "monitor first peaks");
-    r.pod(next_history_), r.pod(next_snapshot_), r.pod(history_every_steps_), r.pod(next_checkpoint_);
-    snapshots_.assign(static_cast<std::size_t>(r.get<std::uint64_t>()), {});
-    for (auto& [t, name] : snapshots_) r.pod(t), r.str(name);
-
-    r.section("crushing");
-    r.vec_sized(crush_.Ep, crush_.Ep.size(), "crushing plastic strains");
-    r.vec_sized(crush_.kappa, crush_.kappa.size(), "crushing softening variables");
-
-    inter_.load_state(r);
-    build_ties();  // derived from the cohesive elements still dormant
-    r.section("end");
-    if (!r.at_end()) throw StateError("data after the end of the state");
+    io.section("end");
+    if constexpr (load)
+        if (!io.at_end()) throw StateError("data after the end of the state");
 }
 
 void Simulation::write_checkpoint() {

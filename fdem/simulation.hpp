@@ -136,6 +136,9 @@ public:
     // history.csv to the checkpoint's row, and makes run() continue from there.
     void save_state(StateWriter& w) const;
     void load_state(StateReader& r);
+    // The one list of the saved fields behind both (fdem/checkpoint.cpp; IO = StateWriter or StateReader).
+    template <class IO>
+    void state_io(IO& io);
     void write_checkpoint();
     void restore(const std::string& run_dir);
     std::string checkpoint_path() const;

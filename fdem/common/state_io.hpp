@@ -29,8 +29,12 @@ struct StateError : std::runtime_error {
     using std::runtime_error::runtime_error;
 };
 
+// One function can save and load a state (one list of fields: template <class IO> void io(IO&), called with a
+// StateWriter or a StateReader): pod, vec, vec_sized, str and section have the same names on both, and `loading`
+// tells the two apart where a load must check or resize (if constexpr (IO::loading)).
 class StateWriter {
 public:
+    static constexpr bool loading = false;
     void section(const char* name) { str(name); }
     template <class T>
     void pod(const T& v) {
@@ -45,6 +49,11 @@ public:
         if (!v.empty()) buf_.append(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(T));
     }
     void vec(const std::vector<bool>&) = delete;
+    // (the reader checks the length; the writer writes the vector as vec does)
+    template <class T>
+    void vec_sized(const std::vector<T>& v, std::size_t, const char*) {
+        vec(v);
+    }
     void str(const std::string& s) {
         pod(static_cast<std::uint64_t>(s.size()));
         buf_.append(s);
@@ -58,6 +67,7 @@ private:
 
 class StateReader {
 public:
+    static constexpr bool loading = true;
     StateReader(const char* data, std::size_t size) : p_(data), end_(data + size) {}
     void section(const char* name) {
         std::string got;
@@ -114,5 +124,14 @@ private:
     const char* p_;
     const char* end_;
 };
+
+// The length of a list of records, then (the caller) each record: written from v; read, v holds that many
+// default records to be filled.
+template <class IO, class C>
+void io_count(IO& io, C& v) {
+    std::uint64_t n = v.size();
+    io.pod(n);
+    if constexpr (IO::loading) v.assign(static_cast<std::size_t>(n), typename C::value_type{});
+}
 
 }  // namespace fdem
