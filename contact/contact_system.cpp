@@ -771,62 +771,68 @@ double ContactSystem::normal_energy_at(const double* x) const {
 // add the field to save_state and load_state if it carries from one step to the next, then update the size.
 void ContactSystem::save_state(StateWriter& w) const {
 #if defined(__x86_64__) && defined(__GLIBCXX__)
-    static_assert(sizeof(ContactSystem) == 1512, "ContactSystem changed: update save_state/load_state and this size");
+    static_assert(sizeof(ContactSystem) == 1512, "ContactSystem changed: update state_io and this size");
 #endif
-    w.section("contact");
-    w.pod(static_cast<std::int32_t>(kHistPerPair));
-    w.pod(n_tri_), w.pod(n_nodes_);
-    w.vec(capable_);
-    w.pod(static_cast<std::uint64_t>(excluded_.size()));
-    for (const auto& e : excluded_) w.vec(e);
-    w.vec(released_);
-    w.pod(dirty_), w.pod(buffer_), w.pod(travel_);
-    w.vec(items_);
-    w.vec(pair_a_), w.vec(pair_b_), w.vec(pair_law_), w.vec(hist_);
-    w.pod(energy_normal_), w.pod(energy_tangential_), w.pod(dissipation_), w.pod(damping_);
-    w.pod(beta_), w.pod(energy_current_), w.pod(opt_.compute_energy);
-    w.pod(stats_.detections), w.pod(stats_.candidate_pairs), w.pod(stats_.active_pairs), w.pod(stats_.pair_evaluations);
+    const_cast<ContactSystem*>(this)->state_io(w);  // (the writer only reads the fields)
 }
 
-void ContactSystem::load_state(StateReader& r) {
-    r.section("contact");
-    if (r.get<std::int32_t>() != kHistPerPair) throw StateError("contact: another number of friction history slots per pair");
-    if (r.get<int>() != n_tri_ || r.get<int>() != n_nodes_) throw StateError("contact: another mesh");
-    r.vec_sized(capable_, static_cast<std::size_t>(n_tri_), "contact-capable flags");
-    if (r.get<std::uint64_t>() != excluded_.size()) throw StateError("contact: excluded pairs of another mesh");
-    for (auto& e : excluded_) r.vec(e);
-    r.vec_sized(released_, released_.size(), "released vertices");
-    r.pod(dirty_), r.pod(buffer_), r.pod(travel_);
-    r.vec(items_);
-    r.vec(pair_a_), r.vec(pair_b_), r.vec(pair_law_), r.vec(hist_);
-    const std::size_t np = pair_a_.size();
-    if (pair_b_.size() != np || pair_law_.size() != np || hist_.size() != kHistPerPair * np)
-        throw StateError("contact: inconsistent pair arrays");
-    pair_hist_on_.resize(np);
-    for (std::size_t p = 0; p < np; ++p) {
-        char held = 0;
-        for (int sl = 0; sl < 6; ++sl)
-            for (int i = 0; i < kHistPerEdge; ++i)
-                if (hist_[kHistPerPair * p + kHistPerEdge * sl + i] != 0.0) held |= static_cast<char>(1 << sl);
-        pair_hist_on_[p] = held;
+void ContactSystem::load_state(StateReader& r) { state_io(r); }
+
+template <class IO>
+void ContactSystem::state_io(IO& io) {
+    constexpr bool load = IO::loading;
+    io.section("contact");
+    std::int32_t slots = kHistPerPair;
+    io.pod(slots);
+    if constexpr (load)
+        if (slots != kHistPerPair) throw StateError("contact: another number of friction history slots per pair");
+    int nt = n_tri_, nn = n_nodes_;
+    io.pod(nt), io.pod(nn);
+    if constexpr (load)
+        if (nt != n_tri_ || nn != n_nodes_) throw StateError("contact: another mesh");
+    io.vec_sized(capable_, static_cast<std::size_t>(n_tri_), "contact-capable flags");
+    std::uint64_t n_excluded = excluded_.size();
+    io.pod(n_excluded);
+    if constexpr (load)
+        if (n_excluded != excluded_.size()) throw StateError("contact: excluded pairs of another mesh");
+    for (auto& e : excluded_) io.vec(e);
+    io.vec_sized(released_, released_.size(), "released vertices");
+    io.pod(dirty_), io.pod(buffer_), io.pod(travel_);
+    io.vec(items_);
+    io.vec(pair_a_), io.vec(pair_b_), io.vec(pair_law_), io.vec(hist_);
+    if constexpr (load) {
+        const std::size_t np = pair_a_.size();
+        if (pair_b_.size() != np || pair_law_.size() != np || hist_.size() != kHistPerPair * np)
+            throw StateError("contact: inconsistent pair arrays");
+        pair_hist_on_.resize(np);
+        for (std::size_t p = 0; p < np; ++p) {
+            char held = 0;
+            for (int sl = 0; sl < 6; ++sl)
+                for (int i = 0; i < kHistPerEdge; ++i)
+                    if (hist_[kHistPerPair * p + kHistPerEdge * sl + i] != 0.0) held |= static_cast<char>(1 << sl);
+            pair_hist_on_[p] = held;
+        }
+        for (std::size_t p = 0; p < np; ++p)
+            if (pair_a_[p] < 0 || pair_a_[p] >= n_tri_ || pair_b_[p] < 0 || pair_b_[p] >= n_tri_ || pair_law_[p] < 0 ||
+                pair_law_[p] >= static_cast<int>(laws_.size()))
+                throw StateError("contact: pair index out of range");
+        for (int t : items_)
+            if (t < 0 || t >= n_tri_) throw StateError("contact: item index out of range");
+        set_pair_nodes();
     }
-    for (std::size_t p = 0; p < np; ++p)
-        if (pair_a_[p] < 0 || pair_a_[p] >= n_tri_ || pair_b_[p] < 0 || pair_b_[p] >= n_tri_ || pair_law_[p] < 0 ||
-            pair_law_[p] >= static_cast<int>(laws_.size()))
-            throw StateError("contact: pair index out of range");
-    for (int t : items_)
-        if (t < 0 || t >= n_tri_) throw StateError("contact: item index out of range");
-    set_pair_nodes();
-    r.pod(energy_normal_), r.pod(energy_tangential_), r.pod(dissipation_), r.pod(damping_);
-    r.pod(beta_), r.pod(energy_current_), r.pod(opt_.compute_energy);
-    r.pod(stats_.detections), r.pod(stats_.candidate_pairs), r.pod(stats_.active_pairs), r.pod(stats_.pair_evaluations);
-    // Per-step scratch sized as detect() leaves it.
-    pair_f_.assign(12 * np, 0.0);
-    pair_e_.assign(4 * np, 0.0);
-    pair_on_.assign(np, 0);
-    box_.assign(8 * static_cast<std::size_t>(n_tri_), 0.0);
-    geom_.resize(static_cast<std::size_t>(n_tri_));
-    faces_dirty_ = true;
+    io.pod(energy_normal_), io.pod(energy_tangential_), io.pod(dissipation_), io.pod(damping_);
+    io.pod(beta_), io.pod(energy_current_), io.pod(opt_.compute_energy);
+    io.pod(stats_.detections), io.pod(stats_.candidate_pairs), io.pod(stats_.active_pairs), io.pod(stats_.pair_evaluations);
+    if constexpr (load) {
+        // Per-step scratch sized as detect() leaves it.
+        const std::size_t np = pair_a_.size();
+        pair_f_.assign(12 * np, 0.0);
+        pair_e_.assign(4 * np, 0.0);
+        pair_on_.assign(np, 0);
+        box_.assign(8 * static_cast<std::size_t>(n_tri_), 0.0);
+        geom_.resize(static_cast<std::size_t>(n_tri_));
+        faces_dirty_ = true;
+    }
 }
 
 }  // namespace fdem::contact

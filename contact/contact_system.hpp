@@ -143,6 +143,8 @@ public:
     // coefficient and the counters. Not the wall-clock timings. load_state needs an object built from the same mesh.
     void save_state(StateWriter& w) const;
     void load_state(StateReader& r);
+    template <class IO>
+    void state_io(IO& io);  // the one list of fields behind both (IO = StateWriter or StateReader)
 
 private:
     void update_faces();

@@ -462,28 +462,33 @@ double Interactions::friction_dissipation() const {
 // field to save_state and load_state if it changes during a run, then update the size.
 void Interactions::save_state(StateWriter& w) const {
 #if defined(__x86_64__) && defined(__GLIBCXX__)
-    static_assert(sizeof(Interactions) == 424, "Interactions changed: update save_state/load_state and this size");
+    static_assert(sizeof(Interactions) == 424, "Interactions changed: update state_io and this size");
 #endif
-    w.section("interactions");
-    w.str(cracks_csv_);
-    w.vec(dry_open_), w.vec(dry_slip_);
-    w.pod(n_open_), w.pod(n_slip_);
-    w.pod(static_cast<std::uint8_t>(contact_ != nullptr)), w.pod(static_cast<std::uint8_t>(joints_ != nullptr));
-    if (contact_) contact_->save_state(w);
-    if (joints_) joints_->save_state(w);
+    const_cast<Interactions*>(this)->state_io(w);  // (the writer only reads the fields)
 }
 
-void Interactions::load_state(StateReader& r) {
-    r.section("interactions");
-    r.str(cracks_csv_);
-    r.vec_sized(dry_open_, dry_.size(), "dry joint open flags");
-    r.vec_sized(dry_slip_, dry_.size(), "dry joint slip flags");
-    r.pod(n_open_), r.pod(n_slip_);
-    const bool has_c = r.get<std::uint8_t>() != 0, has_j = r.get<std::uint8_t>() != 0;
-    if (has_c != (contact_ != nullptr) || has_j != (joints_ != nullptr)) throw StateError("interactions: another set of modules");
-    if (contact_) contact_->load_state(r);
-    if (joints_) joints_->load_state(r);
-    dormant_listed_ = false;  // (the joints' dormant set is the saved one: listed again by the next insertion check)
+void Interactions::load_state(StateReader& r) { state_io(r); }
+
+template <class IO>
+void Interactions::state_io(IO& io) {
+    io.section("interactions");
+    io.str(cracks_csv_);
+    io.vec_sized(dry_open_, dry_.size(), "dry joint open flags");
+    io.vec_sized(dry_slip_, dry_.size(), "dry joint slip flags");
+    io.pod(n_open_), io.pod(n_slip_);
+    std::uint8_t has_c = contact_ != nullptr, has_j = joints_ != nullptr;
+    io.pod(has_c), io.pod(has_j);
+    if constexpr (IO::loading)
+        if ((has_c != 0) != (contact_ != nullptr) || (has_j != 0) != (joints_ != nullptr))
+            throw StateError("interactions: another set of modules");
+    if constexpr (IO::loading) {
+        if (contact_) contact_->load_state(io);
+        if (joints_) joints_->load_state(io);
+        dormant_listed_ = false;  // (the joints' dormant set is the saved one: listed again by the next insertion check)
+    } else {
+        if (contact_) contact_->save_state(io);
+        if (joints_) joints_->save_state(io);
+    }
 }
 
 }  // namespace fdem

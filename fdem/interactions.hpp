@@ -105,6 +105,8 @@ public:
     // own states. load_state needs an object built from the same case and model.
     void save_state(StateWriter& w) const;
     void load_state(StateReader& r);
+    template <class IO>
+    void state_io(IO& io);  // the one list of fields behind both (IO = StateWriter or StateReader)
 
     // One line per class whose penalty = "auto" was resolved (for the log).
     const std::vector<std::string>& penalty_notes() const { return auto_notes_; }

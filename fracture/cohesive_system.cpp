@@ -502,58 +502,62 @@ void write_cracks_csv_row(std::ostream& os, const BreakRecord& r) {
 // libstdc++): add the field to save_state and load_state if it carries from one step to the next, then update the size.
 void CohesiveSystem::save_state(StateWriter& w) const {
 #if defined(__x86_64__) && defined(__GLIBCXX__)
-  static_assert(sizeof(CohesiveSystem) == 656, "CohesiveSystem changed: update save_state/load_state and this size");
-  static_assert(sizeof(PointHistory) == 40, "PointHistory changed: check CohesiveSystem::save_state and this size");
+  static_assert(sizeof(CohesiveSystem) == 656, "CohesiveSystem changed: update state_io and this size");
+  static_assert(sizeof(PointHistory) == 40, "PointHistory changed: check CohesiveSystem::state_io and this size");
 #endif
-  w.section("cohesive");
-  w.pod(static_cast<std::int32_t>(sizeof(PointHistory)));
-  w.pod(static_cast<std::int32_t>(size()));
-  w.vec(history_), w.vec(force_), w.vec(energy_), w.vec(dissipated_), w.vec(friction_);
-  w.vec(break_DI_), w.vec(break_DII_), w.vec(pending_), w.vec(broken_), w.vec(active_);
-  w.pod(pending_count_);
-  w.vec(gather_node_), w.vec(gather_start_), w.vec(gather_slot_);
-  w.pod(static_cast<std::uint64_t>(stale_slots_));
-  w.pod(counts_);
-  // law = "composite": its point histories (composite_index_ and composite_law_ are fixed when the system is built).
-  w.vec(composite_history_);
-  // Extrinsic insertion.
-  w.vec(dormant_), w.vec(offset_);
-  w.pod(static_cast<std::int32_t>(dormant_count_));
-  w.pod(inserted_);
+  const_cast<CohesiveSystem*>(this)->state_io(w);  // (the writer only reads the fields)
 }
 
-void CohesiveSystem::load_state(StateReader& r) {
-  r.section("cohesive");
-  if (r.get<std::int32_t>() != std::int32_t(sizeof(PointHistory))) throw StateError("cohesive: another point history");
-  if (r.get<std::int32_t>() != size()) throw StateError("cohesive: another number of elements");
+void CohesiveSystem::load_state(StateReader& r) { state_io(r); }
+
+template <class IO>
+void CohesiveSystem::state_io(IO& io) {
+  constexpr bool load = IO::loading;
+  io.section("cohesive");
+  std::int32_t hist_size = std::int32_t(sizeof(PointHistory)), n = size();
+  io.pod(hist_size);
+  if constexpr (load)
+    if (hist_size != std::int32_t(sizeof(PointHistory))) throw StateError("cohesive: another point history");
+  io.pod(n);
+  if constexpr (load)
+    if (n != size()) throw StateError("cohesive: another number of elements");
   const std::size_t ne = std::size_t(size());
-  r.vec_sized(history_, 3 * ne, "cohesive point histories");
-  r.vec_sized(force_, 8 * ne, "cohesive forces");
-  r.vec_sized(energy_, ne, "cohesive energies");
-  r.vec_sized(dissipated_, ne, "cohesive dissipation");
-  r.vec_sized(friction_, ne, "cohesive friction");
-  r.vec_sized(break_DI_, ne, "cohesive break damage I");
-  r.vec_sized(break_DII_, ne, "cohesive break damage II");
-  r.vec_sized(pending_, ne, "cohesive pending flags");
-  r.vec_sized(broken_, ne, "cohesive broken flags");
-  r.vec(active_);
-  for (int e : active_)
-    if (e < 0 || e >= size()) throw StateError("cohesive: element index out of range");
-  r.pod(pending_count_);
-  r.vec(gather_node_), r.vec(gather_start_), r.vec(gather_slot_);
-  if (gather_start_.empty() || gather_start_.size() != gather_node_.size() + 1 || gather_start_.back() != int(gather_slot_.size()))
-    throw StateError("cohesive: inconsistent node gather");
-  for (int v : gather_node_)
-    if (v < 0 || v >= num_nodes_) throw StateError("cohesive: gather node out of range");
-  for (int sl : gather_slot_)
-    if (sl < 0 || std::size_t(sl) + 1 >= force_.size()) throw StateError("cohesive: gather slot out of range");
-  stale_slots_ = std::size_t(r.get<std::uint64_t>());
-  r.pod(counts_);
-  r.vec_sized(composite_history_, composite_history_.size(), "composite point histories");
-  r.vec_sized(dormant_, ne, "cohesive dormant flags");
-  r.vec_sized(offset_, 2 * ne, "cohesive insertion offsets");
-  dormant_count_ = r.get<std::int32_t>();
-  r.pod(inserted_);
+  io.vec_sized(history_, 3 * ne, "cohesive point histories");
+  io.vec_sized(force_, 8 * ne, "cohesive forces");
+  io.vec_sized(energy_, ne, "cohesive energies");
+  io.vec_sized(dissipated_, ne, "cohesive dissipation");
+  io.vec_sized(friction_, ne, "cohesive friction");
+  io.vec_sized(break_DI_, ne, "cohesive break damage I");
+  io.vec_sized(break_DII_, ne, "cohesive break damage II");
+  io.vec_sized(pending_, ne, "cohesive pending flags");
+  io.vec_sized(broken_, ne, "cohesive broken flags");
+  io.vec(active_);
+  if constexpr (load)
+    for (int e : active_)
+      if (e < 0 || e >= size()) throw StateError("cohesive: element index out of range");
+  io.pod(pending_count_);
+  io.vec(gather_node_), io.vec(gather_start_), io.vec(gather_slot_);
+  if constexpr (load) {
+    if (gather_start_.empty() || gather_start_.size() != gather_node_.size() + 1 || gather_start_.back() != int(gather_slot_.size()))
+      throw StateError("cohesive: inconsistent node gather");
+    for (int v : gather_node_)
+      if (v < 0 || v >= num_nodes_) throw StateError("cohesive: gather node out of range");
+    for (int sl : gather_slot_)
+      if (sl < 0 || std::size_t(sl) + 1 >= force_.size()) throw StateError("cohesive: gather slot out of range");
+  }
+  std::uint64_t stale = stale_slots_;
+  io.pod(stale);
+  if constexpr (load) stale_slots_ = std::size_t(stale);
+  io.pod(counts_);
+  // law = "composite": its point histories (composite_index_ and composite_law_ are fixed when the system is built).
+  io.vec_sized(composite_history_, composite_history_.size(), "composite point histories");
+  // Extrinsic insertion.
+  io.vec_sized(dormant_, ne, "cohesive dormant flags");
+  io.vec_sized(offset_, 2 * ne, "cohesive insertion offsets");
+  std::int32_t dormant = std::int32_t(dormant_count_);
+  io.pod(dormant);
+  if constexpr (load) dormant_count_ = dormant;
+  io.pod(inserted_);
 }
 
 }  // namespace fdem::fracture

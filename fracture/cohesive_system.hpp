@@ -172,6 +172,8 @@ class CohesiveSystem {
   // elements and properties.
   void save_state(StateWriter& w) const;
   void load_state(StateReader& r);
+  template <class IO>
+  void state_io(IO& io);  // the one list of fields behind both (IO = StateWriter or StateReader)
 
  private:
   std::vector<CohesiveElement> elems_;
