@@ -61,7 +61,8 @@ def case_files(root: str) -> dict:
 
 
 def case_hash(fdem: str, path: str) -> str:
-    r = subprocess.run([fdem, "check", path], capture_output=True, text=True, cwd=os.path.dirname(os.path.abspath(path)))
+    path = os.path.abspath(path)
+    r = subprocess.run([fdem, "check", path], capture_output=True, text=True, cwd=os.path.dirname(path))
     m = re.search(r"case hash ([0-9a-f]{16})", r.stdout)
     if r.returncode != 0 or not m:
         raise ToolError(f"fdem check {path} gave no case hash (exit {r.returncode}): "

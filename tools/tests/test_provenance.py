@@ -60,3 +60,22 @@ def test_figures_ok_then_stale_after_the_case_changes(tmp_path, cli):
                        "--strict")
     assert rc == 2
     assert " stale " in out and "now hashes" in out
+
+
+def test_relative_paths_as_from_the_repository_root(tmp_path, cli, monkeypatch):
+    """Run as the README says (`provenance cases` from the checkout): relative case paths reach fdem check."""
+    if not os.access(fdem_bin(), os.X_OK):
+        pytest.fail(f"no fdem executable at {fdem_bin()} (build it or set FDEM_BIN)")
+    cases = tmp_path / "cases"
+    cases.mkdir()
+    shutil.copy(TINY, cases / "tiny_shear.toml")
+    run = tmp_path / "run"
+    r = subprocess.run([fdem_bin(), "run", str(cases / "tiny_shear.toml"), "--out", str(run), "--quiet"],
+                       capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    rc, out, err = cli("plot", str(run), "--figures", "curves", "--out-dir", str(cases / "fig"))
+    assert rc == 0, err
+    monkeypatch.chdir(tmp_path)
+    rc, out, err = cli("provenance", "cases", "--fdem", fdem_bin(), "--strict")
+    assert rc == 0, out + err
+    assert "1 ok" in out
