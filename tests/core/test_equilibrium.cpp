@@ -49,6 +49,7 @@ TEST_CASE("equilibrium: a stage ends only when the supports carry the applied lo
     fdem::Model model = fdem::build_scene(spec);
     fdem::RunOptions opt;
     opt.quiet = true;
+    opt.threads = 1;  // (ctest runs two tests at once on two cores)
     fdem::Simulation sim(spec, std::move(model), opt);
     sim.begin_stage(0);
     bool ratio_alone_would_end = false;  // a step after the first 10 with the ratio within 1e-3 and the reactions off
