@@ -25,9 +25,16 @@ STAMP = re.compile(r"^fdem (?P<version>\S+) build (?P<build>\S+)(?:; fdem .*?)? 
 CASE = re.compile(r"(?P<name>[^,\[\]]+?) \[(?P<hash>[0-9a-f]{16}|no hash)\]")
 
 
-def read_stamp(png: str) -> str:
+def read_stamp(path: str) -> str:
+    """A PNG's "Source" text chunk, or a Markdown report's "Source: " line (validate's report.md)."""
+    if path.endswith(".md"):
+        with open(path, encoding="utf-8", errors="replace") as f:
+            for line in f:
+                if line.startswith("Source: "):
+                    return line[len("Source: "):].strip()
+        return ""
     from PIL import Image
-    with Image.open(png) as im:
+    with Image.open(path) as im:
         return (im.info.get("Source") or "").strip()
 
 
@@ -71,15 +78,16 @@ def case_hash(fdem: str, path: str) -> str:
 
 
 def check(paths: list, cases_root: str, fdem: str) -> list:
-    pngs = []
+    pngs = []  # figures, and validate's Markdown reports
     for p in paths:
         if os.path.isdir(p):
             for d, _, files in os.walk(p):
-                pngs += [os.path.join(d, f) for f in sorted(files) if f.endswith(".png")]
-        elif p.endswith(".png"):
+                pngs += [os.path.join(d, f) for f in sorted(files)
+                         if f.endswith(".png") or (f.endswith(".md") and f.startswith("validate"))]
+        elif p.endswith(".png") or p.endswith(".md"):
             pngs.append(p)
         else:
-            raise ToolError(f"{p}: not a folder or a PNG file")
+            raise ToolError(f"{p}: not a folder, a PNG file or a Markdown report")
     names = case_files(cases_root)
     hashes = {}
     rows = []
@@ -112,13 +120,13 @@ def check(paths: list, cases_root: str, fdem: str) -> list:
 def cmd_provenance(args):
     rows = check(args.paths, args.cases, fdem_binary(args.fdem))
     if not rows:
-        raise ToolError("no PNG figure under " + ", ".join(args.paths))
+        raise ToolError("no PNG figure or validate report under " + ", ".join(args.paths))
     width = max(len(os.path.relpath(r["figure"])) for r in rows)
     for r in rows:
         print(f"{os.path.relpath(r['figure']):<{width}}  {r['status']:<9}  {r['build'] or '-':<14}  "
               + (r["detail"] or r["cases"]))
     counts = {s: sum(r["status"] == s for r in rows) for s in ("ok", "stale", "unknown", "unstamped")}
-    print(", ".join(f"{n} {s}" for s, n in counts.items()) + f" of {len(rows)} figures")
+    print(", ".join(f"{n} {s}" for s, n in counts.items()) + f" of {len(rows)} figures and reports")
     if args.csv:
         write_csv(args.csv, list(rows[0].keys()), [list(r.values()) for r in rows])
         print(f"wrote {args.csv}")

@@ -685,7 +685,9 @@ def run_family(args) -> int:
                  q["peak_half_kN"], q["change"], yn[q["quasi_static"]], q["reach_full_mm"], q["reach_half_mm"],
                  q["compared_up_to_mm"], q["note"])] for q in qs_rows])
     trend = axial_trend(rows, refs, args.axial_column)
-    md = report_markdown(family, rows, qs_rows, trend, fixed, args, time.monotonic() - t0)
+    from .figures import run_stamp
+    md = report_markdown(family, rows, qs_rows, trend, fixed, args, time.monotonic() - t0,
+                         stamp=run_stamp([rec.get("summary") for rec in recs]))
     with open(os.path.join(out, "report.md"), "w", encoding="utf-8") as f:
         f.write(md)
     print(md)
@@ -708,12 +710,15 @@ def bound_ratio(r: dict) -> str:
     return f"{q:.3f}" + (" ABOVE THE BOUND" if q > 1 + BOUND_TOL else "")
 
 
-def report_markdown(family, rows, qs_rows, trend, fixed, args, elapsed) -> str:
+def report_markdown(family, rows, qs_rows, trend, fixed, args, elapsed, stamp: str = "") -> str:
     L = [f"# Validation report: {family}", ""]
     L.append(f"Cases: {len(rows)} (pattern `{args.glob}`); overrides: "
              + (", ".join(f"`{k}={v}`" for k, v in fixed) if fixed else "none")
              + f"; {args.threads} thread(s) per run; published FDEM column `{args.published_column}`.")
     L.append("")
+    if stamp:  # what made the runs (the figures' stamp; fdem-tools provenance reads it)
+        L.append(f"Source: {stamp}")
+        L.append("")
     L.append("| case | status | peak (kN) | disp. at peak (mm) | K0 (kN/mm) | load at end (kN) | drop after peak "
              "| past peak | stage ended by | unit cracks at peak / end | experiment (kN) | error | published FDEM (kN) "
              "| error vs FDEM | rigid-block bound (kN) | peak / bound | triangles | steps | wall time (s) |")

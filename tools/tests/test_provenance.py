@@ -79,3 +79,25 @@ def test_relative_paths_as_from_the_repository_root(tmp_path, cli, monkeypatch):
     rc, out, err = cli("provenance", "cases", "--fdem", fdem_bin(), "--strict")
     assert rc == 0, out + err
     assert "1 ok" in out
+
+
+def test_a_validate_report_is_checked_by_its_source_line(tmp_path, cli):
+    """validate's report.md carries "Source: <stamp>": provenance reads it as a figure's stamp."""
+    if not os.access(fdem_bin(), os.X_OK):
+        pytest.fail(f"no fdem executable at {fdem_bin()} (build it or set FDEM_BIN)")
+    cases = tmp_path / "cases"
+    cases.mkdir()
+    shutil.copy(TINY, cases / "tiny_shear.toml")
+    run = tmp_path / "run"
+    r = subprocess.run([fdem_bin(), "run", str(cases / "tiny_shear.toml"), "--out", str(run), "--quiet"],
+                       capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    from fdemtools.figures import stamp_of_runs
+    stamp = stamp_of_runs([str(run)])
+    (cases / "validate_report.md").write_text(f"# Validation report: x\n\nCases: 1\n\nSource: {stamp}\n\n| a |\n")
+    (cases / "validate_old_report.md").write_text("# Validation report: y\n\nno source line\n")
+    rc, out, err = cli("provenance", str(cases), "--cases", str(cases), "--fdem", fdem_bin())
+    assert rc == 0, err
+    lines = {os.path.basename(ln.split()[0]): ln for ln in out.splitlines() if ln.split() and ln.split()[0].endswith(".md")}
+    assert " ok " in lines["validate_report.md"]
+    assert " unstamped " in lines["validate_old_report.md"]

@@ -77,6 +77,8 @@ def test_family_report_and_half_rate_check(tmp_path, cli):
     assert float(rows["c0"]["error_vs_published_fdem"]) == pytest.approx(13.2 / 12 - 1, rel=1e-9)
     assert rows["c1"]["error_vs_experiment"] == ""  # no reference row, no [reference]
     md = (out / "report.md").read_text()
+    # what made the runs, as the figures' stamp (the fake's summaries carry no build or hash: said so)
+    assert "\nSource: fdem ? build unknown | fake [no hash]\n" in md
     # half the rate (default: the first case only): 10 (1.1)(1.1) against 10 (1.1)(1.2): -8.3 %, not quasi-static
     assert "| c0 | `rate` | 0.2 | 0.1 | 13.2 | 12.1 | -8.3 % | NOT quasi-static | completed | - |" in md
     assert "0 of 1 checked cases quasi-static; largest change -8.3 %." in md
