@@ -40,7 +40,7 @@ def add_drift_axis(ax, unit_m: float, height_m: float):
     return sec
 
 
-def run_stamp(summaries) -> str:
+def run_stamp(summaries, limit: int | None = 4) -> str:
     """What made a figure, in one line: the fdem release and build (summary.json "fdem_version", "build": the
     source tree's commit when fdem was built) and each run's case with its hash ("case_hash": the case as resolved,
     its TOML after --set). A figure committed next to its case can then be checked against both. Runs written
@@ -57,8 +57,8 @@ def run_stamp(summaries) -> str:
             cases.append(c)
     if not builds:
         return ""
-    if len(cases) > 4:
-        cases = cases[:4] + [f"and {len(cases) - 4} more"]
+    if limit is not None and len(cases) > limit:  # (a figure's corner; a report lists them all)
+        cases = cases[:limit] + [f"and {len(cases) - limit} more"]
     return "; ".join(builds) + " | " + ", ".join(cases)
 
 

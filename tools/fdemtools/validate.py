@@ -687,7 +687,7 @@ def run_family(args) -> int:
     trend = axial_trend(rows, refs, args.axial_column)
     from .figures import run_stamp
     md = report_markdown(family, rows, qs_rows, trend, fixed, args, time.monotonic() - t0,
-                         stamp=run_stamp([rec.get("summary") for rec in recs]))
+                         stamp=run_stamp([rec.get("summary") for rec in recs], limit=None))
     with open(os.path.join(out, "report.md"), "w", encoding="utf-8") as f:
         f.write(md)
     print(md)

@@ -96,8 +96,15 @@ def test_a_validate_report_is_checked_by_its_source_line(tmp_path, cli):
     stamp = stamp_of_runs([str(run)])
     (cases / "validate_report.md").write_text(f"# Validation report: x\n\nCases: 1\n\nSource: {stamp}\n\n| a |\n")
     (cases / "validate_old_report.md").write_text("# Validation report: y\n\nno source line\n")
+    # the same case with a --set run beside it (validate's half-rate check): ok while one hash is the case's now
+    both = stamp + ", " + stamp.split(" | ")[1].split(" [")[0] + " [0123456789abcdef]"
+    (cases / "validate_rate_report.md").write_text(f"# Validation report: z\n\nSource: {both}\n")
+    (cases / "validate_gone_report.md").write_text(
+        "# r\n\nSource: fdem 0.1.0 build x | " + stamp.split(" | ")[1].split(" [")[0] + " [0123456789abcdef]\n")
     rc, out, err = cli("provenance", str(cases), "--cases", str(cases), "--fdem", fdem_bin())
     assert rc == 0, err
     lines = {os.path.basename(ln.split()[0]): ln for ln in out.splitlines() if ln.split() and ln.split()[0].endswith(".md")}
     assert " ok " in lines["validate_report.md"]
     assert " unstamped " in lines["validate_old_report.md"]
+    assert " ok " in lines["validate_rate_report.md"]
+    assert " stale " in lines["validate_gone_report.md"]
