@@ -62,6 +62,11 @@ def run_stamp(summaries, limit: int | None = 4) -> str:
     return "; ".join(builds) + " | " + ", ".join(cases)
 
 
+def _draw_stamp(fig, stamp: str):
+    """The stamp small in the figure's bottom-left corner (save and savefig_stamped)."""
+    fig.text(0.003, 0.003, stamp, fontsize=5.5, color="0.45", ha="left", va="bottom")
+
+
 def stamp_of_runs(run_dirs) -> str:
     """run_stamp of the summary.json files of these run folders (those without one are left out)."""
     import json
@@ -80,7 +85,7 @@ def savefig_stamped(fig, path: str, run_dirs, **kwargs) -> str:
     the bottom-left corner and in the file's metadata, as save() writes it. Returns the stamp ("" without runs)."""
     stamp = stamp_of_runs(run_dirs)
     if stamp:
-        fig.text(0.003, 0.003, stamp, fontsize=5.5, color="0.45", ha="left", va="bottom")
+        _draw_stamp(fig, stamp)
         if path.lower().endswith((".png", ".svg")):
             kwargs.setdefault("metadata", {"Source": stamp})
     fig.savefig(path, **kwargs)
@@ -95,7 +100,7 @@ def save(fig, prefix: str, stamp: str = "") -> list:
     paths = []
     with plt.rc_context(STYLE):
         if stamp:
-            fig.text(0.003, 0.003, stamp, fontsize=5.5, color="0.45", ha="left", va="bottom")
+            _draw_stamp(fig, stamp)
         fig.tight_layout()
         for ext in ("png", "svg"):
             p = f"{prefix}.{ext}"

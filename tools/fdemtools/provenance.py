@@ -16,7 +16,6 @@ from __future__ import annotations
 import os
 import re
 import subprocess
-import sys
 
 from .batch import fdem_binary
 from .common import ToolError, write_csv
@@ -149,6 +148,3 @@ def add_parser(sub):
     p.add_argument("--strict", action="store_true", help="exit 2 unless every figure is ok")
     p.set_defaults(func=cmd_provenance)
 
-
-if __name__ == "__main__":  # pragma: no cover
-    sys.exit("run through fdem-tools provenance")

@@ -17,6 +17,20 @@ def fdem_bin():
     return os.environ.get("FDEM_BIN") or os.path.join(REPO, "build", "fdem", "fdem")
 
 
+def tiny_case_and_run(tmp_path):
+    """tmp_path/cases/tiny_shear.toml and a completed run of it in tmp_path/run."""
+    if not os.access(fdem_bin(), os.X_OK):
+        pytest.fail(f"no fdem executable at {fdem_bin()} (build it or set FDEM_BIN)")
+    cases = tmp_path / "cases"
+    cases.mkdir()
+    shutil.copy(TINY, cases / "tiny_shear.toml")
+    run = tmp_path / "run"
+    r = subprocess.run([fdem_bin(), "run", str(cases / "tiny_shear.toml"), "--out", str(run), "--quiet"],
+                       capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    return cases, run
+
+
 def test_parse_stamp():
     p = parse_stamp("fdem 0.1.0 build abc123 | w1 [00112233445566ff], old [no hash]")
     assert p["build"] == "abc123" and p["cases"] == [("w1", "00112233445566ff"), ("old", None)]
@@ -64,15 +78,7 @@ def test_figures_ok_then_stale_after_the_case_changes(tmp_path, cli):
 
 def test_relative_paths_as_from_the_repository_root(tmp_path, cli, monkeypatch):
     """Run as the README says (`provenance cases` from the checkout): relative case paths reach fdem check."""
-    if not os.access(fdem_bin(), os.X_OK):
-        pytest.fail(f"no fdem executable at {fdem_bin()} (build it or set FDEM_BIN)")
-    cases = tmp_path / "cases"
-    cases.mkdir()
-    shutil.copy(TINY, cases / "tiny_shear.toml")
-    run = tmp_path / "run"
-    r = subprocess.run([fdem_bin(), "run", str(cases / "tiny_shear.toml"), "--out", str(run), "--quiet"],
-                       capture_output=True, text=True)
-    assert r.returncode == 0, r.stderr
+    cases, run = tiny_case_and_run(tmp_path)
     rc, out, err = cli("plot", str(run), "--figures", "curves", "--out-dir", str(cases / "fig"))
     assert rc == 0, err
     monkeypatch.chdir(tmp_path)
@@ -83,15 +89,7 @@ def test_relative_paths_as_from_the_repository_root(tmp_path, cli, monkeypatch):
 
 def test_a_validate_report_is_checked_by_its_source_line(tmp_path, cli):
     """validate's report.md carries "Source: <stamp>": provenance reads it as a figure's stamp."""
-    if not os.access(fdem_bin(), os.X_OK):
-        pytest.fail(f"no fdem executable at {fdem_bin()} (build it or set FDEM_BIN)")
-    cases = tmp_path / "cases"
-    cases.mkdir()
-    shutil.copy(TINY, cases / "tiny_shear.toml")
-    run = tmp_path / "run"
-    r = subprocess.run([fdem_bin(), "run", str(cases / "tiny_shear.toml"), "--out", str(run), "--quiet"],
-                       capture_output=True, text=True)
-    assert r.returncode == 0, r.stderr
+    cases, run = tiny_case_and_run(tmp_path)
     from fdemtools.figures import stamp_of_runs
     stamp = stamp_of_runs([str(run)])
     (cases / "validate_report.md").write_text(f"# Validation report: x\n\nCases: 1\n\nSource: {stamp}\n\n| a |\n")
