@@ -471,6 +471,12 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f,
     const double t0 = omp_get_wtime();
     const int n_items = static_cast<int>(items_.size());
     const int np = static_cast<int>(pair_a_.size());
+    // (the last step's dashpot work on v^{n+1/2}: finish_step)
+    damping_ += damping_next_;
+    damping_next_ = 0.0;
+    const bool dashpots = beta_ > 0.0;
+    if (dashpots && pair_fd_.size() < 12 * static_cast<std::size_t>(np)) pair_fd_.resize(12 * static_cast<std::size_t>(np));
+    dashpot_dt_ = dashpots ? dt : 0.0;
     const bool want_energy = opt_.compute_energy;
     // The kernel's parameters depend on the law, dt and the dashpot only: resolved once per law, not per pair.
     law_prm_.resize(laws_.size());
@@ -613,7 +619,8 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f,
             // when it is not)
             const bool on = batch.end(geom_[a], geom_[b], va, vb, law_prm_[pair_law_[p]], want_energy,
                                       &hist_[kHistPerPair * static_cast<size_t>(p)], r, pair_hist_on_[p],
-                                      &pair_f_[12 * static_cast<size_t>(p)]);
+                                      &pair_f_[12 * static_cast<size_t>(p)],
+                                      dashpots ? &pair_fd_[12 * static_cast<size_t>(p)] : nullptr);
             pair_hist_on_[p] = static_cast<char>(r.held);
             if (on) {
                 pair_on_[p] = 1;
@@ -742,12 +749,37 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f,
     energy_tangential_ = et;
     energy_current_ = want_energy;
     dissipation_ += ed;
-    damping_ += ec;
+    damping_ += 0.5 * ec;  // the half on v^{n-1/2}; finish_step works out the other
     stats_.active_pairs = active;
     stats_.pair_evaluations += np;
     const double t2 = omp_get_wtime();
     stats_.time_forces += t2 - t0;
     stats_.time_scatter += t2 - t1;
+}
+
+void ContactSystem::finish_step(const double* v) {
+    if (dashpot_dt_ == 0.0) return;
+    // -dt / 2 f_d . v^{n+1/2} over the loaded pairs: per block in pair order, then the blocks in order (the same
+    // bits for any thread count).
+    const int np = static_cast<int>(pair_a_.size());
+    const int n_blocks = (np + kPairBlock - 1) / kPairBlock;
+    block_fd_.resize(n_blocks);
+#pragma omp parallel for schedule(static) if (np > kParallelMin)
+    for (int blk = 0; blk < n_blocks; ++blk) {
+        double sum = 0.0;
+        const int p1 = std::min(np, (blk + 1) * kPairBlock);
+        for (int p = blk * kPairBlock; p < p1; ++p) {
+            if (pair_on_[p] != 1) continue;
+            const int* nd = &pair_nodes_[6 * static_cast<size_t>(p)];
+            const double* fd = &pair_fd_[12 * static_cast<size_t>(p)];
+            for (int s = 0; s < 6; ++s) sum += fd[2 * s] * v[2 * nd[s]] + fd[2 * s + 1] * v[2 * nd[s] + 1];
+        }
+        block_fd_[blk] = sum;
+    }
+    double power = 0.0;
+    for (int blk = 0; blk < n_blocks; ++blk) power += block_fd_[blk];
+    damping_next_ = -0.5 * dashpot_dt_ * power;
+    dashpot_dt_ = 0.0;
 }
 
 double ContactSystem::normal_energy_at(const double* x) const {
@@ -771,7 +803,7 @@ double ContactSystem::normal_energy_at(const double* x) const {
 // add the field to save_state and load_state if it carries from one step to the next, then update the size.
 void ContactSystem::save_state(StateWriter& w) const {
 #if defined(__x86_64__) && defined(__GLIBCXX__)
-    static_assert(sizeof(ContactSystem) == 1512, "ContactSystem changed: update state_io and this size");
+    static_assert(sizeof(ContactSystem) == 1576, "ContactSystem changed: update state_io and this size");
 #endif
     const_cast<ContactSystem*>(this)->state_io(w);  // (the writer only reads the fields)
 }
@@ -822,6 +854,7 @@ void ContactSystem::state_io(IO& io) {
     }
     io.pod(energy_normal_), io.pod(energy_tangential_), io.pod(dissipation_), io.pod(damping_);
     io.pod(beta_), io.pod(energy_current_), io.pod(opt_.compute_energy);
+    io.pod(damping_next_);  // (dashpot_dt_ is 0 between steps: finish_step has run)
     io.pod(stats_.detections), io.pod(stats_.candidate_pairs), io.pod(stats_.active_pairs), io.pod(stats_.pair_evaluations);
     if constexpr (load) {
         // Per-step scratch sized as detect() leaves it.

@@ -99,9 +99,11 @@ namespace {
 // len: the owner's edge length (m), as edge_integrals computed it; its integrals I_k at I[k * stride] (the batch's
 // columns, read where they are: copied to a small array, they were stored a double at a time and read back in pairs,
 // a stalled store forwarding on every loaded edge). h: the edge's friction state (kHistPerEdge).
+// fdo, fdq (optional, with dashpots): the dashpot part of fo, fq is also added there (the books' second half).
 void load_edge(const double* __restrict xo, const double* __restrict vo, double* __restrict fo,
                const double* __restrict vq, double* __restrict fq, int e, double len, const double* __restrict In,
-               std::size_t stride, const PairParams& p, double* __restrict h, PairResult& r) {
+               std::size_t stride, const PairParams& p, double* __restrict h, PairResult& r,
+               double* __restrict fdo = nullptr, double* __restrict fdq = nullptr) {
     const double I[6] = {In[0], In[stride], In[2 * stride], In[3 * stride], In[4 * stride], In[5 * stride]};
     const int e1 = (e + 1) % 3;
     const double dx = xo[2 * e1] - xo[2 * e], dy = xo[2 * e1 + 1] - xo[2 * e + 1];
@@ -160,10 +162,11 @@ void load_edge(const double* __restrict xo, const double* __restrict vo, double*
             // go), so the stored energy k_t delta_s^2 / 2 only changes by work or booked dissipation. (Kept as a
             // stretch with k_t read off the current length, a landing edge gained energy from nothing: a
             // rocking block's books showed 20 % more energy held than worked.)
-            if (k_t != h[5]) {
-                const double e_old = 0.5 * h[5] * h[0] * h[0];
+            // (the spring's force k_t delta_s and energy before this step, for the books below)
+            const bool resized = k_t != h[5];
+            const double f_old = h[5] * h[0], e_old = 0.5 * h[5] * h[0] * h[0];
+            if (resized) {
                 if (k_t > h[5]) h[0] *= h[5] / k_t;
-                r.dissipation += e_old - 0.5 * k_t * h[0] * h[0];
                 h[5] = k_t;
             }
             const double s0 = h[1];
@@ -180,13 +183,26 @@ void load_edge(const double* __restrict xo, const double* __restrict vo, double*
             if (!sticks) {
                 kept = (trial > 0.0 ? 1.0 : -1.0) * cap / k_t;
                 ft = -k_t * kept;
-                r.dissipation += cap * std::fabs(trial - kept);
                 // The faces slid: the anchors move to the centre of pressure, keeping the spring's stretch.
                 h[1] = s;
                 h[2] = lq[0], h[3] = lq[1], h[4] = lq[2];
             }
+            // Dissipated this step: the work the spring took, at the mean of its force before and after the step
+            // over the step's tangential motion vt dt (the rule by which the engine books every force's work, on the
+            // mean velocity of the step, integrator.cpp), less the energy it gained. While it sticks at an unchanged
+            // length this is 0; when it slips at a steady cap, the cap times the slip. (Booked as the cap times the
+            // slip at every slip and as the energy lost at every change of length, the books missed
+            // (cap^{n-1} - cap^n)^2 / (2 k_t) at each change of the cap, and a term of each length change times the
+            // motion: where the normal force chatters, as under contact dashpots, a block pushed at mid-height
+            // closed its books to -8 %.)
+            const double e_new = 0.5 * k_t * kept * kept;
+            // (after a slip the force acts at the new anchors: its half of the work on their motion, vrx, vry at
+            // the centre of pressure)
+            const double vt_new = sticks ? vt : vrx * tx + vry * ty;
+            if (resized || !sticks)
+                r.dissipation += 0.5 * (f_old * vt + k_t * kept * vt_new) * p.dt - (e_new - e_old);
             h[0] = kept;
-            r.energy_tangential += 0.5 * k_t * kept * kept;
+            r.energy_tangential += e_new;
             // The tangential dashpot acts only while the edge sticks and keeps the sum within the Coulomb limit,
             // so a sliding edge carries mu (fn - fdn) whatever the rate.
             const double fdt = (p.beta > 0.0 && sticks) ? std::clamp(-p.beta * k_t * vt, -cap - ft, cap - ft) : 0.0;
@@ -201,8 +217,30 @@ void load_edge(const double* __restrict xo, const double* __restrict vo, double*
                 fq[2 * k] -= h[2 + k] * fx;
                 fq[2 * k + 1] -= h[2 + k] * fy;
             }
+            if (fdo && fdt != 0.0) {
+                const double dx_ = fdt * tx, dy_ = fdt * ty;
+                fdo[2 * e] += (1.0 - sa) * dx_;
+                fdo[2 * e + 1] += (1.0 - sa) * dy_;
+                fdo[2 * e1] += sa * dx_;
+                fdo[2 * e1 + 1] += sa * dy_;
+                for (int k = 0; k < 3; ++k) {
+                    fdq[2 * k] -= h[2 + k] * dx_;
+                    fdq[2 * k + 1] -= h[2 + k] * dy_;
+                }
+            }
         }
         if (p.beta > 0.0) r.damping -= fdn * vn * p.dt;
+        if (fdo && fdn != 0.0) {
+            const double dx_ = fdn * nx, dy_ = fdn * ny;
+            fdo[2 * e] += (1.0 - s) * dx_;
+            fdo[2 * e + 1] += (1.0 - s) * dy_;
+            fdo[2 * e1] += s * dx_;
+            fdo[2 * e1 + 1] += s * dy_;
+            for (int k = 0; k < 3; ++k) {
+                fdq[2 * k] -= lq[k] * dx_;
+                fdq[2 * k + 1] -= lq[k] * dy_;
+            }
+        }
     }
     fo[2 * e] += (1.0 - s) * gx;
     fo[2 * e + 1] += (1.0 - s) * gy;
@@ -569,11 +607,16 @@ void PairBatch::integrate() {
 
 bool PairBatch::end(const TriangleGeometry& A, const TriangleGeometry& B, const double* va, const double* vb,
                     const PairParams& params, bool want_energy, double* hist, PairResult& r, unsigned held,
-                    double* f12) {
+                    double* f12, double* fd12) {
     const unsigned tested = tested_[next_pending_++];
     double* fa = f12 ? f12 : r.fa;
     double* fb = f12 ? f12 + 6 : r.fb;
     clear_result(r, fa, fb);
+    if (params.beta <= 0.0) fd12 = nullptr;
+    double* fda = fd12;
+    double* fdb = fd12 ? fd12 + 6 : nullptr;
+    if (fd12)
+        for (int i = 0; i < 12; ++i) fd12[i] = 0.0;
     PairParams p = params;
     if (p.p_t > 0.0 || (p.beta > 0.0 && p.p_n > 0.0)) {
         const double inv_h = A.inv_h_min + B.inv_h_min;  // 1/m
@@ -592,8 +635,8 @@ bool PairBatch::end(const TriangleGeometry& A, const TriangleGeometry& B, const 
                 if (loaded_[i]) {
                     const double* I = col[kI] + i;  // I_k at I[k cap_] (clear: the columns cap_ apart)
                     const double len = col[kLen][i];
-                    if (side == 0) load_edge(A.x, va, fa, vb, fb, e, len, I, cap_, p, hist + kHistPerEdge * s, r);
-                    else load_edge(B.x, vb, fb, va, fa, e, len, I, cap_, p, hist + kHistPerEdge * s, r);
+                    if (side == 0) load_edge(A.x, va, fa, vb, fb, e, len, I, cap_, p, hist + kHistPerEdge * s, r, fda, fdb);
+                    else load_edge(B.x, vb, fb, va, fa, e, len, I, cap_, p, hist + kHistPerEdge * s, r, fdb, fda);
                     ++r.active_edges;
                     r.held |= 1u << s;
                     on = true;

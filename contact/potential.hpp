@@ -65,7 +65,7 @@ struct PairResult {
     double energy_normal = 0.0;      // t INT (c phi_A + c phi_B) dA (J); only when asked for
     double energy_tangential = 0.0;  // sum 0.5 k_t delta_s^2 over the edges (J)
     double dissipation = 0.0;        // friction work dissipated in this step (J)
-    double damping = 0.0;            // work of the dashpots in this step (J, >= 0)
+    double damping = 0.0;            // work of the dashpots in this step on v^{n-1/2}, -dt f_d . v (J, >= 0)
     int active_edges = 0;            // edges carrying a normal force
     unsigned held = 0;               // bit s: friction slot s may hold state after the call (the loaded edges)
 };
@@ -130,10 +130,12 @@ public:
     bool begin(const TriangleGeometry& a, const TriangleGeometry& b, const PairParams& p, bool want_energy,
                double* hist, PairResult& out, unsigned held = 0x3f);
     void integrate();
-    // The next pending pair: loads its edges (pair_contact's f12 and return value).
+    // The next pending pair: loads its edges (pair_contact's f12 and return value). fd12 (optional, read only with
+    // dashpots, p.beta > 0): the dashpots' part of the forces (A's six, then B's six; written whenever the pair
+    // overlaps), so that their work can be booked on the step's mean velocity (ContactSystem::finish_step).
     bool end(const TriangleGeometry& a, const TriangleGeometry& b, const double* va, const double* vb,
              const PairParams& p, bool want_energy, double* hist, PairResult& out, unsigned held = 0x3f,
-             double* f12 = nullptr);
+             double* f12 = nullptr, double* fd12 = nullptr);
     // Forget all pairs and make room for up to max_pairs more (the storage stays).
     void clear(int max_pairs);
 

@@ -605,6 +605,7 @@ void Simulation::step() {
     };
     if (tied) with_filter(std::true_type{});
     else with_filter(std::false_type{});
+    inter_.finish_step(model_.v.data());
     if (spec_.energy_audit) audit_step(2, dt);
     double dW = 0, dD = 0, unb = 0, scale = 0, dM = 0;
     kinetic_n_ = 0, work_half_ = 0, damp_half_ = 0, mass_half_ = 0;

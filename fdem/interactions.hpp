@@ -67,6 +67,10 @@ public:
     // v2max: the largest |v|^2 over the nodes when the caller has it, else -1 (ContactSystem::step).
     void add_forces(const double* x, const double* v, double dt, double* f, double* after_joints = nullptr,
                     std::size_t n = 0, double v2max = -1.0);
+    // After the node update, with v^{n+1/2}: the contact dashpots' books (ContactSystem::finish_step).
+    void finish_step(const double* v) {
+        if (contact_) contact_->finish_step(v);
+    }
     // After the update: removes broken joints, makes their triangles contact-capable, records them.
     // Returns the number of joints that broke.
     int after_step(double time, double control_displacement, const double* x);

@@ -165,6 +165,7 @@ struct BlockSim {
             v[i] += dt * fi / m[i];
             x[i] += dt * v[i];
         }
+        cs->finish_step(v.data());
     }
 
     double kinetic() const {
