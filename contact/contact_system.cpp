@@ -479,28 +479,7 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f,
     dashpot_dt_ = dashpots ? dt : 0.0;
     const bool want_energy = opt_.compute_energy;
     // The kernel's parameters depend on the law, dt and the dashpot only: resolved once per law, not per pair.
-    law_prm_.resize(laws_.size());
-    bool altitudes = false;  // some law's potential weighs by the altitudes (TriangleGeometry::h)
-    for (std::size_t l = 0; l < laws_.size(); ++l) {
-        const ResolvedLaw& L = laws_[l];
-        PairParams& prm = law_prm_[l];
-        prm = PairParams{};
-        prm.thickness = thickness_;
-        prm.distance_potential = L.normal_is_stiffness;
-        altitudes = altitudes || L.normal_is_stiffness;
-        prm.c = L.normal_is_stiffness ? 0.5 * L.normal : L.normal;
-        // A penalty p (Pa) becomes a pressure/overlap slope 3 p (1/H_a + 1/H_b) (Pa/m) ([MA00] phi = 3 min L_k):
-        // p_t for friction, p_n for the dashpots; pair_contact works it out once it knows the pair overlaps.
-        if (L.tangential_is_stiffness) prm.k_s = L.tangential;
-        else prm.p_t = L.tangential;
-        prm.mu = L.mu;
-        prm.dt = dt;
-        if (beta_ > 0.0) {
-            prm.beta = beta_;
-            if (L.normal_is_stiffness) prm.k_n_area = L.normal;
-            else prm.p_n = L.normal;
-        }
-    }
+    const bool altitudes = resolve_params(dt, law_prm_);  // some law's potential weighs by the altitudes
     // Bounding boxes and pair-kernel geometry of the capable triangles, once per step: most candidate pairs are
     // apart and are rejected from two contiguous boxes, and a triangle met by several overlapping pairs has its
     // area coordinates and altitudes computed once. One parallel region for this loop and the pair loop (a fork
@@ -780,6 +759,67 @@ void ContactSystem::finish_step(const double* v) {
     for (int blk = 0; blk < n_blocks; ++blk) power += block_fd_[blk];
     damping_next_ = -0.5 * dashpot_dt_ * power;
     dashpot_dt_ = 0.0;
+}
+
+bool ContactSystem::resolve_params(double dt, std::vector<PairParams>& prm_of) const {
+    prm_of.resize(laws_.size());
+    bool altitudes = false;  // some law's potential weighs by the altitudes (TriangleGeometry::h)
+    for (std::size_t l = 0; l < laws_.size(); ++l) {
+        const ResolvedLaw& L = laws_[l];
+        PairParams& prm = prm_of[l];
+        prm = PairParams{};
+        prm.thickness = thickness_;
+        prm.distance_potential = L.normal_is_stiffness;
+        altitudes = altitudes || L.normal_is_stiffness;
+        prm.c = L.normal_is_stiffness ? 0.5 * L.normal : L.normal;
+        // A penalty p (Pa) becomes a pressure/overlap slope 3 p (1/H_a + 1/H_b) (Pa/m) ([MA00] phi = 3 min L_k):
+        // p_t for friction, p_n for the dashpots; pair_contact works it out once it knows the pair overlaps.
+        if (L.tangential_is_stiffness) prm.k_s = L.tangential;
+        else prm.p_t = L.tangential;
+        prm.mu = L.mu;
+        prm.dt = dt;
+        if (beta_ > 0.0) {
+            prm.beta = beta_;
+            if (L.normal_is_stiffness) prm.k_n_area = L.normal;
+            else prm.p_n = L.normal;
+        }
+    }
+    return altitudes;
+}
+
+std::vector<ContactSystem::LoadedEdge> ContactSystem::loaded_edges(const double* x, const double* v, double dt) const {
+    std::vector<LoadedEdge> out;
+    std::vector<PairParams> prm;
+    const bool altitudes = resolve_params(dt, prm);
+    PairBatch batch;
+    std::vector<double> hist(kHistPerPair);
+    const int np = static_cast<int>(pair_a_.size());
+    for (int p = 0; p < np; ++p) {
+        const int ab[2] = {pair_a_[p], pair_b_[p]};
+        TriangleGeometry g[2];
+        double vel[2][6];
+        for (int i = 0; i < 2; ++i) {
+            double T[6];
+            gather(x, tri_ + 3 * ab[i], T);
+            triangle_geometry(T, g[i], altitudes);
+            // the faces as the last step had them (update_faces runs at the next step)
+            g[i].faces = faces_.empty() ? 0 : static_cast<int>(faces_[ab[i]]);
+            gather(v, tri_ + 3 * ab[i], vel[i]);
+        }
+        // the pair's friction history as it is (a copy: this changes nothing)
+        std::copy(hist_.begin() + kHistPerPair * static_cast<std::ptrdiff_t>(p),
+                  hist_.begin() + kHistPerPair * static_cast<std::ptrdiff_t>(p + 1), hist.begin());
+        PairResult r;
+        batch.clear(1);
+        if (!batch.begin(g[0], g[1], prm[pair_law_[p]], false, hist.data(), r)) continue;
+        batch.integrate();
+        EdgeRecord rec[6];
+        double f12[12], fd12[12];
+        if (!batch.end(g[0], g[1], vel[0], vel[1], prm[pair_law_[p]], false, hist.data(), r, 0x3f, f12, fd12, rec)) continue;
+        for (int s = 0; s < 6; ++s)
+            if (rec[s].loaded) out.push_back({ab[s / 3], s % 3, ab[1 - s / 3], rec[s]});
+    }
+    return out;
 }
 
 double ContactSystem::normal_energy_at(const double* x) const {

@@ -132,6 +132,16 @@ public:
     // gives it for positions x (m) and the current pairs, without touching any state (serial; for reports).
     bool normal_energy_current() const { return energy_current_; }
     double normal_energy_at(const double* x) const;
+    // Every loaded face of the current pairs at positions x (m) and velocities v (m/s), as the next step of length
+    // dt (s) would load it (the pair kernel on a copy of each pair's friction history: nothing changes; serial; for
+    // snapshots): the owner triangle, its edge (from node e to node e + 1), the triangle it enters and the record. Each contact is
+    // carried by both faces, half each, so a face and the faces of the other body across it both appear.
+    struct LoadedEdge {
+        int triangle, edge;  // the owner triangle and its loaded edge
+        int other;           // the triangle it enters
+        EdgeRecord record;
+    };
+    std::vector<LoadedEdge> loaded_edges(const double* x, const double* v, double dt) const;
     double normal_energy() const { return energy_normal_; }                        // J
     double tangential_energy() const { return energy_tangential_; }                // J
     double friction_dissipation() const { return dissipation_; }                   // J, cumulative
@@ -160,6 +170,8 @@ private:
     void detect(const double* x);
     void set_pair_nodes();  // pair_nodes_ from the pair list; the masks to be made again
     int law_of(int ta, int tb) const;
+    // The pair kernel's parameters of every law for a step of dt (s); true when some law needs the altitudes.
+    bool resolve_params(double dt, std::vector<PairParams>& prm_of) const;
 
     const int* tri_;
     int n_tri_, n_nodes_;

@@ -99,11 +99,25 @@ namespace {
 // len: the owner's edge length (m), as edge_integrals computed it; its integrals I_k at I[k * stride] (the batch's
 // columns, read where they are: copied to a small array, they were stored a double at a time and read back in pairs,
 // a stalled store forwarding on every loaded edge). h: the edge's friction state (kHistPerEdge).
+// A force (fx, fy) on the owner's edge at s along it (nodes e, e1), its reaction on the other triangle at area
+// coordinates l.
+inline void spread(double* __restrict fo, double* __restrict fq, int e, int e1, double s, const double* l, double fx,
+                   double fy) {
+    fo[2 * e] += (1.0 - s) * fx;
+    fo[2 * e + 1] += (1.0 - s) * fy;
+    fo[2 * e1] += s * fx;
+    fo[2 * e1 + 1] += s * fy;
+    for (int k = 0; k < 3; ++k) {
+        fq[2 * k] -= l[k] * fx;
+        fq[2 * k + 1] -= l[k] * fy;
+    }
+}
+
 // fdo, fdq (optional, with dashpots): the dashpot part of fo, fq is also added there (the books' second half).
 void load_edge(const double* __restrict xo, const double* __restrict vo, double* __restrict fo,
                const double* __restrict vq, double* __restrict fq, int e, double len, const double* __restrict In,
                std::size_t stride, const PairParams& p, double* __restrict h, PairResult& r,
-               double* __restrict fdo = nullptr, double* __restrict fdq = nullptr) {
+               double* __restrict fdo = nullptr, double* __restrict fdq = nullptr, EdgeRecord* rec = nullptr) {
     const double I[6] = {In[0], In[stride], In[2 * stride], In[3 * stride], In[4 * stride], In[5 * stride]};
     const int e1 = (e + 1) % 3;
     const double dx = xo[2 * e1] - xo[2 * e], dy = xo[2 * e1 + 1] - xo[2 * e + 1];
@@ -208,47 +222,21 @@ void load_edge(const double* __restrict xo, const double* __restrict vo, double*
             const double fdt = (p.beta > 0.0 && sticks) ? std::clamp(-p.beta * k_t * vt, -cap - ft, cap - ft) : 0.0;
             r.damping -= fdt * vt * p.dt;
             const double fx = (ft + fdt) * tx, fy = (ft + fdt) * ty;
-            const double sa = h[1];
-            fo[2 * e] += (1.0 - sa) * fx;
-            fo[2 * e + 1] += (1.0 - sa) * fy;
-            fo[2 * e1] += sa * fx;
-            fo[2 * e1 + 1] += sa * fy;
-            for (int k = 0; k < 3; ++k) {
-                fq[2 * k] -= h[2 + k] * fx;
-                fq[2 * k + 1] -= h[2 + k] * fy;
-            }
-            if (fdo && fdt != 0.0) {
-                const double dx_ = fdt * tx, dy_ = fdt * ty;
-                fdo[2 * e] += (1.0 - sa) * dx_;
-                fdo[2 * e + 1] += (1.0 - sa) * dy_;
-                fdo[2 * e1] += sa * dx_;
-                fdo[2 * e1 + 1] += sa * dy_;
-                for (int k = 0; k < 3; ++k) {
-                    fdq[2 * k] -= h[2 + k] * dx_;
-                    fdq[2 * k + 1] -= h[2 + k] * dy_;
-                }
-            }
+            if (rec) rec->ft = ft + fdt, rec->sliding = sticks ? 0 : 1;
+            spread(fo, fq, e, e1, h[1], h + 2, fx, fy);
+            if (fdo && fdt != 0.0) spread(fdo, fdq, e, e1, h[1], h + 2, fdt * tx, fdt * ty);
         }
         if (p.beta > 0.0) r.damping -= fdn * vn * p.dt;
-        if (fdo && fdn != 0.0) {
-            const double dx_ = fdn * nx, dy_ = fdn * ny;
-            fdo[2 * e] += (1.0 - s) * dx_;
-            fdo[2 * e + 1] += (1.0 - s) * dy_;
-            fdo[2 * e1] += s * dx_;
-            fdo[2 * e1 + 1] += s * dy_;
-            for (int k = 0; k < 3; ++k) {
-                fdq[2 * k] -= lq[k] * dx_;
-                fdq[2 * k + 1] -= lq[k] * dy_;
-            }
-        }
+        if (fdo && fdn != 0.0) spread(fdo, fdq, e, e1, s, lq, fdn * nx, fdn * ny);
     }
-    fo[2 * e] += (1.0 - s) * gx;
-    fo[2 * e + 1] += (1.0 - s) * gy;
-    fo[2 * e1] += s * gx;
-    fo[2 * e1 + 1] += s * gy;
-    for (int k = 0; k < 3; ++k) {
-        fq[2 * k] -= lq[k] * gx;
-        fq[2 * k + 1] -= lq[k] * gy;
+    spread(fo, fq, e, e1, s, lq, gx, gy);
+    if (rec) {
+        rec->loaded = true;
+        rec->px = (1.0 - s) * xo[2 * e] + s * xo[2 * e1];
+        rec->py = (1.0 - s) * xo[2 * e + 1] + s * xo[2 * e1 + 1];
+        rec->nx = nx, rec->ny = ny;
+        rec->fn = -(gx * nx + gy * ny);  // (gx, gy) = -(fn - fdn) n
+        rec->length = I[5];
     }
 }
 
@@ -607,8 +595,10 @@ void PairBatch::integrate() {
 
 bool PairBatch::end(const TriangleGeometry& A, const TriangleGeometry& B, const double* va, const double* vb,
                     const PairParams& params, bool want_energy, double* hist, PairResult& r, unsigned held,
-                    double* f12, double* fd12) {
+                    double* f12, double* fd12, EdgeRecord* records) {
     const unsigned tested = tested_[next_pending_++];
+    if (records)
+        for (int k = 0; k < 6; ++k) records[k] = EdgeRecord{};
     double* fa = f12 ? f12 : r.fa;
     double* fb = f12 ? f12 + 6 : r.fb;
     clear_result(r, fa, fb);
@@ -635,8 +625,9 @@ bool PairBatch::end(const TriangleGeometry& A, const TriangleGeometry& B, const 
                 if (loaded_[i]) {
                     const double* I = col[kI] + i;  // I_k at I[k cap_] (clear: the columns cap_ apart)
                     const double len = col[kLen][i];
-                    if (side == 0) load_edge(A.x, va, fa, vb, fb, e, len, I, cap_, p, hist + kHistPerEdge * s, r, fda, fdb);
-                    else load_edge(B.x, vb, fb, va, fa, e, len, I, cap_, p, hist + kHistPerEdge * s, r, fdb, fda);
+                    EdgeRecord* rec = records ? records + s : nullptr;
+                    if (side == 0) load_edge(A.x, va, fa, vb, fb, e, len, I, cap_, p, hist + kHistPerEdge * s, r, fda, fdb, rec);
+                    else load_edge(B.x, vb, fb, va, fa, e, len, I, cap_, p, hist + kHistPerEdge * s, r, fdb, fda, rec);
                     ++r.active_edges;
                     r.held |= 1u << s;
                     on = true;

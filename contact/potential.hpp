@@ -70,6 +70,18 @@ struct PairResult {
     unsigned held = 0;               // bit s: friction slot s may hold state after the call (the loaded edges)
 };
 
+// One loaded edge of a pair, as the pair kernel loaded it (PairBatch::end's records; for snapshots): the owner's
+// face and where its load acts. Slots without load have loaded = false.
+struct EdgeRecord {
+    bool loaded = false;
+    double px = 0.0, py = 0.0;  // centre of pressure on the owner's edge (m)
+    double nx = 0.0, ny = 0.0;  // the owner edge's outward normal n_O (its load presses along -n_O)
+    double fn = 0.0;            // normal force pressing the faces together, elastic push and dashpot (N, >= 0)
+    double ft = 0.0;            // tangential force on the owner along t_O = (-n_y, n_x), spring and dashpot (N)
+    double length = 0.0;        // the part of the edge inside the other triangle (m)
+    int sliding = -1;           // 1 slid this step, 0 stuck, -1 no friction
+};
+
 // Smallest altitude of a triangle (m): twice its area over its longest edge.
 double smallest_altitude(const double* x);
 
@@ -133,9 +145,10 @@ public:
     // The next pending pair: loads its edges (pair_contact's f12 and return value). fd12 (optional, read only with
     // dashpots, p.beta > 0): the dashpots' part of the forces (A's six, then B's six; written whenever the pair
     // overlaps), so that their work can be booked on the step's mean velocity (ContactSystem::finish_step).
+    // records (optional): six EdgeRecords, one per slot (A's edge e at e, B's at 3 + e).
     bool end(const TriangleGeometry& a, const TriangleGeometry& b, const double* va, const double* vb,
              const PairParams& p, bool want_energy, double* hist, PairResult& out, unsigned held = 0x3f,
-             double* f12 = nullptr, double* fd12 = nullptr);
+             double* f12 = nullptr, double* fd12 = nullptr, EdgeRecord* records = nullptr);
     // Forget all pairs and make room for up to max_pairs more (the storage stays).
     void clear(int max_pairs);
 

@@ -368,12 +368,16 @@ void Simulation::restore(const std::string& run_dir) {
     // Snapshots written after the checkpoint (the one of the stop itself, or those of a run killed later) are not in
     // run.pvd any more; the continued run writes its own.
     std::set<std::string> kept;
-    for (const auto& s : snapshots_) kept.insert(fs::path(s.second).filename().string());
+    for (const auto& s : snapshots_) {
+        kept.insert(fs::path(s.second).filename().string());
+        kept.insert(fs::path(contact_snapshot_name(s.second)).filename().string());
+    }
     std::error_code ec;
     for (const auto& entry : fs::directory_iterator(fs::path(run_dir) / "snapshots", ec)) {
         const std::string name = entry.path().filename().string();
         long st = -1;
-        if (std::sscanf(name.c_str(), "step_%ld.vtu", &st) == 1 && st >= steps_ && !kept.count(name)) fs::remove(entry.path(), ec);
+        const bool ours = std::sscanf(name.c_str(), "step_%ld.vtu", &st) == 1 || std::sscanf(name.c_str(), "contacts_%ld.vtu", &st) == 1;
+        if (ours && st >= steps_ && !kept.count(name)) fs::remove(entry.path(), ec);
     }
     // The log goes on after the earlier run's.
     bool log_ok = false;

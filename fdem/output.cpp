@@ -90,7 +90,7 @@ int remove_previous_snapshots(const std::string& out_dir) {
     int removed = 0;
     std::error_code ec;
     const fs::path dir(out_dir);
-    for (const char* f : {"run.pvd", "run.pvd.tmp"})
+    for (const char* f : {"run.pvd", "run.pvd.tmp", "contacts.pvd", "contacts.pvd.tmp"})
         if (fs::remove(dir / f, ec)) ++removed;
     if (!fs::is_directory(dir / "snapshots", ec)) return removed;
     std::vector<fs::path> old;
@@ -98,17 +98,20 @@ int remove_previous_snapshots(const std::string& out_dir) {
         const std::string n = e.path().filename().string();
         const bool vtu = n.size() > 4 && n.compare(n.size() - 4, 4, ".vtu") == 0;
         const bool tmp = n.size() > 8 && n.compare(n.size() - 8, 8, ".vtu.tmp") == 0;
-        if (n.rfind("step_", 0) == 0 && (vtu || tmp)) old.push_back(e.path());
+        if ((n.rfind("step_", 0) == 0 || n.rfind("contacts_", 0) == 0) && (vtu || tmp)) old.push_back(e.path());
     }
     for (const auto& p : old)
         if (fs::remove(p, ec)) ++removed;
     return removed;
 }
 
-std::string vtu_document(const std::vector<double>& xy, const std::vector<int>& triangles, const std::vector<int>& lines,
-                         const std::vector<VtuArray>& point_data, const std::vector<VtuArray>& cell_data,
-                         const std::vector<VtuStrings>& field_data, double time) {
-    const std::size_t np = xy.size() / 2, ntri = triangles.size() / 3, nline = lines.size() / 2, nc = ntri + nline;
+namespace {
+// An UnstructuredGrid document: points xy (2 per point, z written as 0), cells given by their connectivity, offsets
+// (the end of each cell's nodes in conn) and VTK types.
+std::string grid_document(const std::vector<double>& xy, const std::vector<int64_t>& conn, const std::vector<int64_t>& offs,
+                          const std::vector<uint8_t>& types, const std::vector<VtuArray>& point_data,
+                          const std::vector<VtuArray>& cell_data, const std::vector<VtuStrings>& field_data, double time) {
+    const std::size_t np = xy.size() / 2, nc = types.size();
     std::string xml, blob;
     xml += "<?xml version=\"1.0\"?>\n";
     xml += "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n";
@@ -130,14 +133,6 @@ std::string vtu_document(const std::vector<double>& xy, const std::vector<int>& 
     for (std::size_t i = 0; i < np; ++i) pts.f64[3 * i] = xy[2 * i], pts.f64[3 * i + 1] = xy[2 * i + 1], pts.f64[3 * i + 2] = 0;
     add(pts);
     xml += "      </Points>\n      <Cells>\n";
-    std::vector<int64_t> conn, offs;
-    std::vector<uint8_t> types;
-    conn.reserve(3 * ntri + 2 * nline);
-    for (int n : triangles) conn.push_back(n);
-    for (int n : lines) conn.push_back(n);
-    int64_t o = 0;
-    for (std::size_t c = 0; c < ntri; ++c) offs.push_back(o += 3), types.push_back(5);   // VTK_TRIANGLE
-    for (std::size_t c = 0; c < nline; ++c) offs.push_back(o += 2), types.push_back(3);  // VTK_LINE
     xml += "        <DataArray type=\"Int64\" Name=\"connectivity\" format=\"appended\" offset=\"" + std::to_string(blob.size()) + "\"/>\n";
     append_block(blob, conn.data(), conn.size() * sizeof(int64_t));
     xml += "        <DataArray type=\"Int64\" Name=\"offsets\" format=\"appended\" offset=\"" + std::to_string(blob.size()) + "\"/>\n";
@@ -149,6 +144,37 @@ std::string vtu_document(const std::vector<double>& xy, const std::vector<int>& 
     xml += blob;
     xml += "\n  </AppendedData>\n</VTKFile>\n";
     return xml;
+}
+}  // namespace
+
+std::string vtu_document(const std::vector<double>& xy, const std::vector<int>& triangles, const std::vector<int>& lines,
+                         const std::vector<VtuArray>& point_data, const std::vector<VtuArray>& cell_data,
+                         const std::vector<VtuStrings>& field_data, double time) {
+    const std::size_t ntri = triangles.size() / 3, nline = lines.size() / 2;
+    std::vector<int64_t> conn, offs;
+    std::vector<uint8_t> types;
+    conn.reserve(3 * ntri + 2 * nline);
+    for (int n : triangles) conn.push_back(n);
+    for (int n : lines) conn.push_back(n);
+    int64_t o = 0;
+    for (std::size_t c = 0; c < ntri; ++c) offs.push_back(o += 3), types.push_back(5);   // VTK_TRIANGLE
+    for (std::size_t c = 0; c < nline; ++c) offs.push_back(o += 2), types.push_back(3);  // VTK_LINE
+    return grid_document(xy, conn, offs, types, point_data, cell_data, field_data, time);
+}
+
+std::string points_vtu_document(const std::vector<double>& xy, const std::vector<VtuArray>& point_data,
+                                const std::vector<VtuStrings>& field_data, double time) {
+    const std::size_t np = xy.size() / 2;
+    std::vector<int64_t> conn(np), offs(np);
+    for (std::size_t i = 0; i < np; ++i) conn[i] = static_cast<int64_t>(i), offs[i] = static_cast<int64_t>(i + 1);
+    const std::vector<uint8_t> types(np, 1);  // VTK_VERTEX
+    return grid_document(xy, conn, offs, types, point_data, {}, field_data, time);
+}
+
+std::string contact_snapshot_name(const std::string& snapshot) {
+    const std::size_t slash = snapshot.rfind('/') + 1, step = snapshot.find("step_", slash);
+    if (step == std::string::npos) return snapshot;
+    return snapshot.substr(0, step) + "contacts_" + snapshot.substr(step + 5);
 }
 
 std::string pvd_document(const std::vector<std::pair<double, std::string>>& snapshots) {

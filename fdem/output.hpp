@@ -42,6 +42,10 @@ std::string vtu_document(const std::vector<double>& xy, const std::vector<int>& 
                          const std::vector<VtuArray>& point_data, const std::vector<VtuArray>& cell_data,
                          const std::vector<VtuStrings>& field_data = {}, double time = std::nan(""));
 
+// Points alone, each a VTK_VERTEX cell, with their data (the contact records of a snapshot).
+std::string points_vtu_document(const std::vector<double>& xy, const std::vector<VtuArray>& point_data,
+                                const std::vector<VtuStrings>& field_data = {}, double time = std::nan(""));
+
 // The FieldData block of a VTU file (also used by mesh/vtu.cpp's ASCII writer): "" when there is nothing.
 std::string vtu_field_data(const std::vector<VtuStrings>& field_data, double time = std::nan(""));
 
@@ -53,12 +57,15 @@ struct StressMeasures {
 };
 StressMeasures stress_measures(double sxx, double syy, double sxy, double szz);
 
-// A fresh run into an existing folder: removes the previous run's snapshots (snapshots/step_*.vtu and their
+// A fresh run into an existing folder: removes the previous run's snapshots (snapshots/step_*.vtu, contacts_*.vtu and their
 // .tmp files) and run.pvd, so that the folder never mixes two runs' snapshots. Other files are left alone.
 // Returns the number of files removed.
 int remove_previous_snapshots(const std::string& out_dir);
 
 std::string pvd_document(const std::vector<std::pair<double, std::string>>& snapshots);
+// The contact file beside a snapshot: snapshots/step_N.vtu -> snapshots/contacts_N.vtu (points at the loaded contact
+// faces; contacts.pvd lists them as run.pvd lists the snapshots).
+std::string contact_snapshot_name(const std::string& snapshot);
 
 // A JSON value built in code: null, bool, number, string, array or object (keys kept in insertion order).
 class Json {

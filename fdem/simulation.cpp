@@ -22,6 +22,7 @@
 #include <map>
 #include <set>
 #include <sstream>
+#include <unordered_map>
 
 #include "fdem/common/errors.hpp"
 #include "fdem/sim_detail.hpp"
@@ -497,15 +498,24 @@ void Simulation::write_snapshot() {
             j->mean_traction(e, model_.x.data(), sn, ss);
             add_line(j->element(e).n, 1, j->damage(e), static_cast<int>(j->state(e)), j->crushing(e), sn, ss);
         }
-    for (int e = 0; e < inter_.dry_joint_count(); ++e)
-        add_line(inter_.dry_joints()[e].n.data(), 2, -1.0, inter_.dry_recorded(e) ? 1 : 0, std::nan(""), std::nan(""),
-                 std::nan(""));
+    // The contact faces as the next step loads them (ContactSystem::loaded_edges): the snapshot's contact file, and
+    // the dry joints' normal and shear stress from the faces along them.
+    const contact::ContactSystem* cs = inter_.contact();
+    std::vector<contact::ContactSystem::LoadedEdge> faces;
+    if (cs) faces = cs->loaded_edges(model_.x.data(), model_.v.data(), dt_);
+    std::vector<double> dry_force(2 * static_cast<std::size_t>(inter_.dry_joint_count()), 0.0);
+    dry_joint_forces(faces, dry_force);
+    for (int e = 0; e < inter_.dry_joint_count(); ++e) {
+        double sn, ss;
+        dry_joint_traction(inter_.dry_joints()[e].n.data(), &dry_force[2 * static_cast<std::size_t>(e)], sn, ss);
+        add_line(inter_.dry_joints()[e].n.data(), 2, -1.0, inter_.dry_recorded(e) ? 1 : 0, std::nan(""), sn, ss);
+    }
     char name[64];
     std::snprintf(name, sizeof name, "snapshots/step_%09ld.vtu", steps_);
     std::vector<VtuArray> cells{stress, von_mises, principal, pdir, mat, region, body, kind};
     if (!lines.empty())
         for (const auto* a : {&damage, &state, &opening, &slip}) cells.push_back(*a);
-    if (inter_.joints()) cells.push_back(jsn), cells.push_back(jss);
+    if (inter_.joints() || inter_.dry_joint_count() > 0) cells.push_back(jsn), cells.push_back(jss);
     if (inter_.joints() && inter_.joints()->has_cap()) cells.push_back(crushing);
     if (crush_.active()) {
         // block_crushing: kappa / kappa_u of each crushing triangle (0 intact, 1 no strength left; fdem/plasticity.hpp),
@@ -523,6 +533,82 @@ void Simulation::write_snapshot() {
                       vtu_document(model_.X, tri, lines, {disp, vel}, cells, {region_names, material_names}, time_));
     snapshots_.emplace_back(time_, name);
     write_file_atomic((std::filesystem::path(opt_.out_dir) / "run.pvd").string(), pvd_document(snapshots_));
+    if (cs) {
+        write_file_atomic((std::filesystem::path(opt_.out_dir) / contact_snapshot_name(name)).string(),
+                          contact_snapshot(faces));
+        std::vector<std::pair<double, std::string>> list;
+        for (const auto& [t, n] : snapshots_) list.emplace_back(t, contact_snapshot_name(n));
+        write_file_atomic((std::filesystem::path(opt_.out_dir) / "contacts.pvd").string(), pvd_document(list));
+    }
+}
+
+// Dry joint segment e's force from the faces along it: the force side B exerts on side A (N, 2 per segment), the sum
+// over the faces whose edge is one of its two edges (each face carries half a contact: a face of A gets its own
+// load, a face of B the reaction).
+void Simulation::dry_joint_forces(const std::vector<contact::ContactSystem::LoadedEdge>& faces, std::vector<double>& force) const {
+    if (force.empty() || faces.empty()) return;
+    auto key = [](int a, int b) { return (static_cast<std::uint64_t>(std::min(a, b)) << 32) | static_cast<std::uint32_t>(std::max(a, b)); };
+    std::unordered_map<std::uint64_t, int> side;  // edge -> 2 e (side A) or 2 e + 1 (side B)
+    for (int e = 0; e < inter_.dry_joint_count(); ++e) {
+        const auto& n = inter_.dry_joints()[e].n;
+        side[key(n[0], n[1])] = 2 * e;
+        side[key(n[2], n[3])] = 2 * e + 1;
+    }
+    for (const auto& f : faces) {
+        const int* t = &model_.mesh.tri[3 * static_cast<std::size_t>(f.triangle)];
+        const auto it = side.find(key(t[f.edge], t[(f.edge + 1) % 3]));
+        if (it == side.end()) continue;
+        const contact::EdgeRecord& r = f.record;
+        // the force on the face's owner: -fn n + ft t, t = (-n_y, n_x)
+        const double fx = -r.fn * r.nx - r.ft * r.ny, fy = -r.fn * r.ny + r.ft * r.nx;
+        const double sign = (it->second & 1) ? -1.0 : 1.0;
+        double* F = &force[2 * static_cast<std::size_t>(it->second / 2)];
+        F[0] += sign * fx, F[1] += sign * fy;
+    }
+}
+
+// Mean normal and shear stress of a dry joint segment n = {a0, a1, b0, b1} carrying force F (from B on A): in the
+// frame of its side-A edge (t from a0 to a1, n = (t_y, -t_x) into B), over its length times the thickness; tension
+// positive, as the cohesive elements' joint_normal_stress.
+void Simulation::dry_joint_traction(const int* n, const double* F, double& sigma, double& tau) const {
+    const double* x = model_.x.data();
+    double tx = x[2 * n[1]] - x[2 * n[0]], ty = x[2 * n[1] + 1] - x[2 * n[0] + 1];
+    const double len = std::hypot(tx, ty);
+    if (len <= 0) {
+        sigma = tau = std::nan("");
+        return;
+    }
+    tx /= len, ty /= len;
+    const double area = len * spec_.thickness;
+    sigma = (F[0] * ty - F[1] * tx) / area;
+    tau = (F[0] * tx + F[1] * ty) / area;
+}
+
+// The contact file of a snapshot: one point per loaded face at its centre of pressure.
+std::string Simulation::contact_snapshot(const std::vector<contact::ContactSystem::LoadedEdge>& faces) const {
+    const std::size_t n = faces.size();
+    std::vector<double> xy(2 * n);
+    VtuArray normal{"normal", 3, {}, {}, false, {"nx", "ny", "nz"}}, force{"force", 3, {}, {}, false, {"fx", "fy", "fz"}};
+    VtuArray fn{"normal_force", 1, {}, {}, false, {}}, ft{"shear_force", 1, {}, {}, false, {}};
+    VtuArray sn{"normal_stress", 1, {}, {}, false, {}}, st{"shear_stress", 1, {}, {}, false, {}};
+    VtuArray len{"length", 1, {}, {}, false, {}}, sliding{"sliding", 1, {}, {}, true, {}};
+    // the face's triangle and unit, and those of the triangle it enters
+    VtuArray tri{"triangle", 1, {}, {}, true, {}}, unit{"unit", 1, {}, {}, true, {}};
+    VtuArray other{"other_triangle", 1, {}, {}, true, {}}, other_unit{"other_unit", 1, {}, {}, true, {}};
+    auto unit_of = [&](int t) { return model_.mesh.tri_body.empty() ? 0 : model_.mesh.tri_body[static_cast<std::size_t>(t)]; };
+    for (std::size_t i = 0; i < n; ++i) {
+        const contact::EdgeRecord& r = faces[i].record;
+        xy[2 * i] = r.px, xy[2 * i + 1] = r.py;
+        normal.f64.insert(normal.f64.end(), {r.nx, r.ny, 0.0});
+        force.f64.insert(force.f64.end(), {-r.fn * r.nx - r.ft * r.ny, -r.fn * r.ny + r.ft * r.nx, 0.0});
+        fn.f64.push_back(r.fn), ft.f64.push_back(r.ft);
+        const double area = r.length * spec_.thickness;
+        sn.f64.push_back(area > 0 ? -r.fn / area : std::nan("")), st.f64.push_back(area > 0 ? r.ft / area : std::nan(""));
+        len.f64.push_back(r.length), sliding.i32.push_back(r.sliding);
+        tri.i32.push_back(faces[i].triangle), unit.i32.push_back(unit_of(faces[i].triangle));
+        other.i32.push_back(faces[i].other), other_unit.i32.push_back(unit_of(faces[i].other));
+    }
+    return points_vtu_document(xy, {normal, force, fn, ft, sn, st, len, sliding, tri, unit, other, other_unit}, {}, time_);
 }
 
 void Simulation::flush_files() {

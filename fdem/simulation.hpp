@@ -220,6 +220,9 @@ private:
     double snapshot_interval() const;  // s, of the current stage (0: only at stage ends)
     bool history_due(double t, long step) const;
     void write_snapshot();
+    void dry_joint_forces(const std::vector<contact::ContactSystem::LoadedEdge>& faces, std::vector<double>& force) const;
+    void dry_joint_traction(const int* n, const double* F, double& sigma, double& tau) const;
+    std::string contact_snapshot(const std::vector<contact::ContactSystem::LoadedEdge>& faces) const;
     void write_summary(const std::string& status, const std::string& message);
     void log(const std::string& line);
     void progress_line(bool final);

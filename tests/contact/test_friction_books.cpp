@@ -47,7 +47,9 @@ PushResult push(const std::string& where, double xi, double safety) {
     std::ostringstream c;
     c.precision(17);
     const double eps = 1e-6;
-    c << "[case]\nname = \"books\"\nthickness = 0.05\n[geometry]\ntype = \"gmsh\"\nfile = \"blocks.geo\"\n"
+    // (the mesh file beside the case would be cleared with make_simulation's folder: one of its own)
+    const std::string geo = testing::write_text(testing::tmp_dir("friction_books_geo") / "blocks.geo", g.str());
+    c << "[case]\nname = \"books\"\nthickness = 0.05\n[geometry]\ntype = \"gmsh\"\nfile = \"" << geo << "\"\n"
       << "[materials.m]\nE = 1e10\nnu = 0.2\ndensity = 2000.0\n[regions]\nbase = \"m\"\nblock = \"m\"\n"
       << "[groups.mid]\nbox = [" << -eps << ", " << 0.05 - eps << ", " << 0.1 + eps << ", " << 0.05 + eps
       << "]\nwithin = \"block\"\n"
@@ -57,15 +59,7 @@ PushResult push(const std::string& where, double xi, double safety) {
       << "[[stages]]\nname = \"push\"\nduration = 0.3\nlocal_damping = 0.0\ncontact_damping = " << xi
       << "\ngravity = [0.0, -9.81]\n  [[stages.supports]]\n  group = \"base\"\n  fix = \"xy\"\n"
       << "  [[stages.loads]]\n  group = \"" << where << "\"\n  force = [" << kF << ", 0.0]\n";
-    const auto dir = testing::tmp_dir("friction_books");
-    testing::write_text(dir / "blocks.geo", g.str());
-    const std::string path = testing::write_text(dir / "case.toml", c.str());
-    fdem::CaseSpec spec = fdem::load_case(path, {});
-    fdem::Model model = fdem::build_scene(spec);
-    fdem::RunOptions opt;
-    opt.quiet = true;
-    opt.threads = 1;
-    fdem::Simulation sim(spec, std::move(model), opt);
+    fdem::Simulation sim = testing::make_simulation(c.str(), "friction_books", {}, 1);
     const auto& nodes = sim.model().group("block").nodes;
     double mass = 0;
     for (int k : nodes) mass += sim.model().mass[k];

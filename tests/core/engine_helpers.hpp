@@ -93,15 +93,17 @@ inline double mean_velocity_y(const fdem::Simulation& sim) {
 }
 
 // Loads a case from text, builds its scene (mesh, topology, joints, contact) and returns a Simulation that
-// writes no files.
+// writes no files. The case goes to a fresh tmp_dir(name)/case.toml (a mesh file it names lives elsewhere);
+// threads > 0 sets the run's thread count.
 inline fdem::Simulation make_simulation(const std::string& case_text, const std::string& name,
-                                        const std::vector<std::string>& overrides = {}) {
+                                        const std::vector<std::string>& overrides = {}, int threads = 0) {
     const auto dir = tmp_dir(name);
     const std::string path = write_text(dir / "case.toml", case_text);
     fdem::CaseSpec spec = fdem::load_case(path, overrides);
     fdem::Model model = fdem::build_scene(spec);
     fdem::RunOptions opt;
     opt.quiet = true;
+    if (threads > 0) opt.threads = threads;
     return fdem::Simulation(spec, std::move(model), opt);
 }
 

@@ -177,8 +177,12 @@ def test_rerun_into_the_same_folder_keeps_only_its_own_snapshots(tmp_path):
     _fdem_run("run", _write_case(tmp_path, 0.002), "--quiet", "--threads", "1", "--out", run, cwd=tmp_path)
     second = _pvd_files(run)
     assert 2 <= len(second) < len(first)
-    on_disk = sorted("snapshots/" + f for f in os.listdir(run / "snapshots") if f.endswith(".vtu"))
+    on_disk = sorted("snapshots/" + f for f in os.listdir(run / "snapshots") if f.startswith("step_") and f.endswith(".vtu"))
     assert on_disk == sorted(second)
+    # the contact files beside them: one per snapshot, listed in contacts.pvd, none of the first run's left
+    contacts = sorted("snapshots/" + f for f in os.listdir(run / "snapshots") if f.startswith("contacts_"))
+    assert contacts == sorted(f.replace("/step_", "/contacts_") for f in second)
+    assert sorted(re.findall(r'file="([^"]+)"', (run / "contacts.pvd").read_text())) == contacts
     assert (run / "snapshots" / "my_notes.txt").read_text() == "kept"
 
 
@@ -203,6 +207,15 @@ def test_snapshots_carry_their_time(tmp_path):
     assert reader.GetOutput().GetFieldData().GetArray("TimeValue").GetValue(0) > 0
 
 
+BONDED_JOINT = """kind = "bonded"
+tensile_strength = 1.0e7
+cohesion = 1.0e7
+friction = 30.0
+residual_friction = 30.0
+GI = 1000.0
+GII = 1000.0
+penalty = 1.0e11"""
+
 BONDED = """[case]
 name = "bonded_blocks"
 thickness = 0.1
@@ -219,14 +232,7 @@ lower = "stone"
 upper = "stone"
 [[interfaces]]
 regions = ["lower", "upper"]
-kind = "bonded"
-tensile_strength = 1.0e7
-cohesion = 1.0e7
-friction = 30.0
-residual_friction = 30.0
-GI = 1000.0
-GII = 1000.0
-penalty = 1.0e11
+{joint}
 [output]
 snapshot_interval = 10.0
 [[stages]]
@@ -241,37 +247,48 @@ local_damping = 0.8
   group = "upper_top"
   force = [2000.0, -20000.0]
   ramp = 0.002
-"""
+""".replace("{joint}", BONDED_JOINT)
+
+
+def _run_blocks(tmp_path, case_text):
+    """Runs the two blocks with this case: the run folder, its snapshots, the last one's grid and its cell_kind,
+    joint_normal_stress and joint_shear_stress."""
+    (tmp_path / "blocks.geo").write_text(GEO)
+    case = tmp_path / "case.toml"
+    case.write_text(case_text)
+    run = tmp_path / "run"
+    _fdem_run("run", case, "--quiet", "--threads", "1", "--out", run, cwd=tmp_path)
+    files = _pvd_files(run)
+    grid = _read(run / files[-1])
+    cd = grid.GetCellData()
+    return (run, files, grid, vtk_to_numpy(cd.GetArray("cell_kind")), vtk_to_numpy(cd.GetArray("joint_normal_stress")),
+            vtk_to_numpy(cd.GetArray("joint_shear_stress")))
+
+
+def _joint_forces(grid, cells, sn, ss, thickness=0.1):
+    """The normal and shear force (N) of the line cells selected: their stresses times their current length and
+    the thickness, summed."""
+    cur = vtk_to_numpy(grid.GetPoints().GetData()) + vtk_to_numpy(grid.GetPointData().GetArray("displacement"))
+    N = T = 0.0
+    for c in np.nonzero(cells)[0]:
+        ids = grid.GetCell(int(c)).GetPointIds()
+        a, b = cur[ids.GetId(0)], cur[ids.GetId(1)]
+        length = float(np.hypot(*(b - a)[:2]))
+        N += sn[c] * length * thickness
+        T += ss[c] * length * thickness
+    return N, T
 
 
 def test_joint_tractions_and_principal_directions(tmp_path):
     """A bonded joint carries the load on the block above it: the sum of joint_normal_stress x length x thickness over
     its elements is the applied vertical load, that of joint_shear_stress the horizontal one (1 %); each triangle's
     principal_direction is the unit vector at atan2(2 sxy, sxx - syy) / 2, and an eigenvector of its stress."""
-    (tmp_path / "blocks.geo").write_text(GEO)
-    case = tmp_path / "case.toml"
-    case.write_text(BONDED)
-    run = tmp_path / "run"
-    _fdem_run("run", case, "--quiet", "--threads", "1", "--out", run, cwd=tmp_path)
-    files = _pvd_files(run)
-    grid = _read(run / files[-1])
+    run, files, grid, kind, sn, ss = _run_blocks(tmp_path, BONDED)
     cd = grid.GetCellData()
-    kind = vtk_to_numpy(cd.GetArray("cell_kind"))
-    sn = vtk_to_numpy(cd.GetArray("joint_normal_stress"))
-    ss = vtk_to_numpy(cd.GetArray("joint_shear_stress"))
     joint = kind == 1
     assert joint.sum() >= 4
     assert np.isnan(sn[kind == 0]).all() and np.isnan(ss[kind == 0]).all()
-    pts = vtk_to_numpy(grid.GetPoints().GetData())
-    disp = vtk_to_numpy(grid.GetPointData().GetArray("displacement"))
-    cur = pts + disp
-    N = T = 0.0
-    for c in np.nonzero(joint)[0]:
-        ids = grid.GetCell(int(c)).GetPointIds()
-        a, b = cur[ids.GetId(0)], cur[ids.GetId(1)]
-        length = float(np.hypot(*(b - a)[:2]))
-        N += sn[c] * length * 0.1
-        T += ss[c] * length * 0.1
+    N, T = _joint_forces(grid, joint, sn, ss)
     assert N == pytest.approx(-20000.0, rel=0.01)   # compression: the load on the block above
     assert abs(T) == pytest.approx(2000.0, rel=0.01)  # the horizontal load, along the joint
     s = vtk_to_numpy(cd.GetArray("stress"))
@@ -284,3 +301,50 @@ def test_joint_tractions_and_principal_directions(tmp_path):
         # (sigma - s1 I) n = 0
         assert (sxx - s1) * nx + sxy * ny == pytest.approx(0.0, abs=1e-9 * scale)
         assert sxy * nx + (syy - s1) * ny == pytest.approx(0.0, abs=1e-9 * scale)
+
+
+DRY = BONDED.replace(BONDED_JOINT, """kind = "dry"
+friction = 30.0
+normal_stiffness = 1.0e10""").replace('name = "bonded_blocks"', 'name = "dry_blocks"')
+
+
+def test_dry_joint_stresses_and_contact_forces(tmp_path):
+    """A dry joint at rest under the load of the block above: its segments' joint_normal_stress x length x thickness
+    sum to the applied vertical load and joint_shear_stress to the horizontal one (1 %; the joint sticks: 2 kN is
+    below tan 30 deg x 20 kN). The contact file beside the snapshot (contacts_N.vtu, one point per loaded face at its
+    centre of pressure): the forces of the faces between the blocks add up to the force the lower block exerts on the
+    upper one, the reaction to the load (1 %); each face's force is -normal_force n + shear_force t, its
+    normal_stress -normal_force / (length thickness); the file carries the snapshot's time."""
+    run, files, grid, kind, sn, ss = _run_blocks(tmp_path, DRY)
+    cd = grid.GetCellData()
+    dry = kind == 2
+    assert dry.sum() >= 4
+    assert np.isnan(sn[kind == 0]).all()
+    N, T = _joint_forces(grid, dry, sn, ss)
+    assert N == pytest.approx(-20000.0, rel=0.01)
+    assert abs(T) == pytest.approx(2000.0, rel=0.01)
+
+    contacts = files[-1].replace("/step_", "/contacts_")
+    assert re.findall(r'file="([^"]+)"', (run / "contacts.pvd").read_text())[-1] == contacts
+    faces = _read(run / contacts)
+    pd = faces.GetPointData()
+    get = lambda name: vtk_to_numpy(pd.GetArray(name))  # noqa: E731
+    force, normal, fn, ft = get("force"), get("normal"), get("normal_force"), get("shear_force")
+    unit, other = get("unit"), get("other_unit")
+    tangent = np.stack([-normal[:, 1], normal[:, 0]], axis=1)
+    assert np.allclose(force[:, :2], -fn[:, None] * normal[:, :2] + ft[:, None] * tangent, rtol=0, atol=1e-9 * abs(fn).max())
+    assert np.allclose(get("normal_stress"), -fn / (get("length") * 0.1), rtol=1e-12)
+    assert (fn >= 0).all()
+    # every face between the blocks has unit != other_unit; the upper block's unit from the snapshot's cells
+    between = unit != other
+    assert between.sum() >= 4
+    names = _strings(grid, "region_names")
+    assert names.index("upper") >= 0
+    region = vtk_to_numpy(cd.GetArray("region"))
+    body = vtk_to_numpy(cd.GetArray("unit"))
+    upper = int(body[(kind == 0) & (region == names.index("upper"))][0])
+    on_upper = force[between & (unit == upper), :2].sum(axis=0) - force[between & (other == upper), :2].sum(axis=0)
+    assert on_upper[1] == pytest.approx(20000.0, rel=0.01)
+    assert on_upper[0] == pytest.approx(-2000.0, rel=0.01)
+    assert faces.GetFieldData().GetArray("TimeValue").GetValue(0) == pytest.approx(
+        grid.GetFieldData().GetArray("TimeValue").GetValue(0), rel=1e-12)
