@@ -130,8 +130,8 @@ std::string Simulation::checkpoint_path() const { return (std::filesystem::path(
 void Simulation::save_state(StateWriter& w) const {
 #if defined(__x86_64__) && defined(__GLIBCXX__)
     // (not saved: the energy audit's sums, a diagnostic of one process; after a restart it starts over; the node
-    // loop's speeds block_v2_ and v2max_, which load_state marks unknown)
-    static_assert(sizeof(Simulation) == 5168, "Simulation changed: update state_io (fdem/checkpoint.cpp) and this size");
+    // loop's sums node_sums_ and v2max_, which load_state marks unknown)
+    static_assert(sizeof(Simulation) == 4976, "Simulation changed: update state_io (fdem/checkpoint.cpp) and this size");
     static_assert(sizeof(ActiveSupport) == 376, "ActiveSupport changed: update state_io and this size");
     static_assert(sizeof(ActiveLoad) == 296, "ActiveLoad changed: update state_io and this size");
 #endif

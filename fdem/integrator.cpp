@@ -38,6 +38,7 @@
 #include <type_traits>
 
 #include "fdem/common/errors.hpp"
+#include "fdem/node_update.hpp"
 #include "fdem/sim_detail.hpp"
 
 namespace fdem {
@@ -334,22 +335,16 @@ void Simulation::check_ties() const {
     }
 }
 
-void Simulation::step() {
-    const double w0 = omp_get_wtime();
-    if (spec_.energy_audit) audit_step(0, dt_);
-    const double dt_before = dt_;
-    const int nt = model_.n_triangles(), nn = model_.n_nodes();
+// The triangles' forces at x^n, v^{n-1/2} into tf_ (6 per triangle), in parallel by blocks, crushing triangles
+// through fdem/plasticity.hpp; tsig (extrinsic insertion, else null): their stresses. Returns the viscous power (W)
+// summed by blocks in order; stops the run at the first inverted triangle.
+double Simulation::triangle_stage(double* tsig) {
+    const int nt = model_.n_triangles();
     const TriangleRef* tris = model_.tris.data();
     const MaterialConst* mats = model_.mat.data();
     const double* x = model_.x.data();
     const double* v = model_.v.data();
     double* tf = tf_.data();
-    // Extrinsic insertion: the triangles' stresses of this step for the check below (ties only).
-    if (ties_) tri_sigma_.resize(3 * static_cast<std::size_t>(nt));
-    double* tsig = ties_ ? tri_sigma_.data() : nullptr;
-
-    // 2. Triangle forces; per block: viscous power and the first inverted triangle.
-    const double w1 = omp_get_wtime();
     const int ntb = (nt + kBlock - 1) / kBlock;
 #pragma omp parallel if (ntb > 1)
     for (int b = block_share_begin(nt, omp_get_num_threads(), omp_get_thread_num());
@@ -367,14 +362,14 @@ void Simulation::step() {
             if (!(J > 0) && bad < 0) bad = e;
             pv += p;
         }
-        block_a_[b] = pv;
-        block_bad_[b] = bad;
+        tri_power_[b] = pv;
+        tri_bad_[b] = bad;
     }
     double visc_power = 0;
     for (int b = 0; b < ntb; ++b) {
-        visc_power += block_a_[b];
-        if (block_bad_[b] >= 0) {
-            const int e = block_bad_[b];
+        visc_power += tri_power_[b];
+        if (tri_bad_[b] >= 0) {
+            const int e = tri_bad_[b];
             const TriangleRef& t = tris[e];
             const double cx = (x[2 * t.n[0]] + x[2 * t.n[1]] + x[2 * t.n[2]]) / 3, cy = (x[2 * t.n[0] + 1] + x[2 * t.n[1] + 1] + x[2 * t.n[2] + 1]) / 3;
             fail("triangle " + std::to_string(e) + " (region '" + model_.mesh.regions[model_.mesh.tri_region[e]] +
@@ -382,6 +377,24 @@ void Simulation::step() {
         }
     }
 
+    return visc_power;
+}
+
+void Simulation::step() {
+    const double w0 = omp_get_wtime();
+    if (spec_.energy_audit) audit_step(0, dt_);
+    const double dt_before = dt_;
+    const int nt = model_.n_triangles(), nn = model_.n_nodes();
+    const double* x = model_.x.data();
+    const double* v = model_.v.data();
+    double* tf = tf_.data();
+    // Extrinsic insertion: the triangles' stresses of this step for the check below (ties only).
+    if (ties_) tri_sigma_.resize(3 * static_cast<std::size_t>(nt));
+    double* tsig = ties_ ? tri_sigma_.data() : nullptr;
+
+    // 2. Triangle forces; per block: viscous power and the first inverted triangle.
+    const double w1 = omp_get_wtime();
+    const double visc_power = triangle_stage(tsig);
     const double wi = omp_get_wtime();
     // Extrinsic insertion: dormant edges whose traction reached the strength get their cohesive element before this
     // step's joint forces, their copies are untied, and the step shrinks if the lighter nodes need it. The velocity
@@ -450,173 +463,44 @@ void Simulation::step() {
     // energy, unbalanced force) are those of that node. The unbalanced-force scale takes every member's own forces.
     // A prescribed DOF (a support takes every copy, check_ties) has each member's reaction of its mass share
     // w = m / M of F.
-    const bool tied = ties_;  // (node_block below has it as the constant kTied)
-    const int nu = tied ? static_cast<int>(unit_start_.size()) - 1 : nn;
-    const int* u_start = tied ? unit_start_.data() : nullptr;
-    const int* u_node = tied ? unit_node_.data() : nullptr;
-    const int* u_slot = tied ? unit_slot_.data() : nullptr;
-    const double* u_mass = tied ? unit_mass_.data() : nullptr;
-    const double* u_inv = tied ? unit_inv_mass_.data() : nullptr;
-    const double* tie_w = tied ? tie_w_.data() : nullptr;
-    // blocks of units: kBlock nodes (tied: whole units of at least kBlock members, unit_block_)
+    const bool tied = ties_;
     const int nnb = node_block_count();
-    const int* u_block = tied ? unit_block_.data() : nullptr;
-    const double alpha = alpha_;
-    const double beta_mass = beta_mass_;
-    const double gx = applied_gravity_[0], gy = applied_gravity_[1];
-    const int* inc_ptr = model_.inc_ptr.data();
-    const int* inc_idx = model_.inc_idx.data();
-    const double* mass = model_.mass.data();
-    const double* gmass = model_.grav_mass.data();
-    const double* inv_mass = model_.inv_mass.data();
-    double* xw = model_.x.data();
-    double* vw = model_.v.data();
-    const double* fext = f_ext_.data();
-    const unsigned char* loaded = node_loaded_.data();
-    double* fmod = f_mod_.data();
-    const bool reset_fmod = inter_.has_joints() || inter_.has_contact();  // the modules that add to f_mod_
-    const uint8_t* kind = dof_kind_.data();
-    const double* vpres = dof_vel_.data();
-    double* reac = reaction_.data();
-    // One block; compiled for each combination of three compile-time constants, so that each model runs only the
-    // parts it has: kTied (units of tied copies, else plain nodes without the units' indirections), kFilter (the
-    // filtered local damping's moving means, vref) and kMass (mass-proportional damping, hm > 0).
-    auto node_block = [&](auto tied_const, auto filter_const, auto mass_const, int b) {
-        constexpr bool kTied = decltype(tied_const)::value;
-        constexpr bool kFilter = decltype(filter_const)::value;
-        constexpr bool kMass = decltype(mass_const)::value;
-        double dW = 0, dD = 0, unb = 0, scale = 0, K = 0, cW = 0, cD = 0, dM = 0, cM = 0;
-        double nonfinite = 0;  // v - v summed: 0 while every new velocity is finite, NaN after an inf or a NaN
-        double v2 = 0;  // the largest |v|^2 of the block's units (a NaN passed over, as std::max(v2, NaN) = v2)
-        const int u0 = kTied ? u_block[b] : b * kBlock, u1 = kTied ? u_block[b + 1] : std::min(nu, (b + 1) * kBlock);
-        for (int u = u0; u < u1; ++u) {
-            const int j0 = kTied ? u_start[u] : u, j1 = kTied ? u_start[u + 1] : u + 1;
-            // the resultant: internal (joints, contact, triangles) and external (loads, gravity) sums
-            double S[4] = {0, 0, 0, 0};
-            for (int j = j0; j < j1; ++j) {
-                const int k = kTied ? u_node[j] : j;
-                double fi0 = fmod[2 * k], fi1 = fmod[2 * k + 1];
-                // (without joints and contact no node gets a module force, and the lines are not written; with
-                // them every one is reset: a test of which had one was a branch that a third of the nodes
-                // mispredicted. The sums never make a -0.0, so the reset keeps the bits of one that tests.)
-                if (reset_fmod) fmod[2 * k] = 0, fmod[2 * k + 1] = 0;
-                if (kTied && u_slot[j] >= 0) {
-                    const double* r = tf + 2 * static_cast<std::size_t>(u_slot[j]);
-                    fi0 += r[0], fi1 += r[1];
-                } else {
-                    for (int i = inc_ptr[k]; i < inc_ptr[k + 1]; ++i) {
-                        const double* r = tf + 2 * static_cast<std::size_t>(inc_idx[i]);
-                        fi0 += r[0], fi1 += r[1];
-                    }
-                }
-                // (f_ext_ is +0.0 off the loaded nodes, so 0.0 + m g is the same sum without reading it)
-                const bool ld = loaded[k] != 0;
-                const double fe0 = (ld ? fext[2 * k] : 0.0) + gmass[k] * gx, fe1 = (ld ? fext[2 * k + 1] : 0.0) + gmass[k] * gy;
-                scale += std::abs(fi0) + std::abs(fe0);
-                scale += std::abs(fi1) + std::abs(fe1);
-                S[0] += fi0, S[1] += fi1, S[2] += fe0, S[3] += fe1;
-            }
-            const int k0 = kTied ? u_node[j0] : j0;
-            const double M = kTied ? u_mass[u] : mass[k0];
-            const double im = kTied ? u_inv[u] : inv_mass[k0];
-            double vn[2], xn[2], vr[2];  // the unit's new velocity, position and filter mean, written to its members below
-            // (unrolled: vn, xn and vr stay in registers; a loop over c stored them one double at a time and read them
-            // back as pairs below, a stalled store forwarding on every unit)
-#pragma GCC unroll 2
-            for (int c = 0; c < 2; ++c) {
-                const int d0 = 2 * k0 + c;
-                const double f = S[c] + S[2 + c], fe = S[2 + c];
-                const double vold = vw[d0];
-                double vnew;
-                if (kind[d0] == 0) {
-                    // [C79] local damping: -alpha |f| sign(v), or sign(v - vref) with the filter. (Two selects,
-                    // which the compiler makes without branches: the sign of v is a coin toss on a chattering wall.)
-                    const double vrel = kFilter ? vold - vref[d0] : vold;
-                    const double af = alpha * std::abs(f);
-                    const double fd_pos = vrel > 0 ? -af : 0.0;
-                    const double fd = vrel < 0 ? af : fd_pos;
-                    // (without mass damping the same bits without the division: (1 - 0) v = v, x / 1 = x)
-                    vnew = kMass ? ((1 - hm) * vold + dtv * (f + fd) * im) / (1 + hm) : vold + dtv * (f + fd) * im;
-                    const double vbar = 0.5 * (vold + vnew);
-                    dW += dt * fe * vbar;
-                    dD -= dt * fd * vbar;
-                    cW += 0.5 * dt * fe * vnew;
-                    cD -= 0.5 * dt * fd * vnew;
-                    if (kMass) {  // -a m vbar: work dt (-a m vbar) vbar, and its share up to t^n
-                        const double fm = -beta_mass * M * vbar;
-                        dM -= dt * fm * vbar;
-                        cM -= 0.5 * dt * fm * vnew;
-                    }
-                    unb += std::abs(f);
-                } else {
-                    vnew = kind[d0] == 1 ? 0.0 : vpres[d0];
-                    for (int j = j0; j < j1; ++j) {
-                        const int k = kTied ? u_node[j] : j;
-                        const double w = kTied ? tie_w[k] : 1.0;
-                        const double R = mass[k] * (vnew - vold) / dtv - w * f;
-                        reac[2 * k + c] = R;
-                        dW += dt * (w * fe + R) * 0.5 * (vold + vnew);
-                        cW += 0.5 * dt * (w * fe + R) * vnew;
-                    }
-                }
-                K += 0.5 * M * vold * vnew;
-                nonfinite += vnew - vnew;
-                vn[c] = vnew;
-                xn[c] = xw[d0] + dt * vnew;  // the members' positions are the same bits
-                vr[c] = kFilter ? vref[d0] + wf * (vnew - vref[d0]) : 0.0;
-            }
-            v2 = std::max(v2, vn[0] * vn[0] + vn[1] * vn[1]);  // (every member's |v|^2, the bits of v written below)
-            for (int j = j0; j < j1; ++j) {
-                const int d = 2 * (kTied ? u_node[j] : j);
-                vw[d] = vn[0], vw[d + 1] = vn[1];
-                xw[d] = xn[0], xw[d + 1] = xn[1];
-                if (kFilter) vref[d] = vr[0], vref[d + 1] = vr[1];
-            }
-        }
-        block_a_[b] = dW, block_b_[b] = dD, block_c_[b] = unb, block_d_[b] = scale;
-        block_e_[b] = K, block_f_[b] = cW, block_g_[b] = cD, block_h_[b] = dM, block_i_[b] = cM;
-        block_v2_[b] = v2;
-        // The first unit (in loop order) with a non-finite velocity, looked for only when there is one.
-        int bad = -1;
-        if (!(nonfinite == 0))
-            for (int u = u0; u < u1 && bad < 0; ++u) {
-                const int k0 = kTied ? u_node[u_start[u]] : u;
-                if (!std::isfinite(vw[2 * k0]) || !std::isfinite(vw[2 * k0 + 1])) bad = k0;
-            }
-        block_bad_[b] = bad;
-    };
+    NodeUpdate nu_args;
+    nu_args.n_units = tied ? static_cast<int>(unit_start_.size()) - 1 : nn;
+    nu_args.tied = tied;
+    if (tied) {
+        nu_args.u_start = unit_start_.data(), nu_args.u_node = unit_node_.data(), nu_args.u_slot = unit_slot_.data();
+        nu_args.u_mass = unit_mass_.data(), nu_args.u_inv = unit_inv_mass_.data(), nu_args.tie_w = tie_w_.data();
+        nu_args.u_block = unit_block_.data();
+    }
+    nu_args.tri_forces = tf;
+    nu_args.inc_ptr = model_.inc_ptr.data(), nu_args.inc_idx = model_.inc_idx.data();
+    nu_args.mass = model_.mass.data(), nu_args.grav_mass = model_.grav_mass.data(), nu_args.inv_mass = model_.inv_mass.data();
+    nu_args.f_ext = f_ext_.data(), nu_args.loaded = node_loaded_.data();
+    nu_args.f_mod = f_mod_.data();
+    nu_args.reset_fmod = inter_.has_joints() || inter_.has_contact();  // the modules that add to f_mod_
+    nu_args.dof_kind = dof_kind_.data(), nu_args.dof_velocity = dof_vel_.data(), nu_args.reaction = reaction_.data();
+    nu_args.x = model_.x.data(), nu_args.v = model_.v.data(), nu_args.v_ref = vref;
+    nu_args.dt = dt, nu_args.dtv = dtv, nu_args.alpha = alpha_, nu_args.beta_mass = beta_mass_, nu_args.hm = hm, nu_args.wf = wf;
+    nu_args.gx = applied_gravity_[0], nu_args.gy = applied_gravity_[1];
     // Each thread takes a static share of the blocks (share_begin), the same nodes every step.
     const int n_thr = nnb > 1 ? omp_get_max_threads() : 1;
     if (n_thr != node_part_threads_) share_nodes_with_contact(n_thr);
-    auto run_blocks = [&](auto t, auto fl, auto m) {
-#pragma omp parallel if (nnb > 1)
-        {
-            const int T = omp_get_num_threads(), me = omp_get_thread_num();
-            for (int b = share_begin(nnb, T, me); b < share_begin(nnb, T, me + 1); ++b) node_block(t, fl, m, b);
-        }
-    };
-    auto with_mass = [&](auto t, auto fl) {
-        if (hm > 0) run_blocks(t, fl, std::true_type{});
-        else run_blocks(t, fl, std::false_type{});
-    };
-    auto with_filter = [&](auto t) {
-        if (vref) with_mass(t, std::true_type{});
-        else with_mass(t, std::false_type{});
-    };
-    if (tied) with_filter(std::true_type{});
-    else with_filter(std::false_type{});
+    node_sums_.resize(static_cast<std::size_t>(nnb));
+    update_nodes(nu_args, node_sums_);
     inter_.finish_step(model_.v.data());
     if (spec_.energy_audit) audit_step(2, dt);
     double dW = 0, dD = 0, unb = 0, scale = 0, dM = 0;
     kinetic_n_ = 0, work_half_ = 0, damp_half_ = 0, mass_half_ = 0;
     v2max_ = 0.0;
     for (int b = 0; b < nnb; ++b) {
-        v2max_ = std::max(v2max_, block_v2_[b]);
-        dW += block_a_[b], dD += block_b_[b], unb += block_c_[b], scale += block_d_[b];
-        kinetic_n_ += block_e_[b], work_half_ += block_f_[b], damp_half_ += block_g_[b];
-        dM += block_h_[b], mass_half_ += block_i_[b];
-        if (block_bad_[b] >= 0) {
-            const int k = block_bad_[b];
+        const NodeBlockSums& nb = node_sums_[b];
+        v2max_ = std::max(v2max_, nb.v2);
+        dW += nb.work, dD += nb.damping, unb += nb.unbalanced, scale += nb.scale;
+        kinetic_n_ += nb.kinetic, work_half_ += nb.work_half, damp_half_ += nb.damping_half;
+        dM += nb.mass, mass_half_ += nb.mass_half;
+        if (nb.bad >= 0) {
+            const int k = nb.bad;
             fail("node " + std::to_string(k) + " has a non-finite velocity (NaN/inf) near (" + sci(model_.X[2 * k], 6) + ", " +
                  sci(model_.X[2 * k + 1], 6) + ") m");
         }
@@ -646,7 +530,14 @@ void Simulation::step() {
         if (broke > 0) reduce_dt_after_insertion();  // broken elements' faces join the contact count
     }
 
-    // Outputs.
+    observe(dt);
+    step_times_.other += omp_get_wtime() - w4;
+}
+
+// After a step of length dt (the observers): the history row with the dry joints' record, the snapshot, the periodic
+// flush of the files, progress, and every 1000 steps the energy check (which may stop the run). Nothing here
+// changes what the next step computes.
+void Simulation::observe(double dt) {
     if (!opt_.out_dir.empty()) {
         if (history_due(time_, steps_)) {
             const double hi = history_interval();
@@ -671,7 +562,6 @@ void Simulation::step() {
         if (spec_.energy_audit) log(audit_text(e));
         check_energy(e);
     }
-    step_times_.other += omp_get_wtime() - w4;
 }
 
 }  // namespace fdem

@@ -63,10 +63,7 @@ Simulation::Simulation(CaseSpec spec, Model model, RunOptions options)
     f_mod_.assign(2 * nn, 0.0);
     tf_.assign(6 * static_cast<std::size_t>(nt), 0.0);
     const int nb = std::max((nn + kBlock - 1) / kBlock, (nt + kBlock - 1) / kBlock);
-    block_a_.assign(nb, 0), block_b_.assign(nb, 0), block_c_.assign(nb, 0), block_d_.assign(nb, 0);
-    block_e_.assign(nb, 0), block_f_.assign(nb, 0), block_g_.assign(nb, 0), block_h_.assign(nb, 0), block_i_.assign(nb, 0);
-    block_bad_.assign(nb, -1);
-    block_v2_.assign(nb, 0.0);
+    tri_power_.assign(nb, 0), tri_bad_.assign(nb, -1);
     v2max_ = -1.0;
     mon_ext_.assign(spec_.monitors.size(), {0, 0, 0});
     mon_first_peak_.assign(spec_.monitors.size(), 0.0);

@@ -11,6 +11,7 @@
 
 #include "fdem/case.hpp"
 #include "fdem/interactions.hpp"
+#include "fdem/node_update.hpp"
 #include "fdem/model.hpp"
 #include "fdem/output.hpp"
 #include "fdem/plasticity.hpp"
@@ -220,6 +221,9 @@ private:
     double snapshot_interval() const;  // s, of the current stage (0: only at stage ends)
     bool history_due(double t, long step) const;
     void write_snapshot();
+    // Stages of step() (fdem/integrator.cpp)
+    double triangle_stage(double* tri_sigma);
+    void observe(double dt);
     void dry_joint_forces(const std::vector<contact::ContactSystem::LoadedEdge>& faces, std::vector<double>& force) const;
     void dry_joint_traction(const int* n, const double* F, double& sigma, double& tau) const;
     std::string contact_snapshot(const std::vector<contact::ContactSystem::LoadedEdge>& faces) const;
@@ -297,16 +301,17 @@ private:
     // per-step scratch
     std::vector<double> tf_;  // 6 per triangle
     std::vector<double> f_mod_;  // module forces (contact, joints), 2 per node
-    std::vector<double> block_a_, block_b_, block_c_, block_d_, block_e_, block_f_, block_g_, block_h_, block_i_;
+    // per block of triangles: the viscous power and the first inverted triangle (-1: none)
+    std::vector<double> tri_power_;
+    std::vector<int> tri_bad_;
+    // per block of the node update: its books, largest |v|^2 (for the contact's detection schedule: ContactSystem::
+    // step's v2max, a scan of every node less) and first non-finite node (fdem/node_update.hpp)
+    std::vector<NodeBlockSums> node_sums_;
     double kinetic_n_ = 0;   // J, K^n = 1/2 m v^{n-1/2} . v^{n+1/2} of the last step
     double work_half_ = 0;   // J, dt/2 (f_ext + R)^n . v^{n+1/2}: the half step W_ext_ runs ahead of t^n
     double damp_half_ = 0;   // J, the same for local damping
     double mass_half_ = 0;   // J, the same for mass-proportional damping
-    std::vector<int> block_bad_;
-    // The largest |v|^2 over the nodes, which the node loop keeps per block (block_v2_) for the contact's detection
-    // schedule (ContactSystem::step's v2max: a scan of every node less); -1 when v was set elsewhere since.
-    std::vector<double> block_v2_;
-    double v2max_ = -1.0;
+    double v2max_ = -1.0;  // the largest |v|^2 over the nodes of the last update; -1 when v was set elsewhere since
     double unbalanced_ratio_ = 1;
     double eq_since_ = -1;  // s: since when the stage's equilibrium conditions hold without a break (-1: they do not)
     bool energy_every_step_ = false;  // tests that read energies after every step
