@@ -5,6 +5,7 @@
 // triangles. With --case FILE: the first steps of that case's first stage (contact, joints and all), so that the
 // thread scaling of a real scene is measured; --set key=value as for `fdem run`.
 //   fdem_bench [--triangles N | --case FILE [--set k=v ...]] [--steps S] [--repeats R] [--threads 1,2] [--csv FILE]
+// fdem_bench --nodes N [...]: the node update kernel (fdem/node_update.hpp) alone on N free nodes.
 // fdem_bench --probe [--csv FILE]: what the machine gives each thread, to read the figures above by (Linux): per CPU
 // of the process's set, the latency of a dependent load over 256 KB and 4 MB and a core-bound loop's time, and the
 // round trip of a cache line between the first CPU and each other one. A shared or virtual machine can give its
@@ -32,6 +33,7 @@
 #include <thread>
 #include <vector>
 
+#include "fdem/node_update.hpp"
 #include "fdem/case.hpp"
 #include "fdem/omp_env.hpp"
 #include "fdem/model.hpp"
@@ -156,6 +158,55 @@ int probe(const std::string& csv) {
 
 }  // namespace
 
+// --nodes N: the node update kernel alone (fdem/node_update.hpp) on N free nodes with module forces, local damping
+// and gravity, no triangles: ns per node and step, median of the repeats, per thread count; a CSV row per repeat.
+int bench_nodes(long n, long steps, long repeats, const std::vector<int>& thread_counts, const std::string& csv) {
+    std::ofstream out(csv);
+    if (!out) {
+        std::cerr << "error: cannot write the CSV file '" << csv << "'\n";
+        return 1;
+    }
+    out << "kernel,threads,nodes,steps,repeat,seconds,ns_per_node_step\n";
+    std::mt19937 rng(1);
+    std::uniform_real_distribution<double> u(-1, 1);
+    const std::size_t n2 = 2 * static_cast<std::size_t>(n);
+    std::vector<int> inc_ptr(n + 1, 0);
+    std::vector<double> mass(n, 1.0), inv_mass(n, 1.0), f_ext(n2, 0.0), f_mod(n2), dof_vel(n2, 0.0), reaction(n2, 0.0);
+    std::vector<double> x(n2), v(n2);
+    std::vector<unsigned char> loaded(n, 0);
+    std::vector<std::uint8_t> kind(n2, 0);
+    for (std::size_t i = 0; i < n2; ++i) x[i] = u(rng), v[i] = 1e-3 * u(rng);
+    fdem::NodeUpdate a;
+    a.n_units = static_cast<int>(n);
+    a.inc_ptr = inc_ptr.data();
+    a.mass = mass.data(), a.grav_mass = mass.data(), a.inv_mass = inv_mass.data();
+    a.f_ext = f_ext.data(), a.loaded = loaded.data(), a.f_mod = f_mod.data(), a.reset_fmod = true;
+    a.dof_kind = kind.data(), a.dof_velocity = dof_vel.data(), a.reaction = reaction.data();
+    a.x = x.data(), a.v = v.data();
+    a.dt = a.dtv = 1e-6, a.alpha = 0.1, a.gy = -9.81;
+    std::vector<fdem::NodeBlockSums> sums((n + 255) / 256);
+    std::printf("node update: %ld nodes; %ld steps x %ld repeats\n", n, steps, repeats);
+    for (int nth : thread_counts) {
+        omp_set_num_threads(nth);
+        std::vector<double> ns;
+        for (long r = 0; r < repeats; ++r) {
+            double sec = 0;
+            for (long st = 0; st < steps; ++st) {
+                for (std::size_t i = 0; i < n2; ++i) f_mod[i] = 1e-3 * x[i];  // (refilled: the kernel resets f_mod)
+                const double t0 = omp_get_wtime();
+                fdem::update_nodes(a, sums);
+                sec += omp_get_wtime() - t0;
+            }
+            ns.push_back(1e9 * sec / (static_cast<double>(steps) * n));
+            out << "node_update," << nth << "," << n << "," << steps << "," << r << "," << sec << "," << ns.back() << "\n";
+        }
+        std::sort(ns.begin(), ns.end());
+        std::printf("threads %d: median %.2f ns per node and step (min %.2f, max %.2f)\n", nth, ns[ns.size() / 2],
+                    ns.front(), ns.back());
+    }
+    return 0;
+}
+
 int main(int argc, char** argv) {
     // --probe [--csv FILE]: the machine, not a model
     for (int i = 1; i < argc; ++i)
@@ -177,8 +228,9 @@ int main(int argc, char** argv) {
     std::string csv = "bench.csv", threads_list = "1,2", case_file;
     std::vector<std::string> sets;
     const char* usage =
-        "usage: fdem_bench [--triangles N | --case FILE [--set k=v ...]] [--steps S] [--repeats R] [--threads 1,2] "
-        "[--csv FILE]\n"
+        "usage: fdem_bench [--triangles N | --case FILE [--set k=v ...] | --nodes N] [--steps S] [--repeats R] "
+        "[--threads 1,2] [--csv FILE]\n"
+        "       (--nodes N: the node update kernel alone on N free nodes, ns per node and step)\n"
         "       fdem_bench --probe [--csv FILE]   (per CPU: load latency over 256 KB and 4 MB, a core-bound loop, and\n"
         "                                        the round trip of a cache line with the first CPU)\n";
     for (int i = 1; i < argc; ++i)
@@ -186,9 +238,11 @@ int main(int argc, char** argv) {
             std::cout << usage;
             return 0;
         }
+    long nodes = 0;
     for (int i = 1; i + 1 < argc; i += 2) {
         const std::string a = argv[i], v = argv[i + 1];
         if (a == "--triangles") triangles = std::atol(v.c_str());
+        else if (a == "--nodes") nodes = std::atol(v.c_str());
         else if (a == "--steps") steps = std::atol(v.c_str());
         else if (a == "--repeats") repeats = std::atol(v.c_str());
         else if (a == "--threads") threads_list = v;
@@ -217,6 +271,7 @@ int main(int argc, char** argv) {
                   << triangles << ", threads '" << threads_list << "')\n";
         return 1;
     }
+    if (nodes > 0) return bench_nodes(nodes, steps, repeats, thread_counts, csv);
     fdem::CaseSpec spec;
     fdem::Model model;
     std::string label;
