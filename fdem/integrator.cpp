@@ -1,16 +1,17 @@
 // fdem/integrator.cpp: the explicit central-difference integrator of Simulation: the time step, the tied groups of
 // extrinsic insertion and one step.
 //
-// One step (central differences with local damping, README "Physics"; [M04] ch. 4, [C79]), with x^n, v^{n-1/2} known:
-//   1. loads, gravity and prescribed velocities at time t^n (ramps, protocols, tilting);
-//   2. triangle forces f_int(x^n, v^{n-1/2}) in parallel, one 6-double record per triangle;
-//   3. node loop in parallel, one unit (a node, or a group of tied copies moving as one node) at a time: gather the
-//      triangle records in CSR order, add applied loads and gravity,
-//      local damping f_d = -alpha |f| sign(v) on free DOFs ([C79]) and mass-proportional (Rayleigh alpha) damping -a m vbar
-//      (Belytschko, Liu & Moran 2000; vbar = (v^{n-1/2} + v^{n+1/2}) / 2, implicit in v, never limits the step), then
-//      v^{n+1/2} = ((1 - a dt / 2) v^{n-1/2} + dt (f + f_d) / m) / (1 + a dt / 2), or the prescribed value
-//      (reaction = m dv/dt - f),
-//      x^{n+1} = x^n + dt v^{n+1/2}.
+// One step (central differences with local damping, README "Physics"; [M04] ch. 4, [C79]), with x^n, v^{n-1/2}
+// known, in the order step() runs its stages:
+//   1. triangle forces f_int(x^n, v^{n-1/2}) in parallel, one 6-double record per triangle (triangle_stage);
+//   2. extrinsic insertion: dormant edges whose traction reached the strength get their element, the step may shrink;
+//   3. loads, gravity and prescribed velocities at t^n (ramps, protocols, tilting: apply_time_dependent);
+//   4. joint and contact forces into f_mod (Interactions::add_forces);
+//   5. rigid groups: one velocity per group and component from the resultant of its nodes' forces;
+//   6. node update (fdem/node_update.hpp): v^{n+1/2}, x^{n+1}, reactions and the books of each block; then the
+//      contact dashpots' second half (Interactions::finish_step);
+//   7. energy books (block sums in order), servos, time, damage of the joints (Interactions::after_step);
+//   8. observers (observe): history, snapshot, files, progress, energy check.
 // Determinism: every parallel loop writes per-item results or per-block partial sums over fixed blocks of
 // kBlock items; partials are added serially in block order. No result depends on the thread count.
 // Energy: with vbar = (v^{n-1/2} + v^{n+1/2}) / 2, the kinetic energy change over a step is exactly
@@ -392,11 +393,11 @@ void Simulation::step() {
     if (ties_) tri_sigma_.resize(3 * static_cast<std::size_t>(nt));
     double* tsig = ties_ ? tri_sigma_.data() : nullptr;
 
-    // 2. Triangle forces; per block: viscous power and the first inverted triangle.
+    // 1. Triangle forces; per block: viscous power and the first inverted triangle.
     const double w1 = omp_get_wtime();
     const double visc_power = triangle_stage(tsig);
     const double wi = omp_get_wtime();
-    // Extrinsic insertion: dormant edges whose traction reached the strength get their cohesive element before this
+    // 2-3. Extrinsic insertion: dormant edges whose traction reached the strength get their cohesive element before this
     // step's joint forces, their copies are untied, and the step shrinks if the lighter nodes need it. The velocity
     // update of a step that changed it spans the mean of the two steps (central difference with a variable step,
     // v^{n+1/2} = v^{n-1/2} + (dt^{n-1/2} + dt^{n+1/2}) / 2 a^n; Belytschko, Liu & Moran, Nonlinear Finite Elements
@@ -409,7 +410,7 @@ void Simulation::step() {
     const double dtv = 0.5 * (dt_before + dt);
     apply_time_dependent(time_);
 
-    // Joint and contact forces, added to f_mod_ in a fixed order by their modules. The contact energy is only
+    // 4. Joint and contact forces, added to f_mod_ in a fixed order by their modules. The contact energy is only
     // evaluated on the steps whose energies are reported or checked.
     inter_.want_energy(history_due(time_ + dt, steps_ + 1) || (steps_ + 1) % 1000 == 0 || energy_every_step_);
     const double w2 = omp_get_wtime();
@@ -417,7 +418,7 @@ void Simulation::step() {
     if (spec_.energy_audit) audit_step(1, dt);
     const double w3 = omp_get_wtime();
 
-    // Rigid groups first: one velocity per group and component from the resultant of its nodes' forces,
+    // 5. Rigid groups first: one velocity per group and component from the resultant of its nodes' forces,
     // v^{n+1/2} = v^{n-1/2} + dt (F + F_d) / M with F = sum of the nodal forces, M = sum of the nodal masses and the
     // [C79] local damping F_d = -alpha |F| sign(v) on the resultant. The node loop then treats those DOFs as
     // prescribed: their reactions redistribute the forces inside the group and sum to F_d, which the loop books as
@@ -457,7 +458,7 @@ void Simulation::step() {
             if (dof_owner_[2 * k + c] == static_cast<int>(id)) dof_vel_[2 * k + c] = vnew;
     }
 
-    // 3. Node loop, one unit at a time: a node, or a group of tied copies (extrinsic insertion), which moves as one
+    // 6. Node loop, one unit at a time: a node, or a group of tied copies (extrinsic insertion), which moves as one
     // node of the group's mass M: the resultant F of its members' forces gives every member the same velocity
     // (v^{n+1/2} from F / M, the bits a lone node of mass M takes), and the group's books (work, damping, kinetic
     // energy, unbalanced force) are those of that node. The unbalanced-force scale takes every member's own forces.
