@@ -35,6 +35,81 @@ constexpr double kSimpson[3] = {1.0 / 6.0, 4.0 / 6.0, 1.0 / 6.0};  // end 0, mid
 // Below this many elements a parallel region costs more than it saves (thread wake-up is microseconds, an element
 // tens of nanoseconds), and on a loaded machine much more. The result does not depend on it.
 constexpr int kMinParallel = 4096;
+
+// evaluate_point (law.hpp) for a plain joint (CohesiveSystem::PlainJoint: the [K25] law without keep_friction, cap or
+// insertion offset), the same operations in the same order on the constants the record holds. What the general law
+// would keep unchanged is left alone: the closure and the slider slip (0 for these joints), and the damage unless it
+// grows. L is read only on the rare branch of a compressed point past its shear peak.
+struct PlainPoint {
+  double sigma, tau, energy, dissipated, damage_I, damage_II, D;
+};
+#if defined(__GNUC__)
+__attribute__((always_inline))
+#endif
+inline PlainPoint plain_point(const detail::PlainJoint& J, const JointLaw& L, double o, double s,
+                              PointHistory& h) {
+  PlainPoint r;
+  double sigma_c = 0.0, f_s = J.c, s_p = J.s_p0, inv_s_p = J.inv_s_p0;
+  if (o < 0.0) {
+    sigma_c = J.K_n * o;
+    f_s = shear_strength(sigma_c, J.c, J.tan_phi);
+    s_p = 2.0 * f_s * J.inv_K_s;
+    inv_s_p = 1.0 / s_p;
+  }
+  const double a_s = s < 0.0 ? -s : s;
+  const double o_p = J.o_p;
+  const double dI = (o - o_p) * J.inv_o_t;
+  const double dII = (o < 0.0 && a_s > s_p) ? (a_s - s_p) / shear_softening_range(L, f_s, s_p)
+                                            : (a_s - s_p) * J.inv_s_t0;
+  r.damage_I = dI > 0.0 ? dI : 0.0;
+  r.damage_II = dII > 0.0 ? dII : 0.0;
+  double trial;
+  if (dI > 0.0 || dII > 0.0) {
+    trial = std::sqrt(r.damage_I * r.damage_I + r.damage_II * r.damage_II);
+  } else {
+    trial = dI > dII ? dI : dII;
+  }
+  const double D_old = h.damage;
+  const double D = trial >= 1.0 ? 1.0 : (trial > D_old ? trial : D_old);
+  double t_n0 = 0.0, e_n0 = 0.0;
+  if (o > 0.0) {
+    if (o >= o_p) {
+      t_n0 = J.f_t;
+      e_n0 = J.f_t * (o_p * (2.0 / 3.0) + (o - o_p));
+    } else {
+      const double x = o * J.inv_o_p;
+      t_n0 = prepeak_shape(x) * J.f_t;
+      e_n0 = prepeak_energy_shape(x) * J.f_t * o_p;
+    }
+  }
+  double t_s0, e_s0;
+  if (a_s >= s_p) {
+    t_s0 = f_s;
+    e_s0 = f_s * (s_p * (2.0 / 3.0) + (a_s - s_p));
+  } else {
+    const double y = a_s * inv_s_p;
+    t_s0 = prepeak_shape(y) * f_s;
+    e_s0 = prepeak_energy_shape(y) * f_s * s_p;
+  }
+  const double E0 = e_n0 + e_s0;
+  const double z = D > 0.0 ? softening(D) : 1.0;
+  r.sigma = o < 0.0 ? sigma_c : z * t_n0;
+  r.tau = (s < 0.0 ? -z : z) * t_s0;
+  r.energy = z * E0 + (o < 0.0 ? 0.5 * sigma_c * o : 0.0);
+  r.dissipated = 0.0;
+  if (D > D_old) {
+    double phi = 0.0;
+    if (trial > h.trial) phi = (D_old - h.trial) / (trial - h.trial);
+    phi = phi < 0.0 ? 0.0 : (phi > 1.0 ? 1.0 : phi);
+    const double E0_a = h.undamaged_energy + phi * (E0 - h.undamaged_energy);
+    r.dissipated = (softening(D_old) - z) * 0.5 * (E0_a + E0) + 0.0;  // (+ the cap's crushing, 0)
+    h.damage = D;
+  }
+  h.trial = trial;
+  h.undamaged_energy = E0;
+  r.D = D;
+  return r;
+}
 }  // namespace
 
 const char* to_string(JointClass c) { return c == JointClass::interface ? "interface" : "unit-interior"; }
@@ -178,6 +253,44 @@ CohesiveSystem::CohesiveSystem(std::vector<CohesiveElement> elems, std::vector<C
   }
 
   build_gather();
+  build_hot();
+}
+
+bool CohesiveSystem::plain_law(int e) const {
+  const CohesiveProps& p = props_[elems_[e].props];
+  const JointLaw& L = law_[e];
+  return !p.extrinsic && !p.composite && !L.mohr_coulomb && !L.keep_friction && !(L.compressive_strength > 0.0) &&
+         composite_index_[e] < 0;
+}
+
+void CohesiveSystem::build_hot() {
+  plain_.clear();
+  other_.clear();
+  for (int e : active_) {
+    if (!plain_law(e)) {
+      other_.push_back(e);
+      continue;
+    }
+    const JointLaw& L = law_[e];
+    detail::PlainJoint J{};
+    for (int k = 0; k < 4; ++k) J.n[k] = elems_[e].n[k];
+    J.e = e;
+    const double area = length_[e] * thickness_;
+    J.w_end = kSimpson[0] * area;
+    J.w_mid = kSimpson[1] * area;
+    J.K_n = L.normal_stiffness;
+    J.inv_K_s = L.inv_shear_stiffness;
+    J.o_p = L.opening_peak;
+    J.inv_o_p = L.inv_opening_peak;
+    J.inv_o_t = L.inv_opening_range;
+    J.s_p0 = L.slip_peak0;
+    J.inv_s_p0 = L.inv_slip_peak0;
+    J.inv_s_t0 = L.inv_slip_range0;
+    J.f_t = L.tensile_strength;
+    J.c = L.cohesion;
+    J.tan_phi = L.tan_friction;
+    plain_.push_back(J);
+  }
 }
 
 void CohesiveSystem::build_gather() {
@@ -230,15 +343,84 @@ double CohesiveSystem::stable_dt(const double* node_mass, const int* rep) const 
 
 void CohesiveSystem::add_forces(const double* x, double* f) {
   const int na = int(active_.size());
+  const int np = int(plain_.size()), no = int(other_.size());
   const int rows = int(gather_node_.size());
-  int pending = 0;
-  // One parallel region for both loops: on a shared machine every fork/join can cost a scheduler time slice.
+  int pending = 0, pending_plain = 0;
+  // One parallel region for all loops: on a shared machine every fork/join can cost a scheduler time slice.
 #pragma omp parallel if (na >= kMinParallel)
   {
-  // Integer reduction: exact, so the count does not depend on the thread count.
+  // Plain group (the same arithmetic as the general loop below with evaluate_point; see plain_point). An element
+  // that was pending is still fully damaged (damage never decreases), so pending_ is read only for those.
+  // Integer reductions: exact, so the count does not depend on the thread count.
+#pragma omp for schedule(static) reduction(+ : pending_plain) nowait
+  for (int k = 0; k < np; ++k) {
+    const detail::PlainJoint& J = plain_[k];
+    const int e = J.e;
+    const int* n = J.n;
+    const double xa0 = x[2 * n[0]], ya0 = x[2 * n[0] + 1], xa1 = x[2 * n[1]], ya1 = x[2 * n[1] + 1];
+    const double xb0 = x[2 * n[2]], yb0 = x[2 * n[2] + 1], xb1 = x[2 * n[3]], yb1 = x[2 * n[3] + 1];
+    double tx = (xa1 + xb1) - (xa0 + xb0), ty = (ya1 + yb1) - (ya0 + yb0);
+    const double len = std::sqrt(tx * tx + ty * ty);
+    if (len > 0.0) {
+      tx /= len;
+      ty /= len;
+    } else {
+      tx = 1.0;
+      ty = 0.0;
+    }
+    const double nx = ty, ny = -tx;
+    const double d0x = xb0 - xa0, d0y = yb0 - ya0, d1x = xb1 - xa1, d1y = yb1 - ya1;
+    const double dx[3] = {d0x, 0.5 * (d0x + d1x), d1x};
+    const double dy[3] = {d0y, 0.5 * (d0y + d1y), d1y};
+    PointHistory* h = &history_[3 * std::size_t(e)];
+    double Tx[3], Ty[3];
+    double energy = 0.0, dissipated = 0.0, DI = 0.0, DII = 0.0;
+    bool all_broken = true, damaged = false;
+    for (int i = 0; i < 3; ++i) {
+      // (+ 0.0: the insertion offset of the general loop, 0 for an intrinsic element)
+      const double o = dx[i] * nx + dy[i] * ny + 0.0;
+      const double s = dx[i] * tx + dy[i] * ty + 0.0;
+      const double D_old = h[i].damage;
+      const PlainPoint r = plain_point(J, law_[e], o, s, h[i]);
+      const double w = i == 1 ? J.w_mid : J.w_end;
+      Tx[i] = w * (r.sigma * nx + r.tau * tx);
+      Ty[i] = w * (r.sigma * ny + r.tau * ty);
+      energy += w * r.energy;
+      dissipated += w * r.dissipated;
+      DI += r.damage_I;
+      DII += r.damage_II;
+      all_broken = all_broken && r.D >= 1.0;
+      damaged = damaged || r.D > D_old;
+    }
+    const double fa0x = Tx[0] + 0.5 * Tx[1], fa0y = Ty[0] + 0.5 * Ty[1];
+    const double fa1x = Tx[2] + 0.5 * Tx[1], fa1y = Ty[2] + 0.5 * Ty[1];
+    double* fe = &force_[8 * std::size_t(e)];
+    fe[0] = fa0x;
+    fe[1] = fa0y;
+    fe[2] = fa1x;
+    fe[3] = fa1y;
+    fe[4] = -fa0x;
+    fe[5] = -fa0y;
+    fe[6] = -fa1x;
+    fe[7] = -fa1y;
+    energy_[e] = energy;
+    // Without a damage increment every point dissipated +0.0 (and the element's friction is +0.0 at every step):
+    // adding them would leave the sums as they are.
+    if (damaged) dissipated_[e] += dissipated;
+    if (all_broken) {
+      if (!pending_[e]) {
+        pending_[e] = 1;
+        break_DI_[e] = DI / 3.0;
+        break_DII_[e] = DII / 3.0;
+      }
+      ++pending_plain;
+    }
+  }
+
+  // The other laws.
 #pragma omp for schedule(static) reduction(+ : pending)
-  for (int k = 0; k < na; ++k) {
-    const int e = active_[k];
+  for (int k = 0; k < no; ++k) {
+    const int e = other_[k];
     const int* n = elems_[e].n;
     const double xa0 = x[2 * n[0]], ya0 = x[2 * n[0] + 1], xa1 = x[2 * n[1]], ya1 = x[2 * n[1] + 1];
     const double xb0 = x[2 * n[2]], yb0 = x[2 * n[2] + 1], xb1 = x[2 * n[3]], yb1 = x[2 * n[3] + 1];
@@ -317,7 +499,7 @@ void CohesiveSystem::add_forces(const double* x, double* f) {
     f[2 * v + 1] += sy;
   }
   }  // omp parallel
-  pending_count_ = pending;
+  pending_count_ = pending + pending_plain;
 }
 
 int CohesiveSystem::extrinsic_count() const {
@@ -360,6 +542,7 @@ void CohesiveSystem::insert(const std::vector<Insertion>& list) {
   }
   std::sort(active_.begin(), active_.end());
   build_gather();
+  build_hot();
 }
 
 std::vector<BreakRecord> CohesiveSystem::update_damage(double time, double control_displacement, const double* x) {
@@ -404,6 +587,9 @@ std::vector<BreakRecord> CohesiveSystem::update_damage(double time, double contr
   }
   stale_slots_ += 4 * (active_.size() - kept);
   active_.resize(kept);
+  plain_.erase(std::remove_if(plain_.begin(), plain_.end(), [this](const detail::PlainJoint& J) { return broken_[J.e] != 0; }),
+               plain_.end());
+  other_.erase(std::remove_if(other_.begin(), other_.end(), [this](int e) { return broken_[e] != 0; }), other_.end());
   pending_count_ = 0;
   // Broken elements' slots hold zeros, so the gather stays right; rebuild it once they are a quarter of it, which
   // keeps a fragmented block from paying for its dead joints (amortised O(1) per break).
@@ -500,9 +686,10 @@ void write_cracks_csv_row(std::ostream& os, const BreakRecord& r) {
 
 // Checkpoint. The sizeof guards fail the build when a field is added to CohesiveSystem or PointHistory (x86-64
 // libstdc++): add the field to save_state and load_state if it carries from one step to the next, then update the size.
+// Derived fields are not saved: plain_ and other_ (the force loop's groups) are rebuilt from active_ on load.
 void CohesiveSystem::save_state(StateWriter& w) const {
 #if defined(__x86_64__) && defined(__GLIBCXX__)
-  static_assert(sizeof(CohesiveSystem) == 656, "CohesiveSystem changed: update state_io and this size");
+  static_assert(sizeof(CohesiveSystem) == 704, "CohesiveSystem changed: update state_io and this size");
   static_assert(sizeof(PointHistory) == 40, "PointHistory changed: check CohesiveSystem::state_io and this size");
 #endif
   const_cast<CohesiveSystem*>(this)->state_io(w);  // (the writer only reads the fields)
@@ -558,6 +745,7 @@ void CohesiveSystem::state_io(IO& io) {
   io.pod(dormant);
   if constexpr (load) dormant_count_ = dormant;
   io.pod(inserted_);
+  if constexpr (load) build_hot();
 }
 
 }  // namespace fdem::fracture
