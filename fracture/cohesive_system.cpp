@@ -23,6 +23,9 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 #include <ostream>
 #include <sstream>
 #include <stdexcept>
@@ -346,15 +349,10 @@ void CohesiveSystem::add_forces(const double* x, double* f) {
   const int np = int(plain_.size()), no = int(other_.size());
   const int rows = int(gather_node_.size());
   int pending = 0, pending_plain = 0;
-  // One parallel region for all loops: on a shared machine every fork/join can cost a scheduler time slice.
-#pragma omp parallel if (na >= kMinParallel)
-  {
-  // Plain group (the same arithmetic as the general loop below with evaluate_point; see plain_point). An element
-  // that was pending is still fully damaged (damage never decreases), so pending_ is read only for those.
-  // Integer reductions: exact, so the count does not depend on the thread count.
-#pragma omp for schedule(static) reduction(+ : pending_plain) nowait
-  for (int k = 0; k < np; ++k) {
-    const detail::PlainJoint& J = plain_[k];
+  // One plain element (the same arithmetic as the general loop below with evaluate_point; see plain_point). Returns
+  // whether it is pending. An element that was pending is still fully damaged (damage never decreases), so pending_
+  // is read only for those.
+  auto plain_element = [&](const detail::PlainJoint& J) -> int {
     const int e = J.e;
     const int* n = J.n;
     const double xa0 = x[2 * n[0]], ya0 = x[2 * n[0] + 1], xa1 = x[2 * n[1]], ya1 = x[2 * n[1] + 1];
@@ -407,13 +405,155 @@ void CohesiveSystem::add_forces(const double* x, double* f) {
     // Without a damage increment every point dissipated +0.0 (and the element's friction is +0.0 at every step):
     // adding them would leave the sums as they are.
     if (damaged) dissipated_[e] += dissipated;
-    if (all_broken) {
-      if (!pending_[e]) {
-        pending_[e] = 1;
-        break_DI_[e] = DI / 3.0;
-        break_DII_[e] = DII / 3.0;
-      }
-      ++pending_plain;
+    if (!all_broken) return 0;
+    if (!pending_[e]) {
+      pending_[e] = 1;
+      break_DI_[e] = DI / 3.0;
+      break_DII_[e] = DII / 3.0;
+    }
+    return 1;
+  };
+
+#if defined(__SSE2__)
+  // Two plain elements at once, lane 0 = A, lane 1 = B, each lane the operations of plain_element in the same order
+  // (SSE2 arithmetic is IEEE per lane, as the scalar one), with the branches as selects. It covers the common case
+  // only: every point of both elements undamaged and staying so (trial damage <= 0, so z = 1 and nothing is
+  // dissipated) and not a compressed point past its shear peak. Otherwise it writes nothing and returns false, and
+  // the caller evaluates both elements with plain_element.
+  auto plain_pair = [&](const detail::PlainJoint& A, const detail::PlainJoint& B) -> bool {
+    PointHistory* hA = &history_[3 * std::size_t(A.e)];
+    PointHistory* hB = &history_[3 * std::size_t(B.e)];
+    const __m128d zero = _mm_setzero_pd();
+    __m128d bad = _mm_or_pd(_mm_or_pd(_mm_cmpneq_pd(_mm_set_pd(hB[0].damage, hA[0].damage), zero),
+                                      _mm_cmpneq_pd(_mm_set_pd(hB[1].damage, hA[1].damage), zero)),
+                            _mm_cmpneq_pd(_mm_set_pd(hB[2].damage, hA[2].damage), zero));
+    if (_mm_movemask_pd(bad)) return false;
+    const __m128d one = _mm_set1_pd(1.0), two = _mm_set1_pd(2.0), three = _mm_set1_pd(3.0), half = _mm_set1_pd(0.5),
+                  two_thirds = _mm_set1_pd(2.0 / 3.0), sign = _mm_set1_pd(-0.0);
+    auto sel = [](__m128d m, __m128d a, __m128d b) { return _mm_or_pd(_mm_and_pd(m, a), _mm_andnot_pd(m, b)); };
+    auto neg = [sign](__m128d a) { return _mm_xor_pd(a, sign); };
+    // Node k of A and of B as (x_A, x_B) and (y_A, y_B).
+    auto node = [&](int k, __m128d& vx, __m128d& vy) {
+      const __m128d pa = _mm_loadu_pd(x + 2 * A.n[k]), pb = _mm_loadu_pd(x + 2 * B.n[k]);
+      vx = _mm_unpacklo_pd(pa, pb);
+      vy = _mm_unpackhi_pd(pa, pb);
+    };
+    __m128d xa0, ya0, xa1, ya1, xb0, yb0, xb1, yb1;
+    node(0, xa0, ya0);
+    node(1, xa1, ya1);
+    node(2, xb0, yb0);
+    node(3, xb1, yb1);
+    __m128d tx = _mm_sub_pd(_mm_add_pd(xa1, xb1), _mm_add_pd(xa0, xb0));
+    __m128d ty = _mm_sub_pd(_mm_add_pd(ya1, yb1), _mm_add_pd(ya0, yb0));
+    const __m128d len = _mm_sqrt_pd(_mm_add_pd(_mm_mul_pd(tx, tx), _mm_mul_pd(ty, ty)));
+    const __m128d has_len = _mm_cmpgt_pd(len, zero);
+    tx = sel(has_len, _mm_div_pd(tx, len), one);
+    ty = sel(has_len, _mm_div_pd(ty, len), zero);
+    const __m128d nx = ty, ny = neg(tx);
+    const __m128d d0x = _mm_sub_pd(xb0, xa0), d0y = _mm_sub_pd(yb0, ya0);
+    const __m128d d1x = _mm_sub_pd(xb1, xa1), d1y = _mm_sub_pd(yb1, ya1);
+    const __m128d dx[3] = {d0x, _mm_mul_pd(half, _mm_add_pd(d0x, d1x)), d1x};
+    const __m128d dy[3] = {d0y, _mm_mul_pd(half, _mm_add_pd(d0y, d1y)), d1y};
+    auto pair_of = [](double a, double b) { return _mm_set_pd(b, a); };
+    const __m128d K_n = pair_of(A.K_n, B.K_n), inv_K_s = pair_of(A.inv_K_s, B.inv_K_s);
+    const __m128d o_p = pair_of(A.o_p, B.o_p), inv_o_p = pair_of(A.inv_o_p, B.inv_o_p);
+    const __m128d inv_o_t = pair_of(A.inv_o_t, B.inv_o_t);
+    const __m128d s_p0 = pair_of(A.s_p0, B.s_p0), inv_s_p0 = pair_of(A.inv_s_p0, B.inv_s_p0);
+    const __m128d inv_s_t0 = pair_of(A.inv_s_t0, B.inv_s_t0);
+    const __m128d f_t = pair_of(A.f_t, B.f_t), c = pair_of(A.c, B.c), tan_phi = pair_of(A.tan_phi, B.tan_phi);
+    const __m128d w_end = pair_of(A.w_end, B.w_end), w_mid = pair_of(A.w_mid, B.w_mid);
+    __m128d Tx[3], Ty[3], trial[3], E0[3];
+    __m128d energy = zero;
+    for (int i = 0; i < 3; ++i) {
+      const __m128d o = _mm_add_pd(_mm_add_pd(_mm_mul_pd(dx[i], nx), _mm_mul_pd(dy[i], ny)), zero);
+      const __m128d s = _mm_add_pd(_mm_add_pd(_mm_mul_pd(dx[i], tx), _mm_mul_pd(dy[i], ty)), zero);
+      // compression: the penalty, Mohr-Coulomb f_s and the slip at peak
+      const __m128d comp = _mm_cmplt_pd(o, zero);
+      const __m128d sc = _mm_mul_pd(K_n, o);
+      const __m128d fs_c = _mm_add_pd(c, _mm_and_pd(_mm_cmplt_pd(sc, zero), _mm_mul_pd(neg(sc), tan_phi)));
+      const __m128d sp_c = _mm_mul_pd(_mm_mul_pd(two, fs_c), inv_K_s);
+      const __m128d sigma_c = _mm_and_pd(comp, sc);
+      const __m128d f_s = sel(comp, fs_c, c);
+      const __m128d s_p = sel(comp, sp_c, s_p0);
+      const __m128d inv_s_p = sel(comp, _mm_div_pd(one, sp_c), inv_s_p0);
+      const __m128d s_neg = _mm_cmplt_pd(s, zero);
+      const __m128d a_s = sel(s_neg, neg(s), s);
+      const __m128d dI = _mm_mul_pd(_mm_sub_pd(o, o_p), inv_o_t);
+      const __m128d dII = _mm_mul_pd(_mm_sub_pd(a_s, s_p), inv_s_t0);
+      bad = _mm_or_pd(bad, _mm_or_pd(_mm_and_pd(comp, _mm_cmpgt_pd(a_s, s_p)),
+                                     _mm_or_pd(_mm_cmpgt_pd(dI, zero), _mm_cmpgt_pd(dII, zero))));
+      trial[i] = sel(_mm_cmpgt_pd(dI, dII), dI, dII);
+      // tension: pre-peak curve or plateau
+      const __m128d u = _mm_mul_pd(o, inv_o_p);
+      const __m128d pre_t = _mm_mul_pd(_mm_mul_pd(u, _mm_sub_pd(two, u)), f_t);
+      const __m128d pre_e = _mm_mul_pd(
+          _mm_mul_pd(_mm_mul_pd(_mm_mul_pd(u, u), _mm_sub_pd(one, _mm_div_pd(u, three))), f_t), o_p);
+      const __m128d top_e = _mm_mul_pd(f_t, _mm_add_pd(_mm_mul_pd(o_p, two_thirds), _mm_sub_pd(o, o_p)));
+      const __m128d tension = _mm_cmpgt_pd(o, zero), top = _mm_cmpge_pd(o, o_p);
+      const __m128d t_n0 = _mm_and_pd(tension, sel(top, f_t, pre_t));
+      const __m128d e_n0 = _mm_and_pd(tension, sel(top, top_e, pre_e));
+      // shear: pre-peak curve or plateau
+      const __m128d y = _mm_mul_pd(a_s, inv_s_p);
+      const __m128d pre_ts = _mm_mul_pd(_mm_mul_pd(y, _mm_sub_pd(two, y)), f_s);
+      const __m128d pre_es = _mm_mul_pd(
+          _mm_mul_pd(_mm_mul_pd(_mm_mul_pd(y, y), _mm_sub_pd(one, _mm_div_pd(y, three))), f_s), s_p);
+      const __m128d top_es = _mm_mul_pd(f_s, _mm_add_pd(_mm_mul_pd(s_p, two_thirds), _mm_sub_pd(a_s, s_p)));
+      const __m128d top_s = _mm_cmpge_pd(a_s, s_p);
+      const __m128d t_s0 = sel(top_s, f_s, pre_ts);
+      const __m128d e_s0 = sel(top_s, top_es, pre_es);
+      E0[i] = _mm_add_pd(e_n0, e_s0);
+      // z = 1 (undamaged)
+      const __m128d sigma = sel(comp, sigma_c, _mm_mul_pd(one, t_n0));
+      const __m128d tau = _mm_mul_pd(sel(s_neg, neg(one), one), t_s0);
+      const __m128d en = _mm_add_pd(_mm_mul_pd(one, E0[i]), _mm_and_pd(comp, _mm_mul_pd(_mm_mul_pd(half, sigma_c), o)));
+      const __m128d w = i == 1 ? w_mid : w_end;
+      Tx[i] = _mm_mul_pd(w, _mm_add_pd(_mm_mul_pd(sigma, nx), _mm_mul_pd(tau, tx)));
+      Ty[i] = _mm_mul_pd(w, _mm_add_pd(_mm_mul_pd(sigma, ny), _mm_mul_pd(tau, ty)));
+      energy = _mm_add_pd(energy, _mm_mul_pd(w, en));
+    }
+    if (_mm_movemask_pd(bad)) return false;
+    const __m128d fa0x = _mm_add_pd(Tx[0], _mm_mul_pd(half, Tx[1])), fa0y = _mm_add_pd(Ty[0], _mm_mul_pd(half, Ty[1]));
+    const __m128d fa1x = _mm_add_pd(Tx[2], _mm_mul_pd(half, Tx[1])), fa1y = _mm_add_pd(Ty[2], _mm_mul_pd(half, Ty[1]));
+    double* fA = &force_[8 * std::size_t(A.e)];
+    double* fB = &force_[8 * std::size_t(B.e)];
+    // (f_a0x, f_a0y), (f_a1x, f_a1y) and their negatives for the B side, one element per lane
+    const __m128d a0A = _mm_unpacklo_pd(fa0x, fa0y), a0B = _mm_unpackhi_pd(fa0x, fa0y);
+    const __m128d a1A = _mm_unpacklo_pd(fa1x, fa1y), a1B = _mm_unpackhi_pd(fa1x, fa1y);
+    _mm_storeu_pd(fA + 0, a0A);
+    _mm_storeu_pd(fA + 2, a1A);
+    _mm_storeu_pd(fA + 4, neg(a0A));
+    _mm_storeu_pd(fA + 6, neg(a1A));
+    _mm_storeu_pd(fB + 0, a0B);
+    _mm_storeu_pd(fB + 2, a1B);
+    _mm_storeu_pd(fB + 4, neg(a0B));
+    _mm_storeu_pd(fB + 6, neg(a1B));
+    _mm_storel_pd(&energy_[A.e], energy);
+    _mm_storeh_pd(&energy_[B.e], energy);
+    for (int i = 0; i < 3; ++i) {
+      _mm_storel_pd(&hA[i].trial, trial[i]);
+      _mm_storeh_pd(&hB[i].trial, trial[i]);
+      _mm_storel_pd(&hA[i].undamaged_energy, E0[i]);
+      _mm_storeh_pd(&hB[i].undamaged_energy, E0[i]);
+    }
+    return true;
+  };
+#endif
+
+  // One parallel region for all loops: on a shared machine every fork/join can cost a scheduler time slice.
+#pragma omp parallel if (na >= kMinParallel)
+  {
+  // Plain group, in pairs. Integer reductions: exact, so the count does not depend on the thread count.
+  const int pairs = (np + 1) / 2;
+#pragma omp for schedule(static) reduction(+ : pending_plain) nowait
+  for (int kp = 0; kp < pairs; ++kp) {
+    const int k = 2 * kp;
+    if (k + 1 < np) {
+#if defined(__SSE2__)
+      if (plain_pair(plain_[k], plain_[k + 1])) continue;
+#endif
+      pending_plain += plain_element(plain_[k]) + plain_element(plain_[k + 1]);
+    } else {
+      pending_plain += plain_element(plain_[k]);
     }
   }
 
