@@ -464,6 +464,7 @@ void CohesiveSystem::add_forces(const double* x, double* f) {
     const __m128d w_end = pair_of(A.w_end, B.w_end), w_mid = pair_of(A.w_mid, B.w_mid);
     __m128d Tx[3], Ty[3], trial[3], E0[3];
     __m128d energy = zero;
+#pragma GCC unroll 3
     for (int i = 0; i < 3; ++i) {
       const __m128d o = _mm_add_pd(_mm_add_pd(_mm_mul_pd(dx[i], nx), _mm_mul_pd(dy[i], ny)), zero);
       const __m128d s = _mm_add_pd(_mm_add_pd(_mm_mul_pd(dx[i], tx), _mm_mul_pd(dy[i], ty)), zero);
