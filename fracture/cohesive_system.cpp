@@ -24,7 +24,7 @@
 #include <cmath>
 #include <limits>
 #if defined(__SSE2__)
-#include <emmintrin.h>
+#include <immintrin.h>
 #endif
 #include <ostream>
 #include <sstream>
@@ -113,6 +113,154 @@ inline PlainPoint plain_point(const detail::PlainJoint& J, const JointLaw& L, do
   r.D = D;
   return r;
 }
+
+#if defined(__SSE2__)
+#if defined(__GNUC__) && defined(__x86_64__)
+#define FDEM_PLAIN_QUAD 1
+// Four plain elements at once with AVX (lane j = element J[j]): the lanes of plain_pair (in CohesiveSystem::add_forces)
+// twice as wide, the same operations in the same order (AVX arithmetic is IEEE per lane; no FMA: contraction is
+// off, and "avx" does not enable it), for the same common case; otherwise it writes nothing and returns false.
+// Compiled for AVX whatever the build's baseline; called only where the CPU has it (avx_available).
+__attribute__((target("avx"))) bool plain_quad(const detail::PlainJoint* const J[4], const double* x,
+                                               PointHistory* hist, double* force, double* energy_out) {
+  PointHistory* h[4] = {hist + 3 * std::size_t(J[0]->e), hist + 3 * std::size_t(J[1]->e),
+                        hist + 3 * std::size_t(J[2]->e), hist + 3 * std::size_t(J[3]->e)};
+  const __m256d zero = _mm256_setzero_pd();
+  __m256d bad = zero;
+  for (int i = 0; i < 3; ++i)
+    bad = _mm256_or_pd(bad, _mm256_cmp_pd(_mm256_set_pd(h[3][i].damage, h[2][i].damage, h[1][i].damage,
+                                                        h[0][i].damage), zero, _CMP_NEQ_UQ));
+  if (_mm256_movemask_pd(bad)) return false;
+  const __m256d one = _mm256_set1_pd(1.0), two = _mm256_set1_pd(2.0), three = _mm256_set1_pd(3.0),
+                half = _mm256_set1_pd(0.5), two_thirds = _mm256_set1_pd(2.0 / 3.0), sign = _mm256_set1_pd(-0.0);
+#define sel(m, a, b) _mm256_or_pd(_mm256_and_pd(m, a), _mm256_andnot_pd(m, b))
+#define neg(a) _mm256_xor_pd(a, sign)
+  // Node k of the four elements as (x_0, x_1, x_2, x_3) and (y_0, ..., y_3).
+  __m256d xa0, ya0, xa1, ya1, xb0, yb0, xb1, yb1;
+  __m256d* const vx[4] = {&xa0, &xa1, &xb0, &xb1};
+  __m256d* const vy[4] = {&ya0, &ya1, &yb0, &yb1};
+  for (int k = 0; k < 4; ++k) {
+    const __m256d lo = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(x + 2 * J[0]->n[k])),
+                                            _mm_loadu_pd(x + 2 * J[2]->n[k]), 1);
+    const __m256d hi = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(x + 2 * J[1]->n[k])),
+                                            _mm_loadu_pd(x + 2 * J[3]->n[k]), 1);
+    *vx[k] = _mm256_unpacklo_pd(lo, hi);
+    *vy[k] = _mm256_unpackhi_pd(lo, hi);
+  }
+  __m256d tx = _mm256_sub_pd(_mm256_add_pd(xa1, xb1), _mm256_add_pd(xa0, xb0));
+  __m256d ty = _mm256_sub_pd(_mm256_add_pd(ya1, yb1), _mm256_add_pd(ya0, yb0));
+  const __m256d len = _mm256_sqrt_pd(_mm256_add_pd(_mm256_mul_pd(tx, tx), _mm256_mul_pd(ty, ty)));
+  const __m256d has_len = _mm256_cmp_pd(len, zero, _CMP_GT_OQ);
+  tx = sel(has_len, _mm256_div_pd(tx, len), one);
+  ty = sel(has_len, _mm256_div_pd(ty, len), zero);
+  const __m256d nx = ty, ny = neg(tx);
+  const __m256d d0x = _mm256_sub_pd(xb0, xa0), d0y = _mm256_sub_pd(yb0, ya0);
+  const __m256d d1x = _mm256_sub_pd(xb1, xa1), d1y = _mm256_sub_pd(yb1, ya1);
+  const __m256d dx[3] = {d0x, _mm256_mul_pd(half, _mm256_add_pd(d0x, d1x)), d1x};
+  const __m256d dy[3] = {d0y, _mm256_mul_pd(half, _mm256_add_pd(d0y, d1y)), d1y};
+#define FDEM_QUAD(field) _mm256_set_pd(J[3]->field, J[2]->field, J[1]->field, J[0]->field)
+  const __m256d K_n = FDEM_QUAD(K_n), inv_K_s = FDEM_QUAD(inv_K_s);
+  const __m256d o_p = FDEM_QUAD(o_p), inv_o_p = FDEM_QUAD(inv_o_p), inv_o_t = FDEM_QUAD(inv_o_t);
+  const __m256d s_p0 = FDEM_QUAD(s_p0), inv_s_p0 = FDEM_QUAD(inv_s_p0), inv_s_t0 = FDEM_QUAD(inv_s_t0);
+  const __m256d f_t = FDEM_QUAD(f_t), c = FDEM_QUAD(c), tan_phi = FDEM_QUAD(tan_phi);
+  const __m256d w_end = FDEM_QUAD(w_end), w_mid = FDEM_QUAD(w_mid);
+#undef FDEM_QUAD
+  __m256d Tx[3], Ty[3], trial[3], E0[3];
+  __m256d energy = zero;
+#pragma GCC unroll 3
+  for (int i = 0; i < 3; ++i) {
+    const __m256d o = _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(dx[i], nx), _mm256_mul_pd(dy[i], ny)), zero);
+    const __m256d s = _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(dx[i], tx), _mm256_mul_pd(dy[i], ty)), zero);
+    const __m256d comp = _mm256_cmp_pd(o, zero, _CMP_LT_OQ);
+    const __m256d sc = _mm256_mul_pd(K_n, o);
+    const __m256d fs_c =
+        _mm256_add_pd(c, _mm256_and_pd(_mm256_cmp_pd(sc, zero, _CMP_LT_OQ), _mm256_mul_pd(neg(sc), tan_phi)));
+    const __m256d sp_c = _mm256_mul_pd(_mm256_mul_pd(two, fs_c), inv_K_s);
+    const __m256d sigma_c = _mm256_and_pd(comp, sc);
+    const __m256d f_s = sel(comp, fs_c, c);
+    const __m256d s_p = sel(comp, sp_c, s_p0);
+    const __m256d inv_s_p = sel(comp, _mm256_div_pd(one, sp_c), inv_s_p0);
+    const __m256d s_neg = _mm256_cmp_pd(s, zero, _CMP_LT_OQ);
+    const __m256d a_s = sel(s_neg, neg(s), s);
+    const __m256d dI = _mm256_mul_pd(_mm256_sub_pd(o, o_p), inv_o_t);
+    const __m256d dII = _mm256_mul_pd(_mm256_sub_pd(a_s, s_p), inv_s_t0);
+    bad = _mm256_or_pd(bad, _mm256_or_pd(_mm256_and_pd(comp, _mm256_cmp_pd(a_s, s_p, _CMP_GT_OQ)),
+                                         _mm256_or_pd(_mm256_cmp_pd(dI, zero, _CMP_GT_OQ),
+                                                      _mm256_cmp_pd(dII, zero, _CMP_GT_OQ))));
+    trial[i] = sel(_mm256_cmp_pd(dI, dII, _CMP_GT_OQ), dI, dII);
+    const __m256d u = _mm256_mul_pd(o, inv_o_p);
+    const __m256d pre_t = _mm256_mul_pd(_mm256_mul_pd(u, _mm256_sub_pd(two, u)), f_t);
+    const __m256d pre_e = _mm256_mul_pd(
+        _mm256_mul_pd(_mm256_mul_pd(_mm256_mul_pd(u, u), _mm256_sub_pd(one, _mm256_div_pd(u, three))), f_t), o_p);
+    const __m256d top_e =
+        _mm256_mul_pd(f_t, _mm256_add_pd(_mm256_mul_pd(o_p, two_thirds), _mm256_sub_pd(o, o_p)));
+    const __m256d tension = _mm256_cmp_pd(o, zero, _CMP_GT_OQ), top = _mm256_cmp_pd(o, o_p, _CMP_GE_OQ);
+    const __m256d t_n0 = _mm256_and_pd(tension, sel(top, f_t, pre_t));
+    const __m256d e_n0 = _mm256_and_pd(tension, sel(top, top_e, pre_e));
+    const __m256d y = _mm256_mul_pd(a_s, inv_s_p);
+    const __m256d pre_ts = _mm256_mul_pd(_mm256_mul_pd(y, _mm256_sub_pd(two, y)), f_s);
+    const __m256d pre_es = _mm256_mul_pd(
+        _mm256_mul_pd(_mm256_mul_pd(_mm256_mul_pd(y, y), _mm256_sub_pd(one, _mm256_div_pd(y, three))), f_s), s_p);
+    const __m256d top_es =
+        _mm256_mul_pd(f_s, _mm256_add_pd(_mm256_mul_pd(s_p, two_thirds), _mm256_sub_pd(a_s, s_p)));
+    const __m256d top_s = _mm256_cmp_pd(a_s, s_p, _CMP_GE_OQ);
+    const __m256d t_s0 = sel(top_s, f_s, pre_ts);
+    const __m256d e_s0 = sel(top_s, top_es, pre_es);
+    E0[i] = _mm256_add_pd(e_n0, e_s0);
+    const __m256d sigma = sel(comp, sigma_c, _mm256_mul_pd(one, t_n0));
+    const __m256d tau = _mm256_mul_pd(sel(s_neg, neg(one), one), t_s0);
+    const __m256d en =
+        _mm256_add_pd(_mm256_mul_pd(one, E0[i]), _mm256_and_pd(comp, _mm256_mul_pd(_mm256_mul_pd(half, sigma_c), o)));
+    const __m256d w = i == 1 ? w_mid : w_end;
+    Tx[i] = _mm256_mul_pd(w, _mm256_add_pd(_mm256_mul_pd(sigma, nx), _mm256_mul_pd(tau, tx)));
+    Ty[i] = _mm256_mul_pd(w, _mm256_add_pd(_mm256_mul_pd(sigma, ny), _mm256_mul_pd(tau, ty)));
+    energy = _mm256_add_pd(energy, _mm256_mul_pd(w, en));
+  }
+  if (_mm256_movemask_pd(bad)) return false;
+  const __m256d fa0x = _mm256_add_pd(Tx[0], _mm256_mul_pd(half, Tx[1]));
+  const __m256d fa0y = _mm256_add_pd(Ty[0], _mm256_mul_pd(half, Ty[1]));
+  const __m256d fa1x = _mm256_add_pd(Tx[2], _mm256_mul_pd(half, Tx[1]));
+  const __m256d fa1y = _mm256_add_pd(Ty[2], _mm256_mul_pd(half, Ty[1]));
+  // (f_a0x, f_a0y) per element: lanes 0 and 2 in the unpacklo, 1 and 3 in the unpackhi
+  const __m256d a0_02 = _mm256_unpacklo_pd(fa0x, fa0y), a0_13 = _mm256_unpackhi_pd(fa0x, fa0y);
+  const __m256d a1_02 = _mm256_unpacklo_pd(fa1x, fa1y), a1_13 = _mm256_unpackhi_pd(fa1x, fa1y);
+  const __m128d a0[4] = {_mm256_castpd256_pd128(a0_02), _mm256_castpd256_pd128(a0_13), _mm256_extractf128_pd(a0_02, 1),
+                         _mm256_extractf128_pd(a0_13, 1)};
+  const __m128d a1[4] = {_mm256_castpd256_pd128(a1_02), _mm256_castpd256_pd128(a1_13), _mm256_extractf128_pd(a1_02, 1),
+                         _mm256_extractf128_pd(a1_13, 1)};
+#undef sel
+#undef neg
+  const __m128d sign2 = _mm_set1_pd(-0.0);
+  alignas(32) double en_l[4], trial_l[3][4], E0_l[3][4];
+  _mm256_store_pd(en_l, energy);
+  for (int i = 0; i < 3; ++i) {
+    _mm256_store_pd(trial_l[i], trial[i]);
+    _mm256_store_pd(E0_l[i], E0[i]);
+  }
+  for (int j = 0; j < 4; ++j) {
+    double* fe = force + 8 * std::size_t(J[j]->e);
+    _mm_storeu_pd(fe + 0, a0[j]);
+    _mm_storeu_pd(fe + 2, a1[j]);
+    _mm_storeu_pd(fe + 4, _mm_xor_pd(a0[j], sign2));
+    _mm_storeu_pd(fe + 6, _mm_xor_pd(a1[j], sign2));
+    energy_out[J[j]->e] = en_l[j];
+    for (int i = 0; i < 3; ++i) {
+      h[j][i].trial = trial_l[i][j];
+      h[j][i].undamaged_energy = E0_l[i][j];
+    }
+  }
+  return true;
+}
+bool avx_available() {
+  static const bool yes = __builtin_cpu_supports("avx");
+  return yes;
+}
+#else
+bool avx_available() { return false; }
+#endif
+#else
+bool avx_available() { return false; }
+#endif  // __SSE2__
 }  // namespace
 
 const char* to_string(JointClass c) { return c == JointClass::interface ? "interface" : "unit-interior"; }
@@ -349,6 +497,7 @@ void CohesiveSystem::add_forces(const double* x, double* f) {
   const int np = int(plain_.size()), no = int(other_.size());
   const int rows = int(gather_node_.size());
   int pending = 0, pending_plain = 0;
+  const int lanes = lanes_ >= 4 && !avx_available() ? 2 : lanes_;
   // One plain element (the same arithmetic as the general loop below with evaluate_point; see plain_point). Returns
   // whether it is pending. An element that was pending is still fully damaged (damage never decreases), so pending_
   // is read only for those.
@@ -544,17 +693,26 @@ void CohesiveSystem::add_forces(const double* x, double* f) {
 #pragma omp parallel if (na >= kMinParallel)
   {
   // Plain group, in pairs. Integer reductions: exact, so the count does not depend on the thread count.
-  const int pairs = (np + 1) / 2;
+  // Plain group, in quads (lanes_ == 4), pairs (2) or one by one (1): the same bits whichever evaluates an element.
+  const int quads = (np + 3) / 4;
 #pragma omp for schedule(static) reduction(+ : pending_plain) nowait
-  for (int kp = 0; kp < pairs; ++kp) {
-    const int k = 2 * kp;
-    if (k + 1 < np) {
-#if defined(__SSE2__)
-      if (plain_pair(plain_[k], plain_[k + 1])) continue;
+  for (int q = 0; q < quads; ++q) {
+    const int k0 = 4 * q, k1 = std::min(k0 + 4, np);
+#if defined(FDEM_PLAIN_QUAD)
+    if (lanes >= 4 && k1 - k0 == 4) {
+      const detail::PlainJoint* const J[4] = {&plain_[k0], &plain_[k0 + 1], &plain_[k0 + 2], &plain_[k0 + 3]};
+      if (plain_quad(J, x, history_.data(), force_.data(), energy_.data())) continue;
+    }
 #endif
-      pending_plain += plain_element(plain_[k]) + plain_element(plain_[k + 1]);
-    } else {
-      pending_plain += plain_element(plain_[k]);
+    for (int k = k0; k < k1; k += 2) {
+      if (k + 1 < k1) {
+#if defined(__SSE2__)
+        if (lanes >= 2 && plain_pair(plain_[k], plain_[k + 1])) continue;
+#endif
+        pending_plain += plain_element(plain_[k]) + plain_element(plain_[k + 1]);
+      } else {
+        pending_plain += plain_element(plain_[k]);
+      }
     }
   }
 
@@ -830,7 +988,7 @@ void write_cracks_csv_row(std::ostream& os, const BreakRecord& r) {
 // Derived fields are not saved: plain_ and other_ (the force loop's groups) are rebuilt from active_ on load.
 void CohesiveSystem::save_state(StateWriter& w) const {
 #if defined(__x86_64__) && defined(__GLIBCXX__)
-  static_assert(sizeof(CohesiveSystem) == 704, "CohesiveSystem changed: update state_io and this size");
+  static_assert(sizeof(CohesiveSystem) == 712, "CohesiveSystem changed: update state_io and this size");
   static_assert(sizeof(PointHistory) == 40, "PointHistory changed: check CohesiveSystem::state_io and this size");
 #endif
   const_cast<CohesiveSystem*>(this)->state_io(w);  // (the writer only reads the fields)

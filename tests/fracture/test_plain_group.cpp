@@ -1,7 +1,7 @@
-// The force loop's plain group (CohesiveSystem::plain_: the [K25] law without keep_friction or cap, evaluated inline
-// and two elements at a time) against the general point law: the same bits as evaluate_point element by element and
-// the same node sums, through every state (intact, damaged, compressed past the shear peak, broken), with elements of
-// another law (keep_friction) mixed in, for 1 and 2 threads.
+// The force loop's plain group (CohesiveSystem::plain_: the [K25] law without keep_friction or cap, evaluated inline,
+// four, two or one element at a time) against the general point law: the same bits as evaluate_point element by
+// element and the same node sums, through every state (intact, damaged, compressed past the shear peak, broken), with
+// elements of another law (keep_friction) mixed in, for 1 and 2 threads and each vector width.
 #include <catch2/catch.hpp>
 
 #include <omp.h>
@@ -113,13 +113,14 @@ struct Counts {
   int broken = 0, damaged = 0, compressed_past_shear_peak = 0;
 };
 
-Counts compare_with_reference(const SplitGrid& g, int threads) {
+Counts compare_with_reference(const SplitGrid& g, int threads, int lanes) {
   CohesiveProps plain = fracture_test::sandstone(4e10), other = plain;
   other.keep_friction = true;
   std::vector<CohesiveElement> elems = g.elems;
   for (std::size_t e = 0; e < elems.size(); ++e) elems[e].props = (e % 7 == 3) ? 1 : 0;  // a few of another law
   const double t = 0.1;
   CohesiveSystem sys(elems, {plain, other}, t, g.x.data(), g.num_nodes());
+  sys.set_vector_lanes(lanes);
   Reference ref(g, sys, t);
   omp_set_num_threads(threads);
   Counts c;
@@ -174,12 +175,14 @@ Counts compare_with_reference(const SplitGrid& g, int threads) {
 }
 }  // namespace
 
-TEST_CASE("plain group of the force loop: the bits of evaluate_point through every state, 1 and 2 threads",
+TEST_CASE("plain group of the force loop: the bits of evaluate_point through every state, 1 and 2 threads, 4, 2, 1 lanes",
           "[unit]") {
   const SplitGrid g = make_split_grid(60, 40, 0.01);  // ~7100 elements: above the parallel threshold
   const int saved = omp_get_max_threads();
-  const Counts c1 = compare_with_reference(g, 1);
-  const Counts c2 = compare_with_reference(g, 2);
+  const Counts c1 = compare_with_reference(g, 1, 4);  // four at a time (AVX; two where the CPU has no AVX)
+  const Counts c2 = compare_with_reference(g, 2, 4);
+  compare_with_reference(g, 1, 2);  // two at a time (SSE2)
+  compare_with_reference(g, 2, 1);  // one at a time
   omp_set_num_threads(saved);
   WARN("plain group: broken " << c1.broken << ", damaged point-steps " << c1.damaged
                               << ", compressed past the shear peak (last step) " << c1.compressed_past_shear_peak);
