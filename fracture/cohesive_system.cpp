@@ -3,9 +3,12 @@
 // DATA LAYOUT ASSUMPTIONS
 // - Node arrays (x, f, node_mass) are the engine's: x and f interleaved 2 per node (x0 y0 x1 y1 ...), m 1 per node.
 // - Elements are indexed 0..size()-1 in the order the engine gave them; every per-element array below uses that
-//   index: law_[e] (AoS struct, read whole by the kernel), length_[e], history_[3e + i] (i = end 0, midpoint, end 1;
-//   the damage and what the second-order dissipation needs from the previous step),
+//   index: law_[e] (AoS struct, read whole by the general loop), length_[e], history_[3e + i] (i = end 0, midpoint,
+//   end 1; the damage and what the second-order dissipation needs from the previous step),
 //   force_[8e + 2k + {0,1}] (k = a0, a1, b0, b1), energy_[e], dissipated_[e].
+// - plain_ (detail::PlainJoint, one 128-byte record per element) and other_ group the intact elements by law, each in
+//   active_ order: derived from active_, elems_ and law_ by build_hot(), not saved. The force loop walks plain_ in
+//   order, four or two elements at a time where it can (plain_quad, plain_pair), and other_ with the general laws.
 // - active_ lists the intact elements in ascending order; broken ones leave it and their force slots are zeroed,
 //   so the node gather (CSR over the intact elements, slots in element order) stays valid between rebuilds, which
 //   happen once a quarter of its slots belong to broken elements.
@@ -886,7 +889,8 @@ std::vector<BreakRecord> CohesiveSystem::update_damage(double time, double contr
   }
   stale_slots_ += 4 * (active_.size() - kept);
   active_.resize(kept);
-  plain_.erase(std::remove_if(plain_.begin(), plain_.end(), [this](const detail::PlainJoint& J) { return broken_[J.e] != 0; }),
+  plain_.erase(std::remove_if(plain_.begin(), plain_.end(),
+                              [this](const detail::PlainJoint& J) { return broken_[J.e] != 0; }),
                plain_.end());
   other_.erase(std::remove_if(other_.begin(), other_.end(), [this](int e) { return broken_[e] != 0; }), other_.end());
   pending_count_ = 0;

@@ -200,8 +200,8 @@ class CohesiveSystem {
   bool has_cap_ = false;  // some class has a compressive cap (output of crushing)
   double thickness_;
   int num_nodes_;
-  // Hot, per element (index e): law constants (AoS: the kernel reads them all together), reference length,
-  // history at the 3 points (3e + i), force buffer (8e: a0x a0y a1x a1y b0x b0y b1x b1y), energies.
+  // Per element (index e): law constants (AoS: the general loop reads them all together; plain_ holds its own copy),
+  // reference length, history at the 3 points (3e + i), force buffer (8e: a0x a0y a1x a1y b0x b0y b1x b1y), energies.
   std::vector<JointLaw> law_;
   std::vector<double> length_;
   std::vector<double> ref_mid_;        // cold: reference midpoint, 2 per element

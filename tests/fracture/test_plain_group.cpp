@@ -175,8 +175,8 @@ Counts compare_with_reference(const SplitGrid& g, int threads, int lanes) {
 }
 }  // namespace
 
-TEST_CASE("plain group of the force loop: the bits of evaluate_point through every state, 1 and 2 threads, 4, 2, 1 lanes",
-          "[unit]") {
+TEST_CASE("plain group of the force loop: the bits of evaluate_point through every state, 1 and 2 threads, 4, 2, 1 "
+          "lanes", "[unit]") {
   const SplitGrid g = make_split_grid(60, 40, 0.01);  // ~7100 elements: above the parallel threshold
   const int saved = omp_get_max_threads();
   const Counts c1 = compare_with_reference(g, 1, 4);  // four at a time (AVX; two where the CPU has no AVX)
