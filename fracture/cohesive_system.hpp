@@ -71,6 +71,22 @@ struct BreakCounts {
 // Throws std::invalid_argument if an element's edge is not an edge of its triangle.
 void orient_elements(std::vector<CohesiveElement>& elems, const int* tri_nodes);
 
+namespace detail {
+// One intact element of CohesiveSystem's plain group (see CohesiveSystem::plain_): everything its force loop reads of
+// it but the positions and the point histories, in one 128-byte record (two cache lines).
+struct alignas(64) PlainJoint {
+  int n[4];                 // a0 a1 b0 b1
+  int e;                    // element index
+  int unused;
+  double w_end, w_mid;      // Simpson weights times the face area h t: kSimpson[0] h t (both ends), kSimpson[1] h t
+  double K_n, inv_K_s;      // JointLaw::normal_stiffness, inv_shear_stiffness
+  double o_p, inv_o_p, inv_o_t;            // opening_peak, inv_opening_peak, inv_opening_range
+  double s_p0, inv_s_p0, inv_s_t0;         // slip_peak0, inv_slip_peak0, inv_slip_range0
+  double f_t, c, tan_phi;   // tensile_strength, cohesion, tan_friction
+};
+static_assert(sizeof(PlainJoint) == 128, "PlainJoint: two cache lines");
+}  // namespace detail
+
 class CohesiveSystem {
  public:
   // thickness t (m) of the plane-stress model; x_reference: 2 * num_nodes reference coordinates (m), interleaved
@@ -128,6 +144,9 @@ class CohesiveSystem {
   // dissipation, and ADD its nodal forces (N, whole thickness) to f (2 * num_nodes). Deterministic: per-element
   // forces are computed in parallel, then every node sums its contributions in element order.
   void add_forces(const double* x, double* f);
+  // Elements the force loop evaluates at once where it can (fracture/README.md "Force loop"): 4 (AVX, where the CPU
+  // has it; the default), 2 (SSE2) or 1. The results are the same bits for each; tests compare them.
+  void set_vector_lanes(int lanes) { lanes_ = lanes; }
 
   // Remove the elements that became fully damaged in the last add_forces from the force loop and return one record
   // each, in element order. x: the current positions (for the midpoint). The engine writes cracks.csv and makes
@@ -181,8 +200,8 @@ class CohesiveSystem {
   bool has_cap_ = false;  // some class has a compressive cap (output of crushing)
   double thickness_;
   int num_nodes_;
-  // Hot, per element (index e): law constants (AoS: the kernel reads them all together), reference length,
-  // history at the 3 points (3e + i), force buffer (8e: a0x a0y a1x a1y b0x b0y b1x b1y), energies.
+  // Per element (index e): law constants (AoS: the general loop reads them all together; plain_ holds its own copy),
+  // reference length, history at the 3 points (3e + i), force buffer (8e: a0x a0y a1x a1y b0x b0y b1x b1y), energies.
   std::vector<JointLaw> law_;
   std::vector<double> length_;
   std::vector<double> ref_mid_;        // cold: reference midpoint, 2 per element
@@ -205,6 +224,16 @@ class CohesiveSystem {
   std::vector<int> gather_node_, gather_start_, gather_slot_;
   std::size_t stale_slots_ = 0;  // slots of elements broken since the last build_gather()
   void build_gather();
+  // The force loop's view of the intact elements, grouped by law (derived from active_, elems_ and law_; rebuilt by
+  // build_hot() whenever active_ changes, never saved). plain_: the intact elements of intrinsic classes with the
+  // [K25] law and neither keep_friction nor a compressive cap, in active_ order (detail::PlainJoint); other_: the
+  // remaining intact elements (composite, mohr_coulomb, keep_friction, cap, extrinsic), in active_ order, evaluated by
+  // the general point laws.
+  std::vector<detail::PlainJoint> plain_;
+  std::vector<int> other_;
+  int lanes_ = 4;
+  bool plain_law(int e) const;  // whether intact element e belongs in plain_
+  void build_hot();
   BreakCounts counts_;
   // law = "composite" (composite_law.hpp): composite_index_[e] >= 0 indexes composite_law_ and the 3 points
   // composite_history_[3 ci + i] of a composite element; -1 for the [K25] law (law_, history_ alone).
