@@ -82,6 +82,15 @@ struct EdgeRecord {
     int sliding = -1;           // 1 slid this step, 0 stuck, -1 no friction
 };
 
+// A triangle's three nodes' values (2 per node, e.g. positions or velocities) from a node array: out[2k], out[2k+1] of
+// node t[k].
+inline void gather(const double* x, const int* t, double* out) {
+    for (int k = 0; k < 3; ++k) {
+        out[2 * k] = x[2 * t[k]];
+        out[2 * k + 1] = x[2 * t[k] + 1];
+    }
+}
+
 // Smallest altitude of a triangle (m): twice its area over its longest edge.
 double smallest_altitude(const double* x);
 
