@@ -501,6 +501,7 @@ void CohesiveSystem::add_forces(const double* x, double* f) {
   const int rows = int(gather_node_.size());
   int pending = 0, pending_plain = 0;
   const int lanes = lanes_ >= 4 && !avx_available() ? 2 : lanes_;
+  (void)lanes;  // (read only where the build has SSE2 or the AVX kernel)
   // One plain element (the same arithmetic as the general loop below with evaluate_point; see plain_point). Returns
   // whether it is pending. An element that was pending is still fully damaged (damage never decreases), so pending_
   // is read only for those.
@@ -695,8 +696,8 @@ void CohesiveSystem::add_forces(const double* x, double* f) {
   // One parallel region for all loops: on a shared machine every fork/join can cost a scheduler time slice.
 #pragma omp parallel if (na >= kMinParallel)
   {
-  // Plain group, in pairs. Integer reductions: exact, so the count does not depend on the thread count.
   // Plain group, in quads (lanes_ == 4), pairs (2) or one by one (1): the same bits whichever evaluates an element.
+  // Integer reductions: exact, so the count does not depend on the thread count.
   const int quads = (np + 3) / 4;
 #pragma omp for schedule(static) reduction(+ : pending_plain) nowait
   for (int q = 0; q < quads; ++q) {
