@@ -9,7 +9,8 @@ under the given paths, finds each named case among the case files under --cases 
   unknown     a case it names is not found (renamed or removed);
   unstamped   the figure carries no stamp (made before stamps, or by a script that does not stamp).
 The build each figure was made with is listed too (a commit: `git log BUILD..` shows what changed in the code
-since). Exit code 0 when every figure is ok, 2 otherwise (--strict), else 0 with the report.
+since); a build with uncommitted changes ("BUILD-dirty") is flagged beside an ok figure and counted apart: no commit
+rebuilds the program that drew it. Exit code 0 when every figure is ok, 2 otherwise (--strict), else 0 with the report.
 """
 from __future__ import annotations
 
@@ -117,6 +118,9 @@ def check(paths: list, cases_root: str, fdem: str) -> list:
                 status = "stale"
                 made = ", ".join(f"[{h}]" for h in hs if h)
                 detail.append(f"{name}: made from {made}, {os.path.relpath(path)} now hashes [{hashes[path]}]")
+        if parsed["build"].endswith("-dirty"):
+            detail.append(f"made by build {parsed['build']}, which had uncommitted changes: regenerate it from a "
+                          "committed build to make it reproducible")
         rows.append({"figure": png, "status": status, "build": parsed["build"],
                      "cases": ", ".join(n for n, _ in parsed["cases"]), "detail": "; ".join(detail)})
     return rows
@@ -131,7 +135,9 @@ def cmd_provenance(args):
         print(f"{os.path.relpath(r['figure']):<{width}}  {r['status']:<9}  {r['build'] or '-':<14}  "
               + (r["detail"] or r["cases"]))
     counts = {s: sum(r["status"] == s for r in rows) for s in ("ok", "stale", "unknown", "unstamped")}
-    print(", ".join(f"{n} {s}" for s, n in counts.items()) + f" of {len(rows)} figures and reports")
+    dirty = sum(r["status"] == "ok" and r["build"].endswith("-dirty") for r in rows)
+    print(", ".join(f"{n} {s}" for s, n in counts.items()) + f" of {len(rows)} figures and reports"
+          + (f" ({dirty} of the ok ones made by a build with uncommitted changes)" if dirty else ""))
     if args.csv:
         write_csv(args.csv, list(rows[0].keys()), [list(r.values()) for r in rows])
         print(f"wrote {args.csv}")

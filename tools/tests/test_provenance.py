@@ -106,3 +106,27 @@ def test_a_validate_report_is_checked_by_its_source_line(tmp_path, cli):
     assert " unstamped " in lines["validate_old_report.md"]
     assert " ok " in lines["validate_rate_report.md"]
     assert " stale " in lines["validate_gone_report.md"]
+
+
+def test_a_figure_from_a_dirty_build_is_flagged(tmp_path, cli):
+    """A figure whose cases still match but whose build had uncommitted changes ("BUILD-dirty") is ok and flagged:
+    the line says so and the count names it (no commit rebuilds what drew it)."""
+    import json
+    cases, run = tiny_case_and_run(tmp_path)
+    summary = run / "summary.json"
+    s = json.loads(summary.read_text())
+    s["build"] = str(s.get("build", "abc")).replace("-dirty", "") + "-dirty"
+    summary.write_text(json.dumps(s))
+    rc, out, err = cli("plot", str(run), "--figures", "curves", "--out-dir", str(cases / "fig"))
+    assert rc == 0, err
+    rc, out, err = cli("provenance", str(cases / "fig"), "--cases", str(cases), "--fdem", fdem_bin())
+    assert rc == 0, err
+    line = next(ln for ln in out.splitlines() if "curves.png" in ln)
+    assert " ok " in line and "uncommitted changes" in line
+    assert "(1 of the ok ones made by a build with uncommitted changes)" in out
+    # the same figure from a clean build: no flag
+    s["build"] = s["build"].replace("-dirty", "")
+    summary.write_text(json.dumps(s))
+    rc, out, err = cli("plot", str(run), "--figures", "curves", "--out-dir", str(cases / "fig"))
+    rc, out, err = cli("provenance", str(cases / "fig"), "--cases", str(cases), "--fdem", fdem_bin())
+    assert "uncommitted" not in out
