@@ -46,6 +46,21 @@ constexpr int kMinParallel = 4096;
 // insertion offset), the same operations in the same order on the constants the record holds. What the general law
 // would keep unchanged is left alone: the closure and the slider slip (0 for these joints), and the damage unless it
 // grows. L is read only on the rare branch of a compressed point past its shear peak.
+// An element's nodal forces from its Simpson-weighted point forces T (N, at xi = 0, 1/2, 1): the midpoint's shared
+// half-half by the two ends, a0 and a1 get them, b0 and b1 the opposite (force_'s layout).
+inline void store_forces(const double* Tx, const double* Ty, double* fe) {
+  const double fa0x = Tx[0] + 0.5 * Tx[1], fa0y = Ty[0] + 0.5 * Ty[1];
+  const double fa1x = Tx[2] + 0.5 * Tx[1], fa1y = Ty[2] + 0.5 * Ty[1];
+  fe[0] = fa0x;
+  fe[1] = fa0y;
+  fe[2] = fa1x;
+  fe[3] = fa1y;
+  fe[4] = -fa0x;
+  fe[5] = -fa0y;
+  fe[6] = -fa1x;
+  fe[7] = -fa1y;
+}
+
 struct PlainPoint {
   double sigma, tau, energy, dissipated, damage_I, damage_II, D;
 };
@@ -543,17 +558,7 @@ void CohesiveSystem::add_forces(const double* x, double* f) {
       all_broken = all_broken && r.D >= 1.0;
       damaged = damaged || r.D > D_old;
     }
-    const double fa0x = Tx[0] + 0.5 * Tx[1], fa0y = Ty[0] + 0.5 * Ty[1];
-    const double fa1x = Tx[2] + 0.5 * Tx[1], fa1y = Ty[2] + 0.5 * Ty[1];
-    double* fe = &force_[8 * std::size_t(e)];
-    fe[0] = fa0x;
-    fe[1] = fa0y;
-    fe[2] = fa1x;
-    fe[3] = fa1y;
-    fe[4] = -fa0x;
-    fe[5] = -fa0y;
-    fe[6] = -fa1x;
-    fe[7] = -fa1y;
+    store_forces(Tx, Ty, &force_[8 * std::size_t(e)]);
     energy_[e] = energy;
     // Without a damage increment every point dissipated +0.0 (and the element's friction is +0.0 at every step):
     // adding them would leave the sums as they are.
@@ -765,18 +770,7 @@ void CohesiveSystem::add_forces(const double* x, double* f) {
       DII += r.damage_II;
       all_broken = all_broken && r.history.damage >= 1.0;
     }
-    // Midpoint traction shared half-half by the two ends (N at xi = 1/2).
-    const double fa0x = Tx[0] + 0.5 * Tx[1], fa0y = Ty[0] + 0.5 * Ty[1];
-    const double fa1x = Tx[2] + 0.5 * Tx[1], fa1y = Ty[2] + 0.5 * Ty[1];
-    double* fe = &force_[8 * std::size_t(e)];
-    fe[0] = fa0x;
-    fe[1] = fa0y;
-    fe[2] = fa1x;
-    fe[3] = fa1y;
-    fe[4] = -fa0x;
-    fe[5] = -fa0y;
-    fe[6] = -fa1x;
-    fe[7] = -fa1y;
+    store_forces(Tx, Ty, &force_[8 * std::size_t(e)]);
     energy_[e] = energy;
     dissipated_[e] += dissipated;
     friction_[e] += friction;
