@@ -109,9 +109,7 @@ public:
     // vbar = (v^{n-1/2} + v^{n+1/2}) / 2 (integrator.cpp): step() books the half on v^{n-1/2}, which it has, and
     // keeps each loaded pair's dashpot forces; finish_step(v), called with v^{n+1/2} once the nodes are updated,
     // works out the half on v^{n+1/2}, booked when the next step starts, so dashpot_dissipation() is always the work
-    // up to t^n, the time of the last step's forces, as the rest of the books. (Booked on v^{n-1/2} alone, the
-    // dashpots of a chattering contact, whose velocity changes sign from step to step, were off by up to a tenth of
-    // their work: a block pushed at mid-height with contact_damping 0.3 closed its books to -8 %.)
+    // up to t^n, the time of the last step's forces, as the rest of the books.
     void finish_step(const double* v);
     double dashpot_dissipation() const { return damping_; }  // J, cumulative, to t^n
     // Forces a detection at the next step (e.g. after the engine moved nodes by other means).

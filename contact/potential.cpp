@@ -204,11 +204,8 @@ void load_edge(const double* __restrict xo, const double* __restrict vo, double*
             // Dissipated this step: the work the spring took, at the mean of its force before and after the step
             // over the step's tangential motion vt dt (the rule by which the engine books every force's work, on the
             // mean velocity of the step, integrator.cpp), less the energy it gained. While it sticks at an unchanged
-            // length this is 0; when it slips at a steady cap, the cap times the slip. (Booked as the cap times the
-            // slip at every slip and as the energy lost at every change of length, the books missed
-            // (cap^{n-1} - cap^n)^2 / (2 k_t) at each change of the cap, and a term of each length change times the
-            // motion: where the normal force chatters, as under contact dashpots, a block pushed at mid-height
-            // closed its books to -8 %.)
+            // length this is 0; when it slips at a steady cap, the cap times the slip. (The cap times the slip alone
+            // would miss (cap^{n-1} - cap^n)^2 / (2 k_t) at each change of the cap.)
             const double e_new = 0.5 * k_t * kept * kept;
             // (after a slip the force acts at the new anchors: its half of the work on their motion, vrx, vry at
             // the centre of pressure)
