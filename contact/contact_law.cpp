@@ -75,6 +75,9 @@ ResolvedLaw resolve_law(const ContactLaw& law) {
     } else {
         r.mu = 0.0;
     }
+    if (!(law.restitution > 0.0 && law.restitution <= 1.0))
+        bad(law, "the coefficient of restitution must be in (0, 1]", law.restitution);
+    r.restitution = law.restitution;
     return r;
 }
 

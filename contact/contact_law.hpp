@@ -19,6 +19,10 @@ struct ContactLaw {
     double k_s = 0.0;           // shear stiffness (Pa/m); 0 = not given
     double mu = std::numeric_limits<double>::quiet_NaN();       // Coulomb coefficient (-); NaN = not given
     double phi_deg = std::numeric_limits<double>::quiet_NaN();  // friction angle (deg), mu = tan(phi); NaN = not given
+    // Coefficient of restitution of the normal contact, 0 < e <= 1 (1: elastic, the default). Below 1 each loaded
+    // edge unloads along a line of slope k / e^2 (Walton & Braun 1986), so an impact returns e^2 of the energy its
+    // contact took (potential.hpp, PairParams::inv_e2).
+    double restitution = 1.0;
 
     // A frictionless law with a normal penalty (Pa).
     static ContactLaw penalty(double p_n_Pa, double mu_ = 0.0, double p_t_Pa = 0.0);
@@ -33,11 +37,12 @@ struct ResolvedLaw {
     bool tangential_is_stiffness = false;
     double tangential = 0.0;           // p_t (Pa) or k_s (Pa/m); if neither was given, p_t = p_n or k_s = k_n
     double mu = 0.0;                   // friction coefficient (-)
+    double restitution = 1.0;          // e (-), 0 < e <= 1
 };
 
 // Checks a law and resolves it. Throws std::invalid_argument naming the law and the offending value for:
 // no normal penalty/stiffness, both p_n and k_n, zero/negative/non-finite values, both p_t and k_s,
-// negative or non-finite friction, both mu and phi, phi >= 90 deg.
+// negative or non-finite friction, both mu and phi, phi >= 90 deg, a restitution outside (0, 1].
 ResolvedLaw resolve_law(const ContactLaw& law);
 
 // All laws of a scene. Two triangles of DIFFERENT bodies use interface(material_a, material_b)

@@ -165,6 +165,7 @@ ContactSystem::ContactSystem(const int* tri, int n_tri, int n_nodes, double thic
             crack_law_[a] = interface_law_[a * n_mat_ + a];
         }
     }
+    for (const ResolvedLaw& L : laws_) inelastic_ = inelastic_ || L.restitution < 1.0;
     capable_.assign(n_tri, 0);
     excluded_.resize(n_tri);
     // Edges shared by two triangles through both nodes lie inside a continuum: no face.
@@ -258,11 +259,13 @@ void ContactSystem::release_vertex_of(int node) {
 std::vector<double> ContactSystem::node_stiffness(const double* x, const std::uint8_t* held) const {
     // Per material: the stiffest stiffness-law slope (Pa/m) and the largest penalty (Pa) it can meet.
     std::vector<double> k_max(n_mat_, 0.0), p_max(n_mat_, 0.0);
+    // (an inelastic law unloads along a line of slope k / e^2: potential.hpp, PairParams::inv_e2)
     auto account = [&](int m, int li) {
         if (li < 0) return;
         const ResolvedLaw& L = laws_[li];
+        const double unloading = L.normal / (L.restitution * L.restitution);
         (L.normal_is_stiffness ? k_max[m] : p_max[m]) =
-            std::max(L.normal_is_stiffness ? k_max[m] : p_max[m], L.normal);
+            std::max(L.normal_is_stiffness ? k_max[m] : p_max[m], unloading);
         (L.tangential_is_stiffness ? k_max[m] : p_max[m]) =
             std::max(L.tangential_is_stiffness ? k_max[m] : p_max[m], L.tangential);
     };
@@ -467,7 +470,7 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f,
     // (the last step's dashpot work on v^{n+1/2}: finish_step)
     damping_ += damping_next_;
     damping_next_ = 0.0;
-    const bool dashpots = beta_ > 0.0;
+    const bool dashpots = beta_ > 0.0 || inelastic_;  // (forces whose work finish_step books half of)
     if (dashpots && pair_fd_.size() < 12 * static_cast<std::size_t>(np)) pair_fd_.resize(12 * static_cast<std::size_t>(np));
     dashpot_dt_ = dashpots ? dt : 0.0;
     const bool want_energy = opt_.compute_energy;
@@ -771,6 +774,7 @@ bool ContactSystem::resolve_params(double dt, std::vector<PairParams>& prm_of) c
         else prm.p_t = L.tangential;
         prm.mu = L.mu;
         prm.dt = dt;
+        prm.inv_e2 = 1.0 / (L.restitution * L.restitution);
         if (beta_ > 0.0) {
             prm.beta = beta_;
             if (L.normal_is_stiffness) prm.k_n_area = L.normal;

@@ -245,6 +245,7 @@ private:
     // Dashpots' books (finish_step): the last step's dt (s) when its pairs' dashpot forces await finish_step (else
     // 0), and the half of that step's dashpot work on v^{n+1/2} (J) that the next step books.
     double dashpot_dt_ = 0.0, damping_next_ = 0.0;
+    bool inelastic_ = false;  // some law has a restitution below 1 (its hysteresis is booked like the dashpots)
     std::vector<double> block_fd_;  // per block of pairs: its share of finish_step's sum
     bool energy_current_ = true;
     ContactStats stats_;

@@ -134,11 +134,21 @@ void load_edge(const double* __restrict xo, const double* __restrict vo, double*
     const double s = I[1] * inv_total;
     double lq[3];
     for (int k = 0; k < 3; ++k) lq[k] = I[2 + k] * inv_total;
-    double gx = -fn * nx, gy = -fn * ny;
+    // Impacts (PairParams::inv_e2): fh >= 0, the part of the elastic push fn the unloading line takes away.
+    double fh = 0.0;
+    const bool inelastic = p.inv_e2 > 1.0 && I[5] > 0.0;
+    double q_max = 0.0;
+    if (inelastic) {
+        const double q = fn / I[5];  // N/m
+        q_max = std::max(h[6], q);
+        fh = std::min(fn, (q_max - q) * (p.inv_e2 - 1.0) * I[5]);
+    }
+    double gx = -(fn - fh) * nx, gy = -(fn - fh) * ny;
     const double k_t = 0.5 * p.k_s * p.thickness * I[5];  // N/m; each of the two faces carries half the contact
     const bool friction = p.mu > 0.0 && k_t > 0.0;
     if (!friction) r.dissipation += release_slot(h);
-    if (friction || p.beta > 0.0) {
+    if (inelastic) h[6] = q_max;
+    if (friction || p.beta > 0.0 || inelastic) {
         const double vox = (1.0 - s) * vo[2 * e] + s * vo[2 * e1], voy = (1.0 - s) * vo[2 * e + 1] + s * vo[2 * e1 + 1];
         const double vqx = lq[0] * vq[0] + lq[1] * vq[2] + lq[2] * vq[4];
         const double vqy = lq[0] * vq[1] + lq[1] * vq[3] + lq[2] * vq[5];
@@ -151,7 +161,7 @@ void load_edge(const double* __restrict xo, const double* __restrict vo, double*
         // push outside the cap: mu_eff 0.775 for mu 0.8 at contact_damping 0.5, 0.8001 now).
         const double vn = vrx * nx + vry * ny;  // > 0: the owner's edge moves into the other triangle
         const double fdn =
-            p.beta > 0.0 ? std::min(-p.beta * 0.5 * p.k_n_area * p.thickness * I[5] * vn, fn) : 0.0;  // N
+            p.beta > 0.0 ? std::min(-p.beta * 0.5 * p.k_n_area * p.thickness * I[5] * vn, fn - fh) : 0.0;  // N
         gx += fdn * nx;
         gy += fdn * ny;
         double vt = 0.0;
@@ -189,7 +199,7 @@ void load_edge(const double* __restrict xo, const double* __restrict vo, double*
             const double vby = h[2] * vq[1] + h[3] * vq[3] + h[4] * vq[5];
             vt = (vax - vbx) * tx + (vay - vby) * ty;
             // [K25] Eq. 5: F_t = min(k_t |delta_s|, mu |F_n|), opposing the slip.
-            const double cap = p.mu * (fn - fdn);
+            const double cap = p.mu * (fn - fh - fdn);
             const double trial = h[0] + vt * p.dt;
             double ft = -k_t * trial;  // along t_O on the owner (N)
             double kept = trial;
@@ -223,8 +233,10 @@ void load_edge(const double* __restrict xo, const double* __restrict vo, double*
             spread(fo, fq, e, e1, h[1], h + 2, fx, fy);
             if (fdo && fdt != 0.0) spread(fdo, fdq, e, e1, h[1], h + 2, fdt * tx, fdt * ty);
         }
-        if (p.beta > 0.0) r.damping -= fdn * vn * p.dt;
-        if (fdo && fdn != 0.0) spread(fdo, fdq, e, e1, s, lq, fdn * nx, fdn * ny);
+        // (the dashpot and the impacts' hysteresis act at the same point along n_O: one force fdn + fh)
+        const double fnd = fdn + fh;
+        r.damping -= fnd * vn * p.dt;
+        if (fdo && fnd != 0.0) spread(fdo, fdq, e, e1, s, lq, fnd * nx, fnd * ny);
     }
     spread(fo, fq, e, e1, s, lq, gx, gy);
     if (rec) {
@@ -232,7 +244,7 @@ void load_edge(const double* __restrict xo, const double* __restrict vo, double*
         rec->px = (1.0 - s) * xo[2 * e] + s * xo[2 * e1];
         rec->py = (1.0 - s) * xo[2 * e + 1] + s * xo[2 * e1 + 1];
         rec->nx = nx, rec->ny = ny;
-        rec->fn = -(gx * nx + gy * ny);  // (gx, gy) = -(fn - fdn) n
+        rec->fn = -(gx * nx + gy * ny);  // (gx, gy) = -(fn - fh - fdn) n
         rec->length = I[5];
     }
 }
@@ -599,7 +611,7 @@ bool PairBatch::end(const TriangleGeometry& A, const TriangleGeometry& B, const 
     double* fa = f12 ? f12 : r.fa;
     double* fb = f12 ? f12 + 6 : r.fb;
     clear_result(r, fa, fb);
-    if (params.beta <= 0.0) fd12 = nullptr;
+    if (params.beta <= 0.0 && params.inv_e2 <= 1.0) fd12 = nullptr;
     double* fda = fd12;
     double* fdb = fd12 ? fd12 + 6 : nullptr;
     if (fd12)

@@ -9,7 +9,8 @@
 //   e, e+1) inside B for e = 0..2, slot 3 + e = edge e of B inside A; in a slot: [0] the elastic tangential
 //   displacement delta_s (m) of its two stick anchors, [1] the owner's anchor s0 along its edge (0..1), [2..4] the
 //   other triangle's anchor in its area coordinates (all zero: no anchor yet), [5] the slot's tangential stiffness
-//   k_t (N/m) at its last step, so that its stored energy k_t delta_s^2 / 2 is known when it lets go.
+//   k_t (N/m) at its last step, so that its stored energy k_t delta_s^2 / 2 is known when it lets go, [6] the
+//   largest push per length q_max (N/m) of an inelastic contact (PairParams::inv_e2; 0 for an elastic one).
 //
 // THE POTENTIAL
 //   [MA00] phi(P) = 3 min_i A_i(P) / A = 3 min_k L_k(P): L_k is the area coordinate of vertex k, i.e. A_i / A for the
@@ -36,7 +37,7 @@
 
 namespace fdem::contact {
 
-constexpr int kHistPerEdge = 6;                  // doubles of friction state per loaded-edge slot
+constexpr int kHistPerEdge = 7;                  // doubles of state per loaded-edge slot (friction; impacts)
 constexpr int kHistPerPair = 6 * kHistPerEdge;  // per pair (six slots)
 
 struct PairParams {
@@ -57,6 +58,15 @@ struct PairParams {
     // penalty p_n (Pa) ([MA00] phi = 3 min L_k; H the triangles' smallest altitudes). 0: use k_s, k_n_area as given.
     double p_t = 0.0;        // Pa
     double p_n = 0.0;        // Pa
+    // Impacts: 1 / e^2 for a coefficient of restitution e < 1 (1: elastic). Walton & Braun (1986), written on each
+    // loaded edge's mean push per length of contact q = fn / L (N/m, fn the elastic push of the edge, L its length
+    // inside the other triangle; so an edge whose contact only grows or shrinks along the face at a constant depth
+    // is not unloading): while q is at its largest value q_max since the edge first touched, the edge carries fn; below
+    // it, max(0, q_max - (q_max - q) / e^2) L, the unloading line of slope k / e^2. A contact loaded and unloaded once
+    // returns e^2 of the work it took. q_max is the slot's h[6]; it is forgotten when the edge leaves the other
+    // triangle. The force the hysteresis removes acts with the normal dashpot's, at the centre of pressure, and its
+    // work is booked with the dashpots' (PairResult::damping).
+    double inv_e2 = 1.0;     // -
 };
 
 struct PairResult {
@@ -65,7 +75,7 @@ struct PairResult {
     double energy_normal = 0.0;      // t INT (c phi_A + c phi_B) dA (J); only when asked for
     double energy_tangential = 0.0;  // sum 0.5 k_t delta_s^2 over the edges (J)
     double dissipation = 0.0;        // friction work dissipated in this step (J)
-    double damping = 0.0;            // work of the dashpots in this step on v^{n-1/2}, -dt f_d . v (J, >= 0)
+    double damping = 0.0;            // work of the dashpots and impacts in this step on v^{n-1/2}, -dt f_d . v (J)
     int active_edges = 0;            // edges carrying a normal force
     unsigned held = 0;               // bit s: friction slot s may hold state after the call (the loaded edges)
 };

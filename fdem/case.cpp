@@ -943,6 +943,8 @@ CaseSpec load_case(const std::string& path, const std::vector<std::string>& over
             in.normal_stiffness = r.number("normal_stiffness", false, "a normal stiffness k_n > 0 in Pa/m", positive).value_or(std::nan(""));
             in.tangential_penalty = r.number("tangential_penalty", false, "a tangential penalty p_t > 0 in Pa", positive).value_or(std::nan(""));
             in.shear_stiffness = r.number("shear_stiffness", false, "a shear stiffness k_s > 0 in Pa/m", positive).value_or(std::nan(""));
+            in.restitution = r.number("restitution", false, "a coefficient of restitution e in (0, 1] (1: elastic)",
+                                      [](double v) { return v > 0 && v <= 1; }).value_or(1.0);
             if (std::isnan(in.normal_penalty) == std::isnan(in.normal_stiffness))
                 ctx.error(p, in.line, "give exactly one of normal_penalty (Pa) or normal_stiffness (Pa/m)");
             if (!std::isnan(in.tangential_penalty) && !std::isnan(in.shear_stiffness))

@@ -57,6 +57,7 @@ struct InterfaceSpec {
     double normal_stiffness = std::nan("");       // k_n, Pa/m
     double tangential_penalty = std::nan("");     // p_t, Pa   (or shear_stiffness; default: the normal one)
     double shear_stiffness = std::nan("");        // k_s, Pa/m
+    double restitution = 1;                        // dry: coefficient of restitution e of the normal contact, (0, 1]
     JointSpec bond;                                // bonded: the cohesive law (its stiffness also serves contact)
     int line = 0;
 };

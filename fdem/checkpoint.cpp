@@ -35,7 +35,7 @@ namespace fdem {
 namespace {
 
 constexpr char kMagic[8] = {'F', 'D', 'E', 'M', 'C', 'K', 'P', 'T'};
-constexpr std::uint32_t kFormat = 3;
+constexpr std::uint32_t kFormat = 4;  // 4: a seventh double per contact slot (restitution)
 
 std::uint64_t fnv1a(const char* p, std::size_t n, std::uint64_t h = 1469598103934665603ull) {
     for (std::size_t i = 0; i < n; ++i) h = (h ^ static_cast<unsigned char>(p[i])) * 1099511628211ull;

@@ -190,6 +190,7 @@ Interactions::Interactions(const CaseSpec& spec, const Model& model) {
                 if (!std::isnan(in->tangential_penalty)) l.p_t = in->tangential_penalty;
                 if (!std::isnan(in->shear_stiffness)) l.k_s = in->shear_stiffness;
                 l.phi_deg = in->friction;
+                l.restitution = in->restitution;
             } else {  // bonded: after breaking, contact with the joint's stiffness and the residual friction
                 if (const double pb = bond_penalty[static_cast<std::size_t>(in - spec.interfaces.data())]; !std::isnan(pb)) l.p_n = pb;
                 if (!std::isnan(in->bond.normal_stiffness)) l.k_n = in->bond.normal_stiffness;

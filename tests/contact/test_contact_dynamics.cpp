@@ -329,6 +329,47 @@ TEST_CASE("A frictionless undamped collision of two elastic blocks conserves mom
     }
 }
 
+TEST_CASE("Two stiff blocks meeting through an inelastic contact part at e times their approach speed, losing (1 - e^2)",
+          "[regression]") {
+    // Walton & Braun (1986): loaded along k, unloaded along k / e^2, a contact gives back e^2 of the work it took, so
+    // two rigid bodies separate at e times the speed they met with. Blocks 100 times stiffer than their contact (E t
+    // / L = 1e11 Pa x 0.1 m / 0.2 m against k_n L_c t = 5e8 Pa/m x 0.1 m x 0.1 m) come close to rigid.
+    for (const double e : {1.0, 0.5, 0.2}) {
+        BlockSim s;
+        s.gx = s.gy = 0.0;
+        s.E = 1e11;
+        s.add_block(0.0, 0.0, 0.2, 0.1, 4, 2);
+        s.add_block(0.25, 0.0, 0.2, 0.1, 4, 2);
+        ContactLaws laws(1);
+        ContactLaw law = ContactLaw::stiffness(5e8, 5e8, 0.0);
+        law.name = "impact";
+        law.restitution = e;
+        laws.set_interface(0, 0, law);
+        s.finish(laws);
+        const double dt = 0.5 * s.stable_dt();
+        for (int k = s.body_first_node[0]; k < s.body_last_node[0]; ++k) s.v[2 * k] = 1.0;
+        for (int k = s.body_first_node[1]; k < s.body_last_node[1]; ++k) s.v[2 * k] = -1.0;
+        const double k0 = s.kinetic();
+        run(s, dt, 0.12);
+        double v0x, v0y, v1x, v1y;
+        s.body_velocity(0, v0x, v0y);
+        s.body_velocity(1, v1x, v1y);
+        const double ratio = (v1x - v0x) / 2.0;  // separation speed over approach speed
+        // Kinetic energy of the bodies' mean motion, and what the contact took (dissipated + still held).
+        const double half_m = 0.5 * 2000.0 * 0.1 * 0.02;  // 0.5 rho t (w h) per block, kg
+        const double k_mean = half_m * (v0x * v0x + v1x * v1x);
+        const double taken = s.cs->dashpot_dissipation();
+        std::printf("[restitution] e %.2f: separation / approach %.4f, kinetic kept %.4f (e^2 %.4f), contact dissipated "
+                    "%.4f of it, energy change %.2e of the initial\n",
+                    e, ratio, k_mean / k0, e * e, taken / k0, (s.kinetic() + s.elastic(false) + taken - k0) / k0);
+        CHECK(s.cs->elastic_energy() == 0.0);  // apart again
+        CHECK(ratio == Approx(e).epsilon(0.03));
+        CHECK(std::fabs(s.kinetic() + s.elastic(false) + taken - k0) < 0.005 * k0);  // the books close
+        if (e < 1.0) CHECK(taken / k0 == Approx(1.0 - e * e).epsilon(0.05));
+        else CHECK(taken == 0.0);
+    }
+}
+
 TEST_CASE("Two blocks pressed through a dry joint of stiffness k_n close by q / k_n at 50, 25, 12.5 mm",
           "[convergence]") {
     const double kn = 1e10, q = 1e6, W = 0.2, H = 0.1;
