@@ -112,7 +112,7 @@ public:
     template <class IO>
     void state_io(IO& io);  // the one list of fields behind both (IO = StateWriter or StateReader)
 
-    // One line per class whose penalty = "auto" was resolved (for the log).
+    // One line per class whose penalty = "auto" was resolved and per inelastic dry interface (for the log).
     const std::vector<std::string>& penalty_notes() const { return auto_notes_; }
 
 private:
