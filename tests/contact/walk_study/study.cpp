@@ -8,7 +8,7 @@
 //     -isystem /usr/include/eigen3 -std=c++17 tests/contact/walk_study/study.cpp -o /tmp/study $B/fdem/libfdem_core.a \
 //     $B/mesh/libfdem_mesh.a $B/contact/libfdem_contact.a $B/fracture/libfdem_fracture.a -lgmsh -lgomp -lpthread -ltomlplusplus
 //   /tmp/study A 1.02 omega 1 T 8 bw 0.2 bh 0.025 h 0.0125 hb 0.1 where top safety 0.4
-// Keys (value after each): E kn h hb bw bh x0 safety dt xi mu A omega T F where settle tf every; WIN=s in the
+// Keys (value after each): E kn h hb bw bh x0 safety dt xi mu e A omega T F where settle tf every; WIN=s in the
 // environment prints windows of that length.
 #include <cmath>
 #include <cstdio>
@@ -25,7 +25,7 @@
 #include "fdem/simulation.hpp"
 
 struct P {
-    double E = 1e10, kn = 1e11, h = 0.05, safety = 0.8, xi = 0.0, mu = 0.8, vd = 0.0;
+    double E = 1e10, kn = 1e11, h = 0.05, safety = 0.8, xi = 0.0, mu = 0.8, vd = 0.0, e = 1.0;
     double A = 1.02, omega = 1.0, T = 8.0;  // A in units of mu m g; F = A cos(omega t)
     double F = 0.0;                         // constant force (N), if > 0
     std::string where = "top";              // top | mid | bottom | all
@@ -52,6 +52,7 @@ int main(int argc, char** argv) {
         else if (k == "hb") p.hb = std::stod(v); else if (k == "x0") p.x0 = std::stod(v);
         else if (k == "tf") p.tf = std::stoi(v);
         else if (k == "every") p.every = std::stoi(v); else if (k == "mu") p.mu = std::stod(v);
+        else if (k == "e") p.e = std::stod(v);
         else { std::fprintf(stderr, "unknown %s\n", k.c_str()); return 1; }
     }
     const double g = 9.81, m = 1.0;
@@ -69,7 +70,8 @@ int main(int argc, char** argv) {
       << "[groups.mid]\nbox = [" << bx - eps << ", " << 0.5 * p.bh - eps << ", " << bx + p.bw + eps << ", " << 0.5 * p.bh + eps << "]\nwithin = \"block\"\n"
       << "[groups.bottom]\nbox = [" << bx - eps << ", " << -eps << ", " << bx + p.bw + eps << ", " << eps << "]\nwithin = \"block\"\n"
       << "[[interfaces]]\nregions = [\"base\", \"block\"]\nkind = \"dry\"\nfriction = " << std::atan(p.mu) * 180 / M_PI
-      << "\nnormal_stiffness = " << p.kn << "\n[numerics]\nenergy_audit = true\nsafety = " << p.safety << "\n";
+      << "\nnormal_stiffness = " << p.kn << "\nrestitution = " << p.e << "\n[numerics]\nenergy_audit = true\nsafety = "
+      << p.safety << "\n";
     if (p.dt > 0) c << "dt = " << p.dt << "\n";
     const std::string grp = p.where == "top" ? "block_top" : p.where == "mid" ? "mid" : p.where == "bottom" ? "bottom" : "block";
     if (p.settle > 0) c << "[[stages]]\nname = \"settle\"\nduration = " << p.settle << "\nlocal_damping = 0.7\ngravity = [0.0, -9.81]\n  [[stages.supports]]\n  group = \"base\"\n  fix = \"xy\"\n";
