@@ -196,7 +196,9 @@ Interactions::Interactions(const CaseSpec& spec, const Model& model) {
                                           fmt_g(in->restitution) + ": an impact gives back " +
                                           fmt_g(in->restitution * in->restitution) +
                                           " of the work its contact took; unloading at k_n / e^2 = " +
-                                          fmt_g(1.0 / (in->restitution * in->restitution)) + " k_n bounds the step");
+                                          fmt_g(1.0 / (in->restitution * in->restitution)) +
+                                          " k_n bounds the step (for impacts and rocking; a joint that carries "
+                                          "friction while it vibrates can gain energy: README, impacts)");
             } else {  // bonded: after breaking, contact with the joint's stiffness and the residual friction
                 if (const double pb = bond_penalty[static_cast<std::size_t>(in - spec.interfaces.data())]; !std::isnan(pb)) l.p_n = pb;
                 if (!std::isnan(in->bond.normal_stiffness)) l.k_n = in->bond.normal_stiffness;
