@@ -459,4 +459,28 @@ Mesh generate_macro_wall(const MacroWallSpec& s) {
     return mesh_blocks(b);
 }
 
+// Expected triangle count of a macro-block pier (equilateral triangles of edge h, as for a wall).
+double expected_triangles(const MacroPierSpec& m) {
+    const double per = 4.0 / std::sqrt(3.0);
+    if (!(m.mesh_size > 0)) return 0;
+    const double hb = m.mesh_size_base > 0 ? m.mesh_size_base : m.mesh_size;
+    const double hm = m.mesh_size_beam > 0 ? m.mesh_size_beam : m.mesh_size;
+    return per * m.length * m.height / (m.mesh_size * m.mesh_size) + 12 +
+           per * (m.length + 2 * m.beam_overhang) * m.beam_height / (hm * hm) +
+           per * (m.length + 2 * m.base_overhang) * m.base_height / (hb * hb);
+}
+
+// Expected triangle count of a macro-block wall: the masonry area less the openings, beam and base.
+double expected_triangles(const MacroWallSpec& m) {
+    const double per = 4.0 / std::sqrt(3.0);
+    if (!(m.mesh_size > 0)) return 0;
+    const double hb = m.mesh_size_base > 0 ? m.mesh_size_base : m.mesh_size;
+    const double hm = m.mesh_size_beam > 0 ? m.mesh_size_beam : m.mesh_size;
+    double area = m.length * m.height;
+    for (const auto& o : m.openings) area -= o.width * o.height;
+    return per * std::max(area, 0.0) / (m.mesh_size * m.mesh_size) + 12.0 * (2 * m.openings.size() + 1) +
+           per * (m.length + 2 * m.beam_overhang) * m.beam_height / (hm * hm) +
+           per * (m.length + 2 * m.base_overhang) * m.base_height / (hb * hb);
+}
+
 }  // namespace fdem::mesh

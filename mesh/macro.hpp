@@ -183,4 +183,8 @@ std::vector<MacroWallBlock> macro_wall_blocks(const MacroWallSpec& spec);
 // The meshed wall (blocks, beam, base). Throws MeshError naming the problem (check()) or a Gmsh failure.
 Mesh generate_macro_wall(const MacroWallSpec& spec);
 
+// Expected triangle counts before meshing (the case reader's size guard, as for a wall: mesh/wall.hpp).
+double expected_triangles(const MacroPierSpec& spec);
+double expected_triangles(const MacroWallSpec& spec);
+
 }  // namespace fdem::mesh

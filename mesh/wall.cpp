@@ -447,4 +447,22 @@ Mesh generate_wall(const WallSpec& s) {
     }
 }
 
+// Expected triangle count of a generated wall before meshing: area / (sqrt(3)/4 h^2) for each part meshed at size
+// h (equilateral triangles of edge h), and at least 2 triangles per unit. 0 when the sizes are not known here.
+double expected_triangles(const WallSpec& w) {
+    const double per = 4.0 / std::sqrt(3.0);
+    const double H = w.height > 0 ? w.height : w.courses * (w.unit_height + w.joint_thickness);
+    const double L = w.length;
+    if (!(L > 0) || !(H > 0) || !(w.mesh_size > 0)) return 0;
+    double n = per * L * H / (w.mesh_size * w.mesh_size);
+    if (w.unit_length > 0 && w.unit_height > 0) n = std::max(n, 2.0 * (L / w.unit_length + 1) * (H / w.unit_height + 1));
+    const double hb = w.mesh_size_base > 0 ? w.mesh_size_base : w.mesh_size;
+    const double hm = w.mesh_size_beam > 0 ? w.mesh_size_beam : w.mesh_size;
+    if (w.base == "slab") n += per * (L + 2 * w.base_overhang) * w.base_height / (hb * hb);
+    n += per * (L + 2 * w.beam_overhang) * w.beam_height / (hm * hm);
+    for (const auto& rf : w.refine)
+        if (rf.size > 0) n += per * rf.width * rf.height / (rf.size * rf.size);
+    return n;
+}
+
 }  // namespace fdem::mesh

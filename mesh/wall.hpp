@@ -93,4 +93,8 @@ Mesh generate_wall(const WallSpec& spec);
 // given), for tests and for the CLI's statistics: count, joint lengths. Throws MeshError if check() fails.
 std::vector<std::vector<std::array<double, 2>>> wall_unit_outlines(const WallSpec& spec);
 
+// Expected triangle count before meshing (the case reader's size guard, [geometry] max_triangles): area /
+// (sqrt(3)/4 h^2) for each part meshed at size h, and at least 2 triangles per unit; 0 when the sizes are not set.
+double expected_triangles(const WallSpec& spec);
+
 }  // namespace fdem::mesh
