@@ -176,6 +176,11 @@ private:
     };
     void update_servos();  // after each step: the servo supports' velocity factors from the unbalanced-force ratio
     void apply_initial_conditions();
+    // begin_stage's parts, in its order (fdem/stages.cpp)
+    void stage_damping_and_gravity(const StageSpec& st);
+    void stage_supports(const StageSpec& st);
+    void stage_loads(const StageSpec& st);
+    void stage_termination(int s, const StageSpec& st);
     double rotation_deg(const std::vector<int>& nodes, double lag) const;  // deg, positions x - lag v
 
     void compute_dt();

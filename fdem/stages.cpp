@@ -95,16 +95,9 @@ void Simulation::apply_initial_conditions() {
     }
 }
 
-void Simulation::begin_stage(int s) {
-    const StageSpec& st = spec_.stages[s];
-    if (s == 0) apply_initial_conditions();
-    stage_ = s;
-    stage_t0_ = time_;
-    stage_steps0_ = steps_;
-    eq_since_ = -1;
-    stage_ramp_end_ = time_;
-    const int nn = model_.n_nodes();
-
+// begin_stage, part 1: the damping (local, its filter, mass, contact dashpots) and gravity (vector, ramp, tilt,
+// time function) that the stage sets; the others carry over.
+void Simulation::stage_damping_and_gravity(const StageSpec& st) {
     if (st.local_damping && *st.local_damping != alpha_) {
         // The stable step depends on the local damping (damped_step_factor, fdem/model.hpp): a stage that changes it
         // sets the step again from the current model (faces that cracks opened included).
@@ -149,8 +142,11 @@ void Simulation::begin_stage(int s) {
     } else if (st.gravity) {
         gravity_fn_ = TimeFunction{};
     }
+}
 
-    // Supports: a new block takes over the DOFs it names; the others keep their previous support.
+// begin_stage, part 2: supports. A new block takes over the DOFs it names; the others keep their previous support.
+void Simulation::stage_supports(const StageSpec& st) {
+    const int nn = model_.n_nodes();
     for (const SupportSpec& sp : st.supports) {
         const auto& grp = model_.group(sp.group);
         for (int c = 0; c < 2; ++c) {
@@ -211,8 +207,11 @@ void Simulation::begin_stage(int s) {
             if (dof_owner_[d] >= 0) dof_owner_[d] = remap[dof_owner_[d]];
         supports_ = std::move(kept);
     }
+}
 
-    // Loads: a block on a group replaces that group's previous load of the same kind, ramping from its value.
+// begin_stage, part 3: loads. A block on a group replaces that group's previous load of the same kind, ramping
+// from its value.
+void Simulation::stage_loads(const StageSpec& st) {
     for (const LoadSpec& ls : st.loads) {
         const auto& grp = model_.group(ls.group);
         ActiveLoad l;
@@ -254,8 +253,10 @@ void Simulation::begin_stage(int s) {
         }
         loads_.push_back(std::move(l));
     }
+}
 
-    // Termination state.
+// begin_stage, part 4: the termination state (until, past_peak) of stage s.
+void Simulation::stage_termination(int s, const StageSpec& st) {
     until_monitor_ = -1;
     if (st.until_monitor) {
         for (std::size_t i = 0; i < spec_.monitors.size(); ++i)
@@ -282,6 +283,20 @@ void Simulation::begin_stage(int s) {
             if (spec_.monitors[i].name == st.past_peak->displacement) peak_disp_monitor_ = static_cast<int>(i);
         }
     }
+}
+
+void Simulation::begin_stage(int s) {
+    const StageSpec& st = spec_.stages[s];
+    if (s == 0) apply_initial_conditions();
+    stage_ = s;
+    stage_t0_ = time_;
+    stage_steps0_ = steps_;
+    eq_since_ = -1;
+    stage_ramp_end_ = time_;
+    stage_damping_and_gravity(st);
+    stage_supports(st);
+    stage_loads(st);
+    stage_termination(s, st);
     check_ties();
     const double hi = history_interval();
     next_history_ = hi > 0 ? time_ : 0;
