@@ -235,7 +235,7 @@ void load_edge(const double* __restrict xo, const double* __restrict vo, double*
         }
         // (the dashpot and the impacts' hysteresis act at the same point along n_O: one force fdn + fh)
         const double fnd = fdn + fh;
-        r.damping -= fnd * vn * p.dt;
+        if (p.beta > 0.0 || inelastic) r.damping -= fnd * vn * p.dt;  // (none without dashpots or impacts)
         if (fdo && fnd != 0.0) spread(fdo, fdq, e, e1, s, lq, fnd * nx, fnd * ny);
     }
     spread(fo, fq, e, e1, s, lq, gx, gy);

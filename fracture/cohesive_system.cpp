@@ -42,6 +42,34 @@ constexpr double kSimpson[3] = {1.0 / 6.0, 4.0 / 6.0, 1.0 / 6.0};  // end 0, mid
 // tens of nanoseconds), and on a loaded machine much more. The result does not depend on it.
 constexpr int kMinParallel = 4096;
 
+// An element's frame and opening at positions x (nodes n: edge A a0 a1, edge B b0 b1): the tangent from the mid-line
+// of the two edges (a fully collapsed element, of length 0, has none: x), the normal of edge A pointing into side B,
+// and the relative displacement B - A at end 0, the midpoint and end 1. The plain path and the general loop share it;
+// the vector kernels (SSE2, AVX) do the same arithmetic lane by lane.
+struct ElementFrame {
+  double tx, ty, nx, ny;
+  double dx[3], dy[3];
+};
+inline ElementFrame element_frame(const double* x, const int* n) {
+  const double xa0 = x[2 * n[0]], ya0 = x[2 * n[0] + 1], xa1 = x[2 * n[1]], ya1 = x[2 * n[1] + 1];
+  const double xb0 = x[2 * n[2]], yb0 = x[2 * n[2] + 1], xb1 = x[2 * n[3]], yb1 = x[2 * n[3] + 1];
+  ElementFrame f;
+  f.tx = (xa1 + xb1) - (xa0 + xb0), f.ty = (ya1 + yb1) - (ya0 + yb0);
+  const double len = std::sqrt(f.tx * f.tx + f.ty * f.ty);
+  if (len > 0.0) {
+    f.tx /= len;
+    f.ty /= len;
+  } else {
+    f.tx = 1.0;
+    f.ty = 0.0;
+  }
+  f.nx = f.ty, f.ny = -f.tx;
+  const double d0x = xb0 - xa0, d0y = yb0 - ya0, d1x = xb1 - xa1, d1y = yb1 - ya1;
+  f.dx[0] = d0x, f.dx[1] = 0.5 * (d0x + d1x), f.dx[2] = d1x;
+  f.dy[0] = d0y, f.dy[1] = 0.5 * (d0y + d1y), f.dy[2] = d1y;
+  return f;
+}
+
 // evaluate_point (law.hpp) for a plain joint (CohesiveSystem::PlainJoint: the [K25] law without keep_friction, cap or
 // insertion offset), the same operations in the same order on the constants the record holds. What the general law
 // would keep unchanged is left alone: the closure and the slider slip (0 for these joints), and the damage unless it
@@ -523,21 +551,10 @@ void CohesiveSystem::add_forces(const double* x, double* f) {
   auto plain_element = [&](const detail::PlainJoint& J) -> int {
     const int e = J.e;
     const int* n = J.n;
-    const double xa0 = x[2 * n[0]], ya0 = x[2 * n[0] + 1], xa1 = x[2 * n[1]], ya1 = x[2 * n[1] + 1];
-    const double xb0 = x[2 * n[2]], yb0 = x[2 * n[2] + 1], xb1 = x[2 * n[3]], yb1 = x[2 * n[3] + 1];
-    double tx = (xa1 + xb1) - (xa0 + xb0), ty = (ya1 + yb1) - (ya0 + yb0);
-    const double len = std::sqrt(tx * tx + ty * ty);
-    if (len > 0.0) {
-      tx /= len;
-      ty /= len;
-    } else {
-      tx = 1.0;
-      ty = 0.0;
-    }
-    const double nx = ty, ny = -tx;
-    const double d0x = xb0 - xa0, d0y = yb0 - ya0, d1x = xb1 - xa1, d1y = yb1 - ya1;
-    const double dx[3] = {d0x, 0.5 * (d0x + d1x), d1x};
-    const double dy[3] = {d0y, 0.5 * (d0y + d1y), d1y};
+    const ElementFrame fr = element_frame(x, n);
+    const double tx = fr.tx, ty = fr.ty, nx = fr.nx, ny = fr.ny;
+    const double* dx = fr.dx;
+    const double* dy = fr.dy;
     PointHistory* h = &history_[3 * std::size_t(e)];
     double Tx[3], Ty[3];
     double energy = 0.0, dissipated = 0.0, DI = 0.0, DII = 0.0;
@@ -730,22 +747,10 @@ void CohesiveSystem::add_forces(const double* x, double* f) {
   for (int k = 0; k < no; ++k) {
     const int e = other_[k];
     const int* n = elems_[e].n;
-    const double xa0 = x[2 * n[0]], ya0 = x[2 * n[0] + 1], xa1 = x[2 * n[1]], ya1 = x[2 * n[1] + 1];
-    const double xb0 = x[2 * n[2]], yb0 = x[2 * n[2] + 1], xb1 = x[2 * n[3]], yb1 = x[2 * n[3] + 1];
-    // Frame from the mid-line of the two edges; a fully collapsed element (length 0) has none: pick x.
-    double tx = (xa1 + xb1) - (xa0 + xb0), ty = (ya1 + yb1) - (ya0 + yb0);
-    const double len = std::sqrt(tx * tx + ty * ty);
-    if (len > 0.0) {
-      tx /= len;
-      ty /= len;
-    } else {
-      tx = 1.0;
-      ty = 0.0;
-    }
-    const double nx = ty, ny = -tx;  // normal of edge A pointing into side B
-    const double d0x = xb0 - xa0, d0y = yb0 - ya0, d1x = xb1 - xa1, d1y = yb1 - ya1;
-    const double dx[3] = {d0x, 0.5 * (d0x + d1x), d1x};
-    const double dy[3] = {d0y, 0.5 * (d0y + d1y), d1y};
+    const ElementFrame fr = element_frame(x, n);
+    const double tx = fr.tx, ty = fr.ty, nx = fr.nx, ny = fr.ny;
+    const double* dx = fr.dx;
+    const double* dy = fr.dy;
 
     const JointLaw& L = law_[e];
     const int ci = composite_index_[e];  // law = "composite" when >= 0

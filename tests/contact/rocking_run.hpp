@@ -27,6 +27,13 @@ struct RockingSetup {
     double theta0_of_alpha = 0.5;  // theta0 = this x atan(bw / bh)
 };
 
+// The tests' setting (test_rocking.cpp, test_rocking_long.cpp): 0.01 m pads, E 1e11 Pa, k_n 1e11 Pa/m, e 0.2.
+inline RockingSetup housner_setting(double T) {
+    RockingSetup s;
+    s.foot = 0.01, s.h = 0.05, s.E = 1e11, s.kn = 1e11, s.e = 0.2, s.T = T;
+    return s;
+}
+
 struct RockingResult {
     RigidRocking rigid;
     double theta0 = 0, x_p = 0;

@@ -21,8 +21,7 @@ using namespace contact_test;
 TEST_CASE("engine rocking: a block on its corners with restitution 0.2 rocks as Housner's rigid block, first two "
           "impacts within 2 %, no hop",
           "[engine][regression]") {
-    RockingSetup s;
-    s.foot = 0.01, s.h = 0.05, s.E = 1e11, s.kn = 1e11, s.e = 0.2, s.T = 1.0;
+    const RockingSetup s = housner_setting(1.0);
     const RockingResult r = rock(s, "rocking");
     std::vector<double> rt, ra;
     print_rocking(r, s, rt, ra);

@@ -18,8 +18,7 @@ using namespace contact_test;
 
 TEST_CASE("engine rocking over five impacts: impact times and r per impact within 2 % of the rigid block, no hop",
           "[engine][regression]") {
-    RockingSetup s;
-    s.foot = 0.01, s.h = 0.05, s.E = 1e11, s.kn = 1e11, s.e = 0.2, s.T = 3.0;
+    const RockingSetup s = housner_setting(3.0);
     const RockingResult r = rock(s, "rocking_long");
     std::vector<double> rt, ra;
     print_rocking(r, s, rt, ra);
