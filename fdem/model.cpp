@@ -182,12 +182,10 @@ Model build_model(const CaseSpec& spec, mesh::Topology topo) {
     return md;
 }
 
-double triangle_omega2(const double* p, const int* n, const Material& m, Plane plane, double mass_scale) {
-    // Largest eigenvalue of K_e w = omega^2 M_e w for the constant-strain triangle with lumped mass: K_e = t A B^T D B,
-    // M_e = (rho t A / 3) I, so omega^2 = 3 lambda_max(B^T D B) / rho = 3 lambda_max(D^1/2 (B B^T) D^1/2) / rho, a 3 x 3
-    // problem (B: strain-displacement matrix, Voigt order xx, yy, 2xy). The estimate h_min / c_p used before is up to 18 %
-    // above the exact 2 / omega (equilateral 16 %, a 1 x 0.3 skew triangle 18 %), which left no margin at safety 0.8 where a
-    // node belongs to one or two triangles (coarse meshes of blocks).
+namespace {
+
+// B B^T of the constant-strain triangle (Voigt order xx, yy, 2xy) and its plane elasticity matrix D.
+void triangle_gram(const double* p, const int* n, Eigen::Matrix3d& G) {
     const double x[3] = {p[2 * n[0]], p[2 * n[1]], p[2 * n[2]]}, y[3] = {p[2 * n[0] + 1], p[2 * n[1] + 1], p[2 * n[2] + 1]};
     const double det = (x[1] - x[0]) * (y[2] - y[0]) - (x[2] - x[0]) * (y[1] - y[0]);  // 2 A
     double bb = 0, cc = 0, bc = 0;  // sums over the nodes of dN/dx^2, dN/dy^2, dN/dx dN/dy
@@ -196,23 +194,72 @@ double triangle_omega2(const double* p, const int* n, const Material& m, Plane p
         const double b = (y[j] - y[k]) / det, c = (x[k] - x[j]) / det;
         bb += b * b, cc += c * c, bc += b * c;
     }
-    Eigen::Matrix3d G;  // B B^T
     G << bb, 0, bc, 0, cc, bc, bc, bc, bb + cc;
+}
+
+Eigen::Matrix3d plane_elasticity(const Material& m, Plane plane) {
     double l, mu;  // plane Lame constants: D = [[l + 2 mu, l, 0], [l, l + 2 mu, 0], [0, 0, mu]]
     mu = m.E / (2 * (1 + m.nu));
     l = plane == Plane::stress ? m.E * m.nu / (1 - m.nu * m.nu) : m.E * m.nu / ((1 + m.nu) * (1 - 2 * m.nu));
     Eigen::Matrix3d D;
     D << l + 2 * mu, l, 0, l, l + 2 * mu, 0, 0, 0, mu;
+    return D;
+}
+
+}  // namespace
+
+double triangle_omega2(const double* p, const int* n, const Material& m, Plane plane, double mass_scale) {
+    // Largest eigenvalue of K_e w = omega^2 M_e w for the constant-strain triangle with lumped mass: K_e = t A B^T D B,
+    // M_e = (rho t A / 3) I, so omega^2 = 3 lambda_max(B^T D B) / rho = 3 lambda_max(D^1/2 (B B^T) D^1/2) / rho, a 3 x 3
+    // problem (B: strain-displacement matrix, Voigt order xx, yy, 2xy). The estimate h_min / c_p used before is up to 18 %
+    // above the exact 2 / omega (equilateral 16 %, a 1 x 0.3 skew triangle 18 %), which left no margin at safety 0.8 where a
+    // node belongs to one or two triangles (coarse meshes of blocks).
+    Eigen::Matrix3d G;  // B B^T
+    triangle_gram(p, n, G);
+    const Eigen::Matrix3d D = plane_elasticity(m, plane);
     const Eigen::Matrix3d Dh = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(D).operatorSqrt();
     const Eigen::Matrix3d S = Dh * G * Dh;
     const double lmax = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(S, Eigen::EigenvaluesOnly).eigenvalues().maxCoeff();
     return 3.0 * lmax / (m.density * mass_scale);
 }
 
+double triangle_damped_factor(const double* p, const int* n, const Material& m, Plane plane, double mass_scale,
+                              double eta, double alpha) {
+    if (!(eta > 0)) return damped_step_factor(0.0, alpha);
+    // Central differences with the viscous force lagged (from v^{n-1/2}) and local damping alpha are stable while
+    // (1 + alpha) lambda_max(M^-1 (dt^2 K + 2 dt C)) <= 4 (the energy condition 4 M - dt^2 K - 2 dt C > 0, here with
+    // the local damping's factor 1 + alpha of the damped_step_factor derivation). For the triangle with lumped mass,
+    // M_e^-1 (dt^2 K_e + 2 dt C_e) = (3 / rho) B^T (dt^2 D + 2 dt eta W) B, W = diag(1, 1, 1/2) the viscous stress
+    // eta sym(L) in Voigt form (fdem/triangle.hpp); its largest eigenvalue is that of G^1/2 (dt^2 D + 2 dt eta W) G^1/2,
+    // G = B B^T. K_e and C_e are not proportional (C_e has no lambda part) and the highest viscous mode is damped at
+    // 1.6-2.3 times the nominal xi of eta = xi 2 h sqrt(E rho) (equilateral, nu 0.2: 1.90), so damped_step_factor(xi)
+    // of the nominal xi is not a limit. The largest stable dt is found by bisection between the bound that adds the
+    // two largest eigenvalues separately (below the limit) and the smaller of the two single-term limits (above it).
+    Eigen::Matrix3d G;
+    triangle_gram(p, n, G);
+    const Eigen::Matrix3d Gh = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(G).operatorSqrt();
+    const Eigen::Matrix3d W = Eigen::Vector3d(1.0, 1.0, 0.5).asDiagonal();
+    const Eigen::Matrix3d A = Gh * plane_elasticity(m, plane) * Gh, B = Gh * W * Gh;
+    const double r = 3.0 / (m.density * mass_scale), lim = 4.0 / (1.0 + alpha);
+    auto lmax = [](const Eigen::Matrix3d& S) {
+        return Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(S, Eigen::EigenvaluesOnly).eigenvalues().maxCoeff();
+    };
+    const double w2 = r * lmax(A), c = eta * r * lmax(B);  // omega_e^2 (1/s^2), the largest eigenvalue of M^-1 C (1/s)
+    const double w = std::sqrt(w2);
+    double lo = (std::sqrt(c * c + w2 * lim) - c) / w2;        // dt^2 w2 + 2 dt c = lim (the eigenvalues added)
+    double hi = std::min(std::sqrt(lim / w2), lim / (2.0 * c));  // either term alone at the limit
+    for (int it = 0; it < 60 && hi - lo > 1e-12 * hi; ++it) {
+        const double mid = 0.5 * (lo + hi);
+        (r * lmax(mid * mid * A + 2.0 * mid * eta * B) <= lim ? lo : hi) = mid;
+    }
+    return 0.5 * lo * w;
+}
+
 void add_triangle_node_stiffness(const CaseSpec& spec, const Model& model, const int* rep, double* k, double alpha) {
     for (int e = 0; e < model.n_triangles(); ++e) {
         const Material& m = spec.materials[model.tri_material[e]];
-        const double f = damped_step_factor(m.viscous_damping, alpha);
+        const double f = triangle_damped_factor(model.X.data(), model.tris[e].n, m, spec.plane, spec.mass_scale,
+                                                model.tris[e].eta, alpha);
         const double w2 = triangle_omega2(model.X.data(), model.tris[e].n, m, spec.plane, spec.mass_scale) / (f * f);
         const double m3 = m.density * spec.mass_scale * model.tris[e].A0t / 3.0;  // kg
         for (int j = 0; j < 3; ++j) {
@@ -231,7 +278,9 @@ StepLimit triangle_step_limit(const CaseSpec& spec, const Model& model, double a
     for (int e = 0; e < model.n_triangles(); ++e) {
         const Material& m = spec.materials[model.tri_material[e]];
         const double w2 = triangle_omega2(model.X.data(), model.tris[e].n, m, spec.plane, spec.mass_scale);
-        const double dt = 2.0 / std::sqrt(w2) * damped_step_factor(m.viscous_damping, alpha);
+        const double dt = 2.0 / std::sqrt(w2) *
+                          triangle_damped_factor(model.X.data(), model.tris[e].n, m, spec.plane, spec.mass_scale,
+                                                 model.tris[e].eta, alpha);
         if (dt < lim.dt) lim.dt = dt, lim.element = e;
     }
     return lim;

@@ -62,7 +62,7 @@ Model build_model(const CaseSpec& spec, mesh::Topology topo);
 
 // Stable time step of the triangles alone: min over triangles of 2 / omega_e, omega_e the exact highest frequency of the
 // lumped-mass constant-strain triangle (triangle_omega2), reduced for viscous damping and local damping alpha by
-// damped_step_factor(xi, alpha) ([M04] ch. 4). Returns the limit (s) and the triangle that sets it.
+// the triangle's damped factor (triangle_damped_factor). Returns the limit (s) and the triangle that sets it.
 // The damped factor of the central-difference step: dt <= (2 / omega) damped_step_factor(xi, alpha) for a mode of
 // frequency omega with viscous damping at a fraction xi of critical, its force lagged half a step as the engine
 // evaluates it, under local damping alpha ([C79]: -alpha |f| sign(v)). In the highest (alternating) mode,
@@ -81,12 +81,17 @@ StepLimit triangle_step_limit(const CaseSpec& spec, const Model& model, double a
 
 // The triangles' share of the assembled system's nodal bound (README.md 'Time step'): adds to k[node] (or to
 // k[rep[node]] when rep is given: tied copies that move as one) sum over the node's triangles of omega_e^2 m_e / 3
-// (N/m), omega_e the triangle's highest frequency (damped: divided by damped_step_factor(xi, alpha)) and m_e / 3 its lumped
+// (N/m), omega_e the triangle's highest frequency (damped: divided by triangle_damped_factor) and m_e / 3 its lumped
 // share at mass_scale. With u^T K_e u <= omega_e^2 u^T M_e u per triangle (the element eigenvalue inequality behind
 // the element step bound, Belytschko, Liu & Moran, Nonlinear Finite Elements for Continua and Structures, 2000, §6.3),
 // u^T K u <= sum_i k_i u_i^2 for the triangles, so the node's k / m bounds omega^2 (Rayleigh quotient) together with
 // the springs' Gershgorin row sums.
 void add_triangle_node_stiffness(const CaseSpec& spec, const Model& model, const int* rep, double* k, double alpha = 0.0);
+
+// The triangle's damped factor f_e: its stable step is (2 / omega_e) f_e under its viscous coefficient eta (Pa s,
+// TriangleRef::eta) and local damping alpha; damped_step_factor(0, alpha) when eta = 0.
+double triangle_damped_factor(const double* p, const int* n, const Material& m, Plane plane, double mass_scale,
+                              double eta, double alpha);
 
 // omega_e^2 (1/s^2) of triangle n (node indices into the coordinates p) of material m at the given mass scaling.
 double triangle_omega2(const double* p, const int* n, const Material& m, Plane plane, double mass_scale);

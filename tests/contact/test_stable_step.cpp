@@ -200,7 +200,7 @@ TEST_CASE("time step: the faces of intact cohesive elements join the contact cou
 namespace {
 
 // A lone triangle, free, pulled at its apex (no supports: its highest mode is the element's, at the bound).
-std::string lone_triangle_case(double alpha, double safety, const std::string& dir) {
+std::string lone_triangle_case(double alpha, double safety, const std::string& dir, double xi = 0.0) {
     testing::write_text(std::filesystem::path(dir) / "tri.geo",
                         "Point(1) = {0, 0, 0, 1.0};\nPoint(2) = {0.1, 0, 0, 1.0};\nPoint(3) = {0.03, 0.09, 0, 1.0};\n"
                         "Line(1) = {1, 2};\nLine(2) = {2, 3};\nLine(3) = {3, 1};\nCurve Loop(1) = {1, 2, 3};\n"
@@ -208,7 +208,8 @@ std::string lone_triangle_case(double alpha, double safety, const std::string& d
     std::ostringstream c;
     c.precision(17);
     c << "[case]\nname = \"lone\"\nthickness = 0.1\n[geometry]\ntype = \"gmsh\"\nfile = \"tri.geo\"\n"
-      << "[materials.m]\nE = 1e10\nnu = 0.2\ndensity = 2000.0\n[regions]\nbody = \"m\"\n[numerics]\nsafety = " << safety
+      << "[materials.m]\nE = 1e10\nnu = 0.2\ndensity = 2000.0\nviscous_damping = " << xi
+      << "\n[regions]\nbody = \"m\"\n[numerics]\nsafety = " << safety
       << "\n[[stages]]\nname = \"pull\"\nduration = 100.0\nlocal_damping = " << alpha
       << "\n  [[stages.loads]]\n  group = \"apex\"\n  force = [3000.0, -5000.0]\n"
       << "[[stages]]\nname = \"free\"\nduration = 100.0\nlocal_damping = 0.0\n";
@@ -216,9 +217,9 @@ std::string lone_triangle_case(double alpha, double safety, const std::string& d
 }
 
 // Steps of the pull stage; false when the run stopped (an inverted triangle, energy grown without work).
-bool pull_lone_triangle(double alpha, double safety, int steps, double* dt = nullptr) {
+bool pull_lone_triangle(double alpha, double safety, int steps, double* dt = nullptr, double xi = 0.0) {
     const auto dir = testing::tmp_dir("stable_step_lone");
-    fdem::Simulation sim = simulation_of(testing::write_text(dir / "case.toml", lone_triangle_case(alpha, safety, dir.string())));
+    fdem::Simulation sim = simulation_of(testing::write_text(dir / "case.toml", lone_triangle_case(alpha, safety, dir.string(), xi)));
     if (dt) *dt = sim.dt();
     try {
         sim.begin_stage(0);
@@ -285,5 +286,31 @@ TEST_CASE("time step: viscous element damping with local damping 0.8 is stable a
                     e.elastic, e.external, e.kinetic);
         CHECK(e.elastic == Approx(0.5 * e.external).epsilon(1e-3));
         CHECK(e.kinetic < 1e-9 * e.elastic);
+    }
+}
+
+// VISCOUS DAMPING AND THE STEP (fdem/model.hpp triangle_damped_factor). The viscous stress eta sym(L) of a triangle
+// with viscous_damping xi damps its highest mode at about twice xi (no lambda part, eta from the smallest altitude),
+// so the damped factor of the nominal xi, sqrt(xi^2 + 1) - xi, is above the triangle's limit: the lone triangle pulled
+// at its apex at that step inverts. The step now takes each triangle's exact damped limit.
+TEST_CASE("time step: a viscous triangle at the default safety holds, and at the step of its nominal damping ratio "
+          "it inverts",
+          "[engine][regression]") {
+    for (double xi : {0.5, 1.0}) {
+        INFO("viscous_damping " << xi);
+        double dt = 0;
+        CHECK(pull_lone_triangle(0.0, 0.8, 20000, &dt, xi));
+        // The step of the nominal rule at the default safety, as a safety factor on the exact limit dt / 0.8.
+        const auto dir = testing::tmp_dir("stable_step_lone_nominal");
+        fdem::Simulation sim =
+            simulation_of(testing::write_text(dir / "case.toml", lone_triangle_case(0.0, 0.8, dir.string(), xi)));
+        const fdem::Model& md = sim.model();
+        const double w2 = fdem::triangle_omega2(md.X.data(), md.tris[0].n, sim.spec().materials[md.tri_material[0]],
+                                                sim.spec().plane, sim.spec().mass_scale);
+        const double dt_nominal = 0.8 * 2.0 / std::sqrt(w2) * fdem::damped_step_factor(xi, 0.0);
+        std::printf("[stable step viscous triangle] xi %.1f: step %.4e s, nominal rule %.4e s (%.3f x)\n", xi, dt,
+                    dt_nominal, dt_nominal / dt);
+        CHECK(dt_nominal > 1.3 * dt);
+        CHECK_FALSE(pull_lone_triangle(0.0, 0.8 * dt_nominal / dt, 20000, nullptr, xi));
     }
 }

@@ -353,3 +353,67 @@ TEST_CASE("triangle time step: omega_e is the lumped-mass CST's exact highest fr
             CHECK(w2 == Approx(w2_exact).epsilon(1e-6));
         }
 }
+
+// The damped step of a viscous triangle: central differences with the viscous force from v^{n-1/2} are stable while
+// the spectral radius of the step's amplification matrix [x; v] -> [x + dt v+; v+], v+ = v + dt M^-1 (-K x - C v),
+// stays at 1. K and C from central differences of the engine's triangle_forces in x and in v at the reference state,
+// M lumped. The limit triangle_damped_factor gives, (2 / omega_e) f_e, must be that threshold: at 0.999 of it the
+// radius is 1, at 1.002 above 1. The nominal damped_step_factor(xi) of eta = xi 2 h sqrt(E rho) is not (it is above
+// the threshold for every shape: the highest viscous mode is damped at about twice xi).
+TEST_CASE("triangle time step: the viscous triangle's damped limit is the threshold of the lagged-viscosity update",
+          "[unit]") {
+    const double shapes[][6] = {{0, 0, 1, 0, 0.5, 0.8660254037844386}, {0, 0, 1, 0, 0, 1}, {0, 0, 2, 0, 0, 1},
+                                {0, 0, 1, 0, 0.9, 0.3}, {0.1, 0.2, 0.4, 0.25, 0.2, 0.6}};
+    for (Plane plane : {Plane::stress, Plane::strain})
+        for (const auto& p : shapes)
+            for (double xi : {0.1, 0.5, 1.0}) {
+                Material mat;
+                mat.E = 3.0e10, mat.nu = 0.2, mat.density = 2500.0;
+                const double t = 0.2, scale = 1.0;
+                const double det = (p[2] - p[0]) * (p[5] - p[1]) - (p[4] - p[0]) * (p[3] - p[1]);
+                const double d00 = p[2] - p[0], d10 = p[3] - p[1], d01 = p[4] - p[0], d11 = p[5] - p[1];
+                TriangleRef tr{};
+                tr.n[0] = 0, tr.n[1] = 1, tr.n[2] = 2;
+                tr.Dinv[0] = d11 / det, tr.Dinv[1] = -d01 / det, tr.Dinv[2] = -d10 / det, tr.Dinv[3] = d00 / det;
+                tr.A0t = 0.5 * det * t;
+                const double l0 = std::hypot(d00, d10), l1 = std::hypot(d01, d11), l2 = std::hypot(d01 - d00, d11 - d10);
+                tr.eta = xi * 2 * (det / std::max({l0, l1, l2})) * std::sqrt(mat.E * mat.density * scale);
+                MaterialConst mc;
+                mc.mu = mat.E / (2 * (1 + mat.nu));
+                mc.lambda = plane == Plane::stress ? mat.E * mat.nu / (1 - mat.nu * mat.nu)
+                                                   : mat.E * mat.nu / ((1 + mat.nu) * (1 - 2 * mat.nu));
+                Eigen::Matrix<double, 6, 6> K, C;
+                const double h = 1e-7, hv = 1e-3, zero[6] = {0, 0, 0, 0, 0, 0};
+                for (int j = 0; j < 6; ++j) {
+                    double xp[6], xm[6], vp[6] = {0, 0, 0, 0, 0, 0}, vm[6] = {0, 0, 0, 0, 0, 0}, fp[6], fm[6], pw;
+                    for (int i = 0; i < 6; ++i) xp[i] = xm[i] = p[i];
+                    xp[j] += h, xm[j] -= h;
+                    triangle_forces(tr, mc, xp, zero, fp, pw);
+                    triangle_forces(tr, mc, xm, zero, fm, pw);
+                    for (int i = 0; i < 6; ++i) K(i, j) = -(fp[i] - fm[i]) / (2 * h);
+                    vp[j] = hv, vm[j] = -hv;
+                    triangle_forces(tr, mc, p, vp, fp, pw);
+                    triangle_forces(tr, mc, p, vm, fm, pw);
+                    for (int i = 0; i < 6; ++i) C(i, j) = -(fp[i] - fm[i]) / (2 * hv);
+                }
+                const Eigen::Matrix<double, 6, 6> Ks = 0.5 * (K + K.transpose()), Cs = 0.5 * (C + C.transpose());
+                const double m = mat.density * scale * tr.A0t / 3.0;
+                const double w2 = triangle_omega2(p, tr.n, mat, plane, scale);
+                const double f = triangle_damped_factor(p, tr.n, mat, plane, scale, tr.eta, 0.0);
+                const double dt_lim = 2.0 / std::sqrt(w2) * f;
+                auto radius = [&](double dt) {
+                    using M6 = Eigen::Matrix<double, 6, 6>;
+                    const M6 I = M6::Identity(), Vk = I - dt / m * Cs, Xk = -dt / m * Ks;
+                    Eigen::Matrix<double, 12, 12> T;
+                    T << I + dt * Xk, dt * Vk, Xk, Vk;
+                    return Eigen::EigenSolver<Eigen::Matrix<double, 12, 12>>(T, false).eigenvalues().cwiseAbs().maxCoeff();
+                };
+                INFO("plane " << (plane == Plane::stress ? "stress" : "strain") << ", shape " << p[4] << ", " << p[5]
+                              << ", xi " << xi << ", f_e " << f << ", nominal " << damped_step_factor(xi, 0.0));
+                CHECK(radius(0.999 * dt_lim) < 1.0 + 1e-6);
+                CHECK(radius(1.002 * dt_lim) > 1.0 + 1e-6);
+                CHECK(f < damped_step_factor(xi, 0.0));
+                // Without viscosity the factor is the undamped one, the same bits as damped_step_factor(0, alpha).
+                CHECK(triangle_damped_factor(p, tr.n, mat, plane, scale, 0.0, 0.7) == damped_step_factor(0.0, 0.7));
+            }
+}
