@@ -18,8 +18,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 
-class ToolError(Exception):
-    """Bad input or a state the tools cannot work with; the message is shown to the user as one line."""
+from .errors import ToolError  # noqa: F401  (defined apart so that curves.py can raise it too)
+from .curves import loading_work_sign, resolve_sign  # noqa: F401  (the load sign rule; names kept here too)
 
 
 REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
@@ -285,41 +285,9 @@ class Curve:
 
 
 # ----------------------------------------------------------------------------------------------
-# The load sign rule (one rule for plot, hysteresis, eeep and validate; README "Curves, signs and units")
+# The load sign rule: curves.loading_work_sign and curves.resolve_sign (README "Curves, signs and units")
 
 SIGN_CHOICES = ("auto", "1", "-1")
-
-
-def loading_work_sign(x, y) -> float:
-    """+1 or -1: the sign that makes the load do positive work on the loading branches of the curve.
-
-    A loading branch is a segment along which the displacement moves away from its starting value
-    (|x - x0| grows). Along it, an applied load does positive work on the structure: W+ = sum over those segments
-    of (y_k + y_k+1)/2 (x_k+1 - x_k) > 0; a reaction (the structure pushing back on its support) does negative
-    work. So the sign is that of W+ (+1 when W+ = 0). Unlike the covariance of load and displacement, W+ does
-    not change sign when the load softens after its peak (a pushover whose load falls from 40 to 10 kN), and it
-    reads cyclic loops too (every excursion away from zero is a loading branch)."""
-    x, y = np.asarray(x, float), np.asarray(y, float)
-    if len(x) < 2:
-        return 1.0
-    r = x - x[0]
-    dx = np.diff(x)
-    away = (r[1:] + r[:-1]) * dx > 0  # the midpoint of the segment and its step have the same sign
-    w = float(np.sum(0.5 * (y[1:] + y[:-1])[away] * dx[away]))
-    return -1.0 if w < 0 else 1.0
-
-
-def resolve_sign(curve: "Curve", given: str | float | None = "auto") -> tuple:
-    """(sign, rule) of a curve's load: the command line's --load-sign (1 or -1) first, then the sign the case
-    states (its [output] curve.sign, through the run folder), else loading_work_sign."""
-    if given not in (None, "auto"):
-        v = float(given)
-        if v not in (1.0, -1.0):
-            raise ToolError(f"--load-sign must be auto, 1 or -1, got '{given}'")
-        return v, "given (--load-sign)"
-    if curve.sign is not None:
-        return float(curve.sign), curve.sign_source or "stated by the case"
-    return loading_work_sign(curve.x, curve.y), "loading work (the load does positive work as the displacement grows)"
 
 
 def _case_curve_sign(run: "Run") -> tuple:

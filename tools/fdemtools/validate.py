@@ -69,14 +69,11 @@ import numpy as np
 from .batch import Batch, collect, default_jobs, fdem_binary, is_finished, parse_assignment, run_name
 from .eeep import eeep
 from .common import SIGN_CHOICES, ToolError, load_curve, load_run, resolved_case, stage_curve, write_csv
+from .curves import (FIRST_PEAK_DROP, FIRST_PEAK_FLOOR, PAST_PEAK_DROP, PEAK_RULES, PLATEAU_REACH,  # noqa: F401
+                     cut_at, oscillation, peak_index, peak_up_to, plateau_or, polyline_area, smooth_curve)
 
 QS_LIMIT = 0.02  # the peak may change by less than this when the rate is halved
-PAST_PEAK_DROP = 0.05  # the load at the end must be this far below the peak (fraction of it) to call it a peak
 BOUND_TOL = 0.02  # a peak more than this fraction above its case's rigid-block bound is flagged (it cannot be right)
-PLATEAU_REACH = 0.75  # a curve with less drop whose largest load lies before this fraction of its travel: a plateau
-FIRST_PEAK_DROP = 0.05  # --peak first: the load must fall this far below the largest value so far (fraction)
-FIRST_PEAK_FLOOR = 0.5  # --peak first: only a maximum of at least this fraction of the largest load is a peak
-PEAK_RULES = ("largest", "first")
 SAME_END_RTOL = 0.005  # two runs whose control displacements reached differ by less than this (relative) end alike
 
 
@@ -193,63 +190,12 @@ def _float(v):
 # Results of one run
 
 
-def smooth_curve(x: np.ndarray, y: np.ndarray, window: float) -> np.ndarray:
-    """y averaged over the rows whose x lies within window / 2 of each row's x (x in the same unit as window; x is
-    the control displacement, made non-decreasing first so that a stalled or jittering actuator does not break the
-    search). Near the ends the window is cut (one-sided mean). window <= 0 returns y unchanged."""
-    y = np.asarray(y, float)
-    if window <= 0 or len(y) == 0:
-        return y
-    xm = np.maximum.accumulate(np.asarray(x, float))
-    cs = np.concatenate(([0.0], np.cumsum(y)))
-    lo = np.searchsorted(xm, xm - 0.5 * window, side="left")
-    hi = np.searchsorted(xm, xm + 0.5 * window, side="right")
-    return (cs[hi] - cs[lo]) / (hi - lo)
-
-
-def peak_index(y: np.ndarray, rule: str = "largest") -> tuple:
-    """(index of the peak, whether the curve fell past it) by --peak's rule. largest: the first row of the largest
-    value, past when the last row is PAST_PEAK_DROP below it. first: the running maximum at the first row that lies
-    FIRST_PEAK_DROP below it, counting only maxima of at least FIRST_PEAK_FLOOR times the curve's largest value (so
-    the inertia spike when an actuator starts is not a peak); then past by construction. A curve that never falls
-    that far gives its largest value and past = False (None when that value is not positive)."""
-    y = np.asarray(y, float)
-    if rule == "first" and len(y):
-        floor = FIRST_PEAK_FLOOR * float(np.max(y))
-        best = 0
-        for k in range(1, len(y)):
-            if y[k] > y[best]:
-                best = k
-            elif y[best] >= floor and y[k] <= (1.0 - FIRST_PEAK_DROP) * y[best]:
-                return best, True
-        rule = "largest"
-    if rule != "largest":
-        raise ToolError(f"--peak must be one of {', '.join(PEAK_RULES)}, got '{rule}'")
-    i = int(np.argmax(y))
-    return i, (None if not y[i] > 0 else bool((y[i] - y[-1]) / y[i] >= PAST_PEAK_DROP))
-
-
-def plateau_or(past, x: np.ndarray, y: np.ndarray, i: int):
-    """"plateau" for a curve not past its peak (past False) whose largest load y[i] lies well inside the run (at or
-    before PLATEAU_REACH of its travel) and that ends below it, by less than PAST_PEAK_DROP: an inner maximum followed
-    by a slow fall (a rigid mechanism losing load to the P-delta of its weights); otherwise `past` unchanged."""
-    if past is False and len(x) and float(x[i]) <= PLATEAU_REACH * float(np.max(x)) and float(y[-1]) < float(y[i]):
-        return "plateau"
-    return past
-
-
-def cut_at(x: np.ndarray, d: float) -> int:
-    """Number of rows of a curve up to and including the first row whose control displacement reaches d (m)."""
-    hit = np.nonzero(np.asarray(x) >= d * (1 - 1e-12))[0]
-    return int(hit[0]) + 1 if len(hit) else len(x)
-
-
 def curve_metrics(run_dir: str, smooth_m: float = 0.0, rule: str = "largest", up_to_m: float | None = None,
                   load_sign: str = "auto") -> dict:
     """Peak load (N), displacement at peak (m, from the start of the stage) and initial stiffness (N/m) of the
     load-displacement curve in the run's last stage (the loading after precompression); the load at the last
     history row (N), the drop after the peak (fraction of the peak) and the largest control displacement reached
-    (m). The load is taken with the tools' one sign rule (common.resolve_sign: --load-sign, else the case's
+    (m). The load is taken with the tools' one sign rule (curves.resolve_sign: --load-sign, else the case's
     output.curve.sign, else the sign that makes the loading work positive), the same curve `eeep` reads
     (common.stage_curve). `x`, `y` (|x - x0| in m, signed load in N) are kept for comparing two runs over the
     same range. With
@@ -358,7 +304,7 @@ def damping_work_shares(run, stage, c, n: int | None = None) -> dict:
         return out
     keep = h.numeric("stage") == stage
     xs, ys = np.asarray(c.x, float)[:n], np.asarray(c.y, float)[:n]
-    work = abs(float(np.sum(0.5 * (ys[1:] + ys[:-1]) * np.diff(xs)))) if len(xs) > 1 else 0.0
+    work = abs(polyline_area(xs, ys)) if len(xs) > 1 else 0.0
     if not work > 0:
         return out
     for col, key in (("D_damp", "local_damping_work_share"), ("D_visc", "viscous_work_share")):
@@ -368,29 +314,12 @@ def damping_work_shares(run, stage, c, n: int | None = None) -> dict:
     return out
 
 
-def oscillation(x: np.ndarray, raw: np.ndarray, smooth: np.ndarray, window: float) -> float:
-    """Largest |raw - smoothed| (N) over the rows whose window is whole (x - window / 2 >= 0 and x + window / 2 <=
-    the largest x): the one-sided means at the two ends of the curve would count the curve's own slope there."""
-    if window <= 0:
-        return 0.0
-    whole = (x - 0.5 * window >= 0) & (x + 0.5 * window <= np.max(x))
-    return float(np.max(np.abs(raw - smooth)[whole])) if np.any(whole) else float("nan")
-
-
 def past_peak(past) -> str | None:
     if past is None:
         return None
     if past == "plateau":
         return "plateau (an inner maximum, then falling less than 5 %)"
     return "yes" if past else "no (still rising / flat)"
-
-
-def peak_up_to(m: dict, d: float) -> float:
-    """The peak (N) of a run's curve, by the run's --peak rule, up to the first row where the control displacement
-    reaches d (m)."""
-    x, y = m["x"], m["y"]
-    y = y[: cut_at(x, d)]
-    return float(y[peak_index(y, m.get("rule", "largest"))[0]])
 
 
 def compare_rates(m_full: dict, m_half: dict) -> dict:
