@@ -226,9 +226,7 @@ int main(int argc, char** argv) {
             }
             std::cout << a.case_file << ": ok: " << sim.model().n_triangles() << " triangles, " << sim.model().n_nodes()
                       << " nodes, " << sim.model().cohesive.size() << " cohesive elements, " << spec.stages.size()
-                      << " stage(s), time step " << sim.dt() << " s, case hash " << [&spec] {
-                             return hash_hex(spec);
-                         }() << "\n";
+                      << " stage(s), time step " << sim.dt() << " s, case hash " << hash_hex(spec) << "\n";
             for (const std::string& note : sim.interactions().penalty_notes()) std::cout << note << "\n";
             return 0;
         }
