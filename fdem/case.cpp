@@ -13,6 +13,7 @@
 #include <set>
 #include <sstream>
 
+#include "fdem/case_json.hpp"
 #include "fdem/case_reader.hpp"
 #include "fdem/common/errors.hpp"
 
@@ -471,9 +472,9 @@ static void read_numerics(Ctx& ctx, Reader& top, CaseSpec& spec) {
     }
 }
 
-CaseSpec load_case(const std::string& path, const std::vector<std::string>& overrides) {
-    namespace fs = std::filesystem;
-    if (!fs::exists(path)) throw InputError(path + ": no such case file");
+// The case file's TOML tree with the overrides applied in order (load_case, resolved_case_tree).
+static toml::table read_tree(const std::string& path, const std::vector<std::string>& overrides, Ctx& ctx) {
+    if (!std::filesystem::exists(path)) throw InputError(path + ": no such case file");
     toml::table root;
     try {
         root = toml::parse_file(path);
@@ -481,13 +482,25 @@ CaseSpec load_case(const std::string& path, const std::vector<std::string>& over
         throw InputError(path + ":" + std::to_string(e.source().begin.line) + ": TOML syntax error: " +
                          std::string(e.description()));
     }
+    for (const auto& o : overrides) apply_override(root, o, ctx);
+    return root;
+}
+
+toml::table resolved_case_tree(const std::string& path, const std::vector<std::string>& overrides) {
     Ctx ctx;
     ctx.file = path;
+    return read_tree(path, overrides, ctx);
+}
+
+CaseSpec load_case(const std::string& path, const std::vector<std::string>& overrides) {
+    namespace fs = std::filesystem;
+    Ctx ctx;
+    ctx.file = path;
+    toml::table root = read_tree(path, overrides, ctx);
     CaseSpec spec;
     spec.file = path;
     spec.dir = fs::path(path).parent_path().string();
     for (const auto& o : overrides) {
-        apply_override(root, o, ctx);
         if (!o.empty() && o[0] == '!') {
             spec.overrides.emplace_back(o.substr(1), "(unset)");
             continue;

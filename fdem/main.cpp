@@ -14,6 +14,7 @@
 
 #include "fdem/version.hpp"
 #include "fdem/case.hpp"
+#include "fdem/case_json.hpp"
 #include "fdem/omp_env.hpp"
 #include "fdem/common/errors.hpp"
 #include "fdem/limit_export.hpp"
@@ -35,8 +36,8 @@ const char* kUsage =
     "      snapshots/*.vtu + run.pvd, run.log, checkpoint.bin\n"
     "  fdem run CASE.toml --restart DIR [-s KEY=VALUE ...] [-t N] [-q]\n"
     "      continue the run in DIR from its checkpoint.bin (same case, same --set options, same fdem build)\n"
-    "  fdem check CASE.toml [-s KEY=VALUE ...]\n"
-    "      validate a case and its mesh without running\n"
+    "  fdem check CASE.toml [-s KEY=VALUE ...] [--json]\n"
+    "      validate a case and its mesh without running; with --json, print the resolved case as one JSON object\n"
     "  fdem mesh CASE.toml [-o DIR] [-s KEY=VALUE ...]\n"
     "      mesh only: writes DIR/mesh.vtu (regions, bodies, edge classes) and DIR/limit_model.json (the rigid\n"
     "      bodies, joints, supports and loads of the last stage, for fdem-tools limit) and prints statistics\n"
@@ -56,6 +57,13 @@ const char* kUsage =
     "                       from the checkpoint's row\n"
     "  --progress S         when stderr is not a terminal (batch, cluster), a progress line in the log every\n"
     "                       S seconds of wall time (default 10): stage, time, steps/s, stage and run time left\n"
+    "  --json               fdem check: instead of the summary line, one JSON object on stdout (nothing else there):\n"
+    "                       case_file, case_hash (as in summary.json), overrides, case (the TOML after --set and\n"
+    "                       --unset), resolved (the values the run uses, defaults applied: geometry and mesh sizes,\n"
+    "                       numerics and the time step, materials, interfaces, monitors, stages with the damping each\n"
+    "                       runs with, output, curve and its sign, reference, the files the case reads; SI units,\n"
+    "                       null where nothing is given and nothing applies), mesh (counts), notes, warnings. Bad\n"
+    "                       input: the message on stderr, exit 1, nothing on stdout\n"
     "  -h, --help           this text\n"
     "\n"
     "signals: SIGINT, SIGTERM and SIGUSR1 (Slurm's --signal=USR1@SECONDS) finish the step, write a checkpoint and\n"
@@ -70,6 +78,7 @@ struct Args {
     int threads = 0;
     bool quiet = false;
     bool help = false;
+    bool json = false;  // fdem check --json
     double progress_interval = 10.0;  // s
 };
 
@@ -126,6 +135,9 @@ Args parse_args(int argc, char** argv) {
         } else if (s == "--quiet" || s == "-q") {
             no_value(s);
             a.quiet = true;
+        } else if (s == "--json") {
+            no_value(s);
+            a.json = true;
         } else if (s == "--help" || s == "-h") {
             no_value(s);
             a.help = true;
@@ -134,6 +146,45 @@ Args parse_args(int argc, char** argv) {
         else throw fdem::InputError("unexpected argument '" + s + "' (see fdem --help)");
     }
     return a;
+}
+
+// summary.json case_hash: the resolved case (its TOML after --set), as fdem check prints it.
+std::string hash_hex(const fdem::CaseSpec& spec) {
+    char hex[17];
+    std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(spec.resolved_hash));
+    return hex;
+}
+
+// fdem check --json: the case as the engine resolved it (fdem/case_json.hpp), with what building the model found.
+fdem::Json check_json(const Args& a, const fdem::CaseSpec& spec, const fdem::Simulation& sim,
+                      const std::vector<std::string>& warnings) {
+    fdem::Json j = fdem::Json::object();
+    j["case_file"] = a.case_file;
+    j["case_hash"] = hash_hex(spec);
+    fdem::Json ov = fdem::Json::array();
+    for (const auto& [k, v] : spec.overrides) {  // in order; an --unset KEY as [KEY, "(unset)"]
+        fdem::Json kv = fdem::Json::array();
+        kv.push_back(k);
+        kv.push_back(v);
+        ov.push_back(kv);
+    }
+    j["overrides"] = ov;
+    j["case"] = fdem::toml_to_json(fdem::resolved_case_tree(a.case_file, a.sets));
+    fdem::Json r = fdem::resolved_values_json(spec);
+    r["numerics"]["dt_s"] = sim.dt();  // the time step the run starts with
+    j["resolved"] = r;
+    fdem::Json mesh = fdem::Json::object();
+    mesh["triangles"] = static_cast<long long>(sim.model().n_triangles());
+    mesh["nodes"] = static_cast<long long>(sim.model().n_nodes());
+    mesh["cohesive_elements"] = static_cast<long long>(sim.model().cohesive.size());
+    j["mesh"] = mesh;
+    fdem::Json notes = fdem::Json::array();
+    for (const std::string& n : sim.interactions().penalty_notes()) notes.push_back(n);
+    j["notes"] = notes;
+    fdem::Json warn = fdem::Json::array();
+    for (const std::string& w : warnings) warn.push_back(w);
+    j["warnings"] = warn;
+    return j;
 }
 
 }  // namespace
@@ -159,21 +210,23 @@ int main(int argc, char** argv) {
         if (a.case_file.empty()) throw fdem::InputError("fdem " + a.command + ": no case file given");
         if (a.command != "run" && (!a.restart.empty() || a.stop_after_steps > 0))
             throw fdem::InputError("fdem " + a.command + ": --restart and --stop-after-steps belong to fdem run");
+        if (a.command != "check" && a.json) throw fdem::InputError("fdem " + a.command + ": --json belongs to fdem check");
         if (a.command == "check") {
             const fdem::CaseSpec spec = fdem::load_case(a.case_file, a.sets);
-            for (const std::string& w : fdem::plausibility_warnings(spec)) std::cerr << "warning: " << w << "\n";
+            const std::vector<std::string> warnings = fdem::plausibility_warnings(spec);
+            for (const std::string& w : warnings) std::cerr << "warning: " << w << "\n";
             fdem::RunOptions quiet;
             quiet.quiet = true;
             quiet.threads = a.threads;
             // Building the simulation validates the laws of contact and fracture too.
             const fdem::Simulation sim(spec, fdem::build_scene(spec), quiet);
+            if (a.json) {  // built whole before anything is written: an error leaves stdout empty
+                std::cout << check_json(a, spec, sim, warnings).dump();
+                return 0;
+            }
             std::cout << a.case_file << ": ok: " << sim.model().n_triangles() << " triangles, " << sim.model().n_nodes()
                       << " nodes, " << sim.model().cohesive.size() << " cohesive elements, " << spec.stages.size()
-                      << " stage(s), time step " << sim.dt() << " s, case hash " << [&spec] {
-                             char hex[17];  // summary.json case_hash: the resolved case (its TOML after --set)
-                             std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(spec.resolved_hash));
-                             return std::string(hex);
-                         }() << "\n";
+                      << " stage(s), time step " << sim.dt() << " s, case hash " << hash_hex(spec) << "\n";
             for (const std::string& note : sim.interactions().penalty_notes()) std::cout << note << "\n";
             return 0;
         }

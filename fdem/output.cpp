@@ -236,7 +236,15 @@ void Json::dump_to(std::string& out, int indent, int depth) const {
     switch (kind_) {
         case Null: out += "null"; break;
         case Bool: out += num_ != 0 ? "true" : "false"; break;
-        case Number: out += std::isfinite(num_) ? format_double(num_) : "null"; break;
+        case Number:
+            if (!std::isfinite(num_)) {
+                out += "null";
+            } else {
+                const std::string t = format_double(num_);
+                out += t;
+                if (real_ && t.find_first_of(".e") == std::string::npos) out += ".0";
+            }
+            break;
         case String: escape(out, str_); break;
         case Array:
             if (items_.empty()) { out += "[]"; break; }

@@ -78,6 +78,9 @@ public:
     Json(bool v) : kind_(Bool), num_(v ? 1 : 0) {}
     Json(const char* s) : kind_(String), str_(s) {}
     Json(std::string s) : kind_(String), str_(std::move(s)) {}
+    // A number that is written with a decimal point or an exponent even when whole (1.0, not 1): a TOML float
+    // stays a float for the reader (fdem check --json's case tree).
+    static Json real(double v) { Json j(v); j.real_ = true; return j; }
     static Json object() { Json j; j.kind_ = Object; return j; }
     static Json array() { Json j; j.kind_ = Array; return j; }
     Json& operator[](const std::string& key);  // object member (created if absent)
@@ -87,6 +90,7 @@ public:
 private:
     enum Kind { Null, Bool, Number, String, Array, Object } kind_ = Null;
     double num_ = 0;
+    bool real_ = false;
     std::string str_;
     std::vector<std::pair<std::string, Json>> members_;  // objects
     std::vector<Json> items_;                            // arrays

@@ -523,3 +523,45 @@ TEST_CASE("fdem --unset KEY removes a case key so that its default applies, and 
     CHECK(none.code == 1);
     CHECK(none.err.find("--unset numerics.nothere: no such key") != std::string::npos);
 }
+
+TEST_CASE("fdem check --json prints the resolved case as one JSON object: the check's hash, the tree after --set, the "
+          "defaults applied; bad input leaves stdout empty",
+          "[unit]") {
+    const auto dir = testing::tmp_dir("cli_json");
+    // a description with a quote, a backslash, a tab and a newline: escaped, not cut
+    const std::string text = replace(kGood, "name = \"good\"", "name = \"good\"\ndescription = \"a \\\"b\\\" \\\\ c\\td\\ne\"");
+    const auto path = testing::write_text(dir / "case.toml", text);
+    const auto hash_of = [](const std::string& out) {
+        const std::size_t a = out.find("case hash ");
+        return a == std::string::npos ? std::string() : out.substr(a + 10, 16);
+    };
+    const auto plain = testing::run_fdem("check \"" + path + "\"", dir);
+    const auto js = testing::run_fdem("check \"" + path + "\" --json", dir);
+    INFO(js.err);
+    REQUIRE(js.code == 0);
+    REQUIRE(hash_of(plain.out).size() == 16);
+    CHECK(js.out.front() == '{');
+    CHECK(js.out.substr(js.out.size() - 2) == "}\n");
+    CHECK(js.out.find("\"case_hash\": \"" + hash_of(plain.out) + "\"") != std::string::npos);
+    CHECK(js.out.find("\"description\": \"a \\\"b\\\" \\\\ c\\td\\ne\"") != std::string::npos);
+    CHECK(js.out.find("\"E\": 1000000000.0") != std::string::npos);  // a TOML float stays a float in the tree
+    CHECK(js.out.find("\"safety\": 0.8") != std::string::npos);      // [numerics] absent: the default
+    CHECK(js.out.find("\"dt_automatic\": true") != std::string::npos);
+    CHECK(js.out.find("ok:") == std::string::npos);  // nothing but the object
+    // --set: the tree, the resolved value and the hash change, and the hash is still the check's
+    const auto set = testing::run_fdem("check \"" + path + "\" --set numerics.safety=0.5 --json", dir);
+    const auto set_plain = testing::run_fdem("check \"" + path + "\" --set numerics.safety=0.5", dir);
+    REQUIRE(set.code == 0);
+    CHECK(set.out.find("\"safety\": 0.5") != std::string::npos);
+    CHECK(set.out.find("\"numerics.safety\",\n      \"0.5\"") != std::string::npos);
+    CHECK(hash_of(set_plain.out) != hash_of(plain.out));
+    CHECK(set.out.find("\"case_hash\": \"" + hash_of(set_plain.out) + "\"") != std::string::npos);
+    // bad input: the message and exit 1, nothing on stdout
+    const auto bad = testing::run_fdem("check \"" + path + "\" --set numerics.bogus=1 --json", dir);
+    CHECK(bad.code == 1);
+    CHECK(bad.out.empty());
+    CHECK(bad.err.find("numerics.bogus") != std::string::npos);
+    const auto other = testing::run_fdem("mesh \"" + path + "\" --json", dir);
+    CHECK(other.code == 1);
+    CHECK(other.err.find("--json belongs to fdem check") != std::string::npos);
+}

@@ -19,16 +19,13 @@ import json
 import os
 import re
 import shlex
-import shutil
 import subprocess
 import sys
 import threading
 import time
 from concurrent.futures import ThreadPoolExecutor
 
-from .common import ToolError, read_summary, write_csv, write_json
-
-REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+from .common import REPO, ToolError, fdem_binary, read_summary, resolved_case, write_csv, write_json  # noqa: F401
 
 
 def split_values(text: str) -> list:
@@ -91,23 +88,12 @@ def run_name(params: dict) -> str:
     return f"{name}__{digest}"
 
 
-def fdem_binary(given: str | None, must_exist: bool = True) -> str:
-    """The fdem executable (absolute path). must_exist=False (dry runs): the path as it would be used."""
-    path = given or os.environ.get("FDEM_BIN") or os.path.join(REPO, "build", "fdem", "fdem")
-    resolved = shutil.which(path) if os.sep not in path else path
-    if not resolved or not os.path.isfile(resolved) or not os.access(resolved, os.X_OK):
-        if not must_exist:
-            return os.path.abspath(path) if os.sep in path else path
-        raise ToolError(f"fdem executable '{path}' not found (build it, set FDEM_BIN or give --fdem)")
-    return os.path.abspath(resolved)
-
-
 # ----------------------------------------------------------------------------------------------
 # Run fingerprints: what a run was made from. A completed run is reused only when its fingerprint matches the one
 # the batch would give it now (README "batch": Resumable).
 
 FINGERPRINT = "fingerprint.json"
-FINGERPRINT_VERSION = 1
+FINGERPRINT_VERSION = 2  # 2: the case hashed by the engine (fdem check --json); 1: the tools' own TOML reading
 _FILE_HASHES: dict = {}  # (path, size, mtime_ns) -> sha256, so a large binary is read once per process
 _EXPECTED: dict = {}     # run folder -> the fingerprint the current batch gives it (is_finished checks it)
 
@@ -124,51 +110,24 @@ def _sha256_file(path: str) -> str:
     return _FILE_HASHES[key]
 
 
-def _strings(tree):
-    """Every string value of a parsed TOML tree."""
-    if isinstance(tree, dict):
-        for v in tree.values():
-            yield from _strings(v)
-    elif isinstance(tree, list):
-        for v in tree:
-            yield from _strings(v)
-    elif isinstance(tree, str):
-        yield tree
-
-
-def _toml_string(value: str):
-    """The string a --set value stands for when it is a TOML string ("x.geo" or 'x.geo'), else None."""
-    import tomllib
-    try:
-        v = tomllib.loads(f"v = {value}")["v"]
-    except (tomllib.TOMLDecodeError, ValueError):
-        return None
-    return v if isinstance(v, str) else None
-
-
-def case_fingerprint(case: str, overrides: list) -> dict:
-    """The case's part of a run fingerprint: its parsed contents (so a comment or layout edit does not count; a file
-    that does not parse is taken byte for byte) and every file it or an override names that exists beside it (the
-    .geo script or .msh mesh of geometry.file, relative to the case's folder as the engine reads it)."""
-    import tomllib
-    with open(case, "rb") as f:
-        raw = f.read()
-    try:
-        tree = tomllib.loads(raw.decode("utf-8"))
-        text = json.dumps(tree, sort_keys=True, default=str)
-        digest, how = hashlib.sha256(text.encode()).hexdigest(), "parsed"
-    except (UnicodeDecodeError, tomllib.TOMLDecodeError):
-        tree, digest, how = {}, hashlib.sha256(raw).hexdigest(), "bytes"
+def case_fingerprint(case: str, overrides: list, fdem: str) -> dict:
+    """The case's part of a run fingerprint, from the engine (common.resolved_case): the hash of the case as resolved
+    with the run's overrides (fdem check's case hash: the TOML tree after the overrides, so a comment or layout edit
+    does not count) and the sha256 of every file the resolved case reads (the .geo script or .msh mesh of
+    geometry.file), named relative to the case's folder. A case the engine refuses with these overrides has no hash
+    but its message: the run fails the same way (and a completed run is not taken for it)."""
     here = os.path.dirname(os.path.abspath(case))
-    names = set(_strings(tree)) | {s for _, v in overrides if (s := _toml_string(v)) is not None}
+    try:
+        rc = resolved_case(case, overrides, fdem=fdem)
+    except ToolError as e:
+        return {"case_hash": None, "error": str(e), "files": {}}
     files = {}
-    for s in sorted(names):
-        if not s or "\n" in s or len(s) > 4096:
-            continue
-        p = s if os.path.isabs(s) else os.path.join(here, s)
+    for f in rc["resolved"].get("files") or []:
+        p = f if os.path.isabs(f) else os.path.abspath(f)
+        rel = os.path.relpath(p, here)
         if os.path.isfile(p):
-            files[s] = _sha256_file(p)
-    return {"sha256": digest, "hashed": how, "files": files}
+            files[p if rel.startswith("..") else rel] = _sha256_file(p)
+    return {"case_hash": rc["case_hash"], "files": files}
 
 
 def build_fingerprint(fdem: str) -> dict:
@@ -194,18 +153,21 @@ def build_fingerprint(fdem: str) -> dict:
 def fingerprint_changes(old: dict | None, new: dict) -> list:
     """What differs between a run's recorded fingerprint and the current one, as short phrases (empty: the same).
     None (no fingerprint recorded) is a difference: such a run cannot be checked."""
-    if not isinstance(old, dict) or old.get("version") != new.get("version"):
+    if not isinstance(old, dict):
         return ["no fingerprint recorded (a run made before fdem-tools recorded them, or by another tool)"]
+    if old.get("version") != new.get("version"):
+        return [f"fingerprint of another fdem-tools (version {old.get('version')}, now {new.get('version')})"]
     out = []
     oc, nc = old.get("case") or {}, new["case"]
-    if oc.get("sha256") != nc["sha256"]:
+    oo, no = dict(map(tuple, old.get("overrides") or [])), dict(map(tuple, new["overrides"]))
+    # the hash is of the case with its overrides: with the same overrides a different hash is an edited case file
+    if oc.get("case_hash") != nc["case_hash"] and oo == no:
         out.append(f"case file ({new['case_file']} changed)")
     of, nf = oc.get("files") or {}, nc["files"]
     for name in sorted(set(of) | set(nf)):
         if of.get(name) != nf.get(name):
             out.append(f"file {name} " + ("changed" if name in of and name in nf else
                                           "now referenced" if name in nf else "no longer referenced"))
-    oo, no = dict(map(tuple, old.get("overrides") or [])), dict(map(tuple, new["overrides"]))
     diffs = []
     for k in sorted(set(oo) | set(no)):
         if oo.get(k) != no.get(k):
@@ -289,13 +251,15 @@ class Batch:
         self._stopping = False
 
     def fingerprint(self, params: dict) -> dict:
-        """What a run of this grid point is made from: the case (parsed contents and the files it names), every
-        --set (fixed, then the point's, as passed) and the fdem build (module section "Run fingerprints")."""
+        """What a run of this grid point is made from: the case as the engine resolves it with the point's
+        overrides (its hash and the files it reads), every --set (fixed, then the point's, as passed) and the fdem
+        build (module section "Run fingerprints")."""
         overrides = [[k, v] for k, v in list(self.fixed) + list(params.items())]
         if self._build is None:
             self._build = build_fingerprint(self.fdem)
         return {"version": FINGERPRINT_VERSION, "case_file": self.case,
-                "case": case_fingerprint(self.case, overrides), "overrides": overrides, "build": self._build}
+                "case": case_fingerprint(self.case, overrides, self.fdem), "overrides": overrides,
+                "build": self._build}
 
     def register(self, name: str, params: dict, label: str | None = None, say: bool = True) -> tuple:
         """(run folder, fingerprint) of a grid point; from now on is_finished(run folder) also asks that the

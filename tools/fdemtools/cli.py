@@ -11,7 +11,8 @@ import sys
 
 from .common import (DEFAULT_X_UNIT, DEFAULT_Y_UNIT, FORCE_UNITS, LENGTH_UNITS, SIGN_CHOICES, STRESS_UNITS,
                      ToolError, check_finite, is_run_folder, load_curve, load_run, output_prefix, read_table,
-                     resolve_sign, stage_curve, write_json)
+                     stage_curve, write_json)
+from .curves import resolve_sign
 
 PROG = "fdem-tools"
 COMMAND_MODULES = ["plots", "cracks", "batch", "study", "validate", "limit", "preview", "provenance"]  # modules with an add_parser(subparsers) function
@@ -115,7 +116,7 @@ def _eeep_flags(r: dict, indent: str = "  ", yu: str = "") -> list:
 
 def cmd_eeep(args):
     from . import eeep
-    from .validate import smooth_curve
+    from .curves import smooth_curve
     if not args.smooth >= 0:
         raise ToolError(f"--smooth must be a window >= 0 mm, got {args.smooth}")
     if args.drift_height is not None and not args.drift_height > 0:

@@ -7,16 +7,93 @@ that the command line prints without a traceback.
 from __future__ import annotations
 
 import csv
+import hashlib
 import json
 import math
 import os
+import shutil
+import subprocess
 from dataclasses import dataclass, field
 
 import numpy as np
 
 
-class ToolError(Exception):
-    """Bad input or a state the tools cannot work with; the message is shown to the user as one line."""
+from .errors import ToolError  # noqa: F401  (defined apart so that curves.py can raise it too)
+from .curves import loading_work_sign, resolve_sign  # noqa: F401  (the load sign rule; names kept here too)
+
+
+REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+
+
+def fdem_binary(given: str | None, must_exist: bool = True) -> str:
+    """The fdem executable (absolute path): --fdem, else $FDEM_BIN, else build/fdem/fdem of this repository.
+    must_exist=False (dry runs): the path as it would be used."""
+    path = given or os.environ.get("FDEM_BIN") or os.path.join(REPO, "build", "fdem", "fdem")
+    resolved = shutil.which(path) if os.sep not in path else path
+    if not resolved or not os.path.isfile(resolved) or not os.access(resolved, os.X_OK):
+        if not must_exist:
+            return os.path.abspath(path) if os.sep in path else path
+        raise ToolError(f"fdem executable '{path}' not found (build it, set FDEM_BIN or give --fdem)")
+    return os.path.abspath(resolved)
+
+
+# ----------------------------------------------------------------------------------------------
+# Case files: the tools never read a case file themselves. The engine resolves it (its TOML after --set and --unset,
+# every default applied) and prints it as JSON (`fdem check CASE --json`, fdem --help); resolved_case asks it.
+
+_RESOLVED: dict = {}  # (fdem, its stat, case path, digest of the case's bytes, sets, unsets) -> the parsed answer
+
+
+def _override_pair(s) -> tuple:
+    if isinstance(s, str):
+        if "=" not in s:
+            raise ToolError(f"--set '{s}': expected KEY=VALUE")
+        k, v = s.split("=", 1)
+        return k.strip(), v.strip()
+    k, v = s
+    return str(k), str(v)
+
+
+def resolved_case(path: str, sets=(), unsets=(), fdem: str | None = None) -> dict:
+    """The case as the engine will run it: the object `fdem check PATH --set K=V ... --unset K ... --json` prints
+    (case_file, case_hash, overrides, case: the TOML tree after the overrides, resolved: the values the run uses with
+    the defaults applied, mesh, notes, warnings). sets: (KEY, VALUE) pairs or "KEY=VALUE" strings, applied in order,
+    then unsets. fdem: the executable (fdem_binary's rule). Cached per arguments while neither the case file nor the
+    executable changes. Bad input raises ToolError with the engine's message."""
+    exe = fdem_binary(fdem)
+    sets = tuple(_override_pair(s) for s in sets)
+    unsets = tuple(str(k) for k in unsets)
+    if not os.path.isfile(path):
+        raise ToolError(f"{path}: no such case file")  # the engine's words
+    try:
+        with open(path, "rb") as f:
+            digest = hashlib.sha256(f.read()).hexdigest()
+        st = os.stat(exe)
+    except OSError as e:
+        raise ToolError(f"{path}: cannot read the case file ({e.strerror})") from None
+    key = (exe, st.st_size, st.st_mtime_ns, os.path.abspath(path), digest, sets, unsets)
+    if key not in _RESOLVED:
+        cmd = [exe, "check", path, "--json", "--threads", "1"]
+        for k, v in sets:
+            cmd += ["--set", f"{k}={v}"]
+        for k in unsets:
+            cmd += ["--unset", k]
+        try:
+            r = subprocess.run(cmd, capture_output=True, text=True, stdin=subprocess.DEVNULL, timeout=600)
+        except (OSError, subprocess.SubprocessError) as e:
+            raise ToolError(f"cannot run {exe} check: {e}") from None
+        if r.returncode != 0:
+            lines = [ln.strip() for ln in r.stderr.splitlines() if ln.strip() and not ln.startswith("warning:")]
+            msg = "; ".join(ln[len("error: "):] if ln.startswith("error: ") else ln for ln in lines)
+            raise ToolError(msg or f"fdem check {path} failed (exit {r.returncode})")
+        try:
+            j = json.loads(r.stdout)
+        except ValueError:
+            j = None
+        if not isinstance(j, dict) or not isinstance(j.get("resolved"), dict):
+            raise ToolError(f"{exe} check {path} --json printed no resolved case (an fdem without --json?)")
+        _RESOLVED[key] = j
+    return _RESOLVED[key]
 
 
 # Unit -> factor to SI. Lengths to m, forces to N, stresses to Pa, energies to J.
@@ -208,61 +285,32 @@ class Curve:
 
 
 # ----------------------------------------------------------------------------------------------
-# The load sign rule (one rule for plot, hysteresis, eeep and validate; README "Curves, signs and units")
+# The load sign rule: curves.loading_work_sign and curves.resolve_sign (README "Curves, signs and units")
 
 SIGN_CHOICES = ("auto", "1", "-1")
 
 
-def loading_work_sign(x, y) -> float:
-    """+1 or -1: the sign that makes the load do positive work on the loading branches of the curve.
-
-    A loading branch is a segment along which the displacement moves away from its starting value
-    (|x - x0| grows). Along it, an applied load does positive work on the structure: W+ = sum over those segments
-    of (y_k + y_k+1)/2 (x_k+1 - x_k) > 0; a reaction (the structure pushing back on its support) does negative
-    work. So the sign is that of W+ (+1 when W+ = 0). Unlike the covariance of load and displacement, W+ does
-    not change sign when the load softens after its peak (a pushover whose load falls from 40 to 10 kN), and it
-    reads cyclic loops too (every excursion away from zero is a loading branch)."""
-    x, y = np.asarray(x, float), np.asarray(y, float)
-    if len(x) < 2:
-        return 1.0
-    r = x - x[0]
-    dx = np.diff(x)
-    away = (r[1:] + r[:-1]) * dx > 0  # the midpoint of the segment and its step have the same sign
-    w = float(np.sum(0.5 * (y[1:] + y[:-1])[away] * dx[away]))
-    return -1.0 if w < 0 else 1.0
-
-
-def resolve_sign(curve: "Curve", given: str | float | None = "auto") -> tuple:
-    """(sign, rule) of a curve's load: the command line's --load-sign (1 or -1) first, then the sign the case
-    states (its [output] curve.sign, through the run folder), else loading_work_sign."""
-    if given not in (None, "auto"):
-        v = float(given)
-        if v not in (1.0, -1.0):
-            raise ToolError(f"--load-sign must be auto, 1 or -1, got '{given}'")
-        return v, "given (--load-sign)"
-    if curve.sign is not None:
-        return float(curve.sign), curve.sign_source or "stated by the case"
-    return loading_work_sign(curve.x, curve.y), "loading work (the load does positive work as the displacement grows)"
-
-
 def _case_curve_sign(run: "Run") -> tuple:
-    """The load sign a run's case states: summary.json curve.sign, else the case file's [output] curve.sign
-    (summary.json case_file, resolved from the working folder or beside the run folder). (None, '') if none."""
+    """The load sign a run's case states: summary.json curve.sign, else the [output] curve.sign of the case file
+    summary.json names (case_file, found from the working folder or beside the run folder), as the engine resolves
+    it with the run's overrides (summary.json settings.overrides; resolved_case). (None, '') if none, or when the
+    case cannot be resolved now (no fdem, a case edited since)."""
     c = run.summary.get("curve") or {}
     if c.get("sign") is not None:
         return _sign_value(c["sign"], f"{run.path}/summary.json curve.sign"), "case (summary.json curve.sign)"
     cf = run.summary.get("case_file")
     if not cf:
         return None, ""
+    ov = (run.summary.get("settings") or {}).get("overrides") or {}
+    ov = ov if isinstance(ov, dict) else {}
+    sets = [(k, v) for k, v in ov.items() if v != "(unset)"]
+    unsets = [k for k, v in ov.items() if v == "(unset)"]
     for p in (cf, os.path.join(run.path, cf), os.path.join(os.path.dirname(os.path.normpath(run.path)), cf)):
         if os.path.isfile(p):
-            import tomllib
             try:
-                with open(p, "rb") as f:
-                    tree = tomllib.load(f)
-            except (OSError, tomllib.TOMLDecodeError):
+                curve = resolved_case(p, sets, unsets)["resolved"].get("curve") or {}
+            except ToolError:
                 return None, ""
-            curve = (tree.get("output") or {}).get("curve") or {}
             if isinstance(curve, dict) and curve.get("sign") is not None:
                 return _sign_value(curve["sign"], f"{p}: output.curve.sign"), f"case ({p} output.curve.sign)"
             return None, ""

@@ -26,7 +26,7 @@ EN 1998-1:2004 Annex B (the N2 method's): the yield force equals the largest loa
 follows from the equal area, Delta_y = 2 (Delta_u - A / P_y), K_e = P_y / Delta_y (Delta_u by --ultimate; the
 Annex's Delta_m, the displacement at the formation of the mechanism, taken at the drop to 0.8 P_peak by default).
 Signs: the displacement is mirrored when its largest excursion is negative; the load takes the tools' one sign rule
-(common.resolve_sign: given, else the case's, else the sign whose loading work is positive), so a softening curve is
+(curves.resolve_sign: given, else the case's, else the sign whose loading work is positive), so a softening curve is
 never turned and a reaction is.
 All quantities are in whatever consistent units the arrays carry (SI from the command line).
 Past the peak: the curve has a post-peak branch when its load at the end is at least PAST_PEAK_DROP (5 %) below its
@@ -43,10 +43,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from .common import ToolError, loading_work_sign
+from .common import ToolError
+from .curves import (PAST_PEAK_DROP, REVERSAL, envelope, interp_x, is_reversing,  # noqa: F401
+                     loading_work_sign, mirror_sign, polyline_area, reversal)
 
-PAST_PEAK_DROP = 0.05  # the load at the end this far (fraction of the peak) below the peak: a post-peak branch
-REVERSAL = 0.10        # a retreat of the displacement beyond this fraction of its largest |value|: a reversing record
 NO_POST_PEAK = "no post-peak branch: ductility is a lower bound"
 # The bilinear idealisations: the rules each fixes (None: the caller's) and what the result names as its source.
 METHODS = {
@@ -61,38 +61,6 @@ METHODS = {
             "defaults": {"ultimate": "drop"},
             "source": "EN 1998-1 Annex B (P_y = P_peak, stiffness by equal energy)"},
 }
-
-
-def reversal(d) -> float:
-    """How far the displacement turns back, as a fraction of its largest |value|: the larger of its largest retreat
-    from the running extreme in the direction of its largest excursion and its largest excursion the other way."""
-    d = np.asarray(d, dtype=float)
-    if len(d) < 2:
-        return 0.0
-    s = -1.0 if abs(d.min()) > abs(d.max()) else 1.0
-    x = s * (d - d[0])
-    top = float(np.max(np.abs(x)))
-    if top <= 0:
-        return 0.0
-    back = float(np.max(np.maximum.accumulate(x) - x))
-    other = float(max(0.0, -x.min()))
-    return max(back, other) / top
-
-
-def is_reversing(d, tol: float = REVERSAL) -> bool:
-    return reversal(d) > tol
-
-
-def envelope(d, p, direction: float = 1.0) -> tuple:
-    """The backbone of a (cyclic) record in one direction (+1 or -1), in that direction's coordinates (x = direction
-    x d, y = direction x p, so both are positive on the envelope): the rows where x exceeds every earlier x, with x > 0,
-    the origin first. Empty arrays when the record never goes that way."""
-    from .study import loading_branch
-    d = np.asarray(d, dtype=float) * direction
-    p = np.asarray(p, dtype=float) * direction
-    xb, yb = loading_branch(d, p)
-    keep = xb > 0
-    return np.concatenate(([0.0], xb[keep])), np.concatenate(([0.0], yb[keep]))
 
 
 def method_options(method: str, fraction=None, stiffness=None, ultimate=None, drop=None) -> dict:
@@ -115,13 +83,6 @@ def method_options(method: str, fraction=None, stiffness=None, ultimate=None, dr
     return opts
 
 
-def _interp_x(x0, y0, x1, y1, y):
-    """x where the segment (x0,y0)-(x1,y1) reaches load y."""
-    if y1 == y0:
-        return x1
-    return x0 + (y - y0) * (x1 - x0) / (y1 - y0)
-
-
 def eeep(d, p, fraction: float = 0.7, ultimate: str = "peak", drop: float = 0.8, stiffness: str = "regression",
          source: str = "curve", load_sign: float | None = None, method: str = "eeep") -> dict:
     """EEEP analysis of the curve (d, p). Returns a dict of results (same units as the input).
@@ -132,7 +93,7 @@ def eeep(d, p, fraction: float = 0.7, ultimate: str = "peak", drop: float = 0.8,
     fraction: regression limit as a fraction of the peak load (0 < fraction <= 1).
     ultimate: "peak" ([K25]) or "drop" (ASTM E2126: post-peak drop to `drop` x peak).
     stiffness: "regression" (least squares through the origin) or "secant" (at fraction x peak).
-    load_sign: +1 / -1 to take the load as given / turned; None: common.loading_work_sign.
+    load_sign: +1 / -1 to take the load as given / turned; None: curves.loading_work_sign.
     """
     if not 0 < fraction <= 1:
         raise ToolError(f"regression limit must be in (0, 1], got {fraction}")
@@ -159,7 +120,7 @@ def eeep(d, p, fraction: float = 0.7, ultimate: str = "peak", drop: float = 0.8,
 
     # A curve loaded in the negative direction is analysed as its mirror image (both axes turned); a reaction
     # monitor's sign is turned on top of that by the one load sign rule.
-    sign_x = -1.0 if abs(d.min()) > abs(d.max()) else 1.0
+    sign_x = mirror_sign(d)
     s = loading_work_sign(d, p) if load_sign is None else float(load_sign)
     sign_y = sign_x * s
     d, p = sign_x * d, sign_y * p
@@ -188,7 +149,7 @@ def eeep(d, p, fraction: float = 0.7, ultimate: str = "peak", drop: float = 0.8,
         below = np.nonzero(p[i_peak + 1:] < level)[0]
         if len(below):
             j = i_peak + 1 + int(below[0])
-            d_u = float(_interp_x(d[j - 1], p[j - 1], d[j], p[j], level))
+            d_u = float(interp_x(d[j - 1], p[j - 1], d[j], p[j], level))
             p_u = level
             n_u = j - 1
             ultimate_note = f"post-peak drop to {drop:g} x peak load (ASTM E2126)"
@@ -200,7 +161,7 @@ def eeep(d, p, fraction: float = 0.7, ultimate: str = "peak", drop: float = 0.8,
     # Area under the polyline up to Delta_u (path integral, so a non-monotonic displacement counts correctly).
     dd = np.concatenate((d[:n_u + 1], [d_u]))
     pp = np.concatenate((p[:n_u + 1], [p_u]))
-    area = float(np.sum(0.5 * (pp[1:] + pp[:-1]) * np.diff(dd)))
+    area = polyline_area(dd, pp)
     if area <= 0:
         raise ToolError(f"{source}: the area under the curve up to the ultimate displacement is not positive")
 
@@ -209,7 +170,7 @@ def eeep(d, p, fraction: float = 0.7, ultimate: str = "peak", drop: float = 0.8,
     over = np.nonzero(p[:i_peak + 1] > level)[0]
     if len(over):
         k = int(over[0])
-        d_lim = float(_interp_x(d[k - 1], p[k - 1], d[k], p[k], level))
+        d_lim = float(interp_x(d[k - 1], p[k - 1], d[k], p[k], level))
         bd = np.concatenate((d[:k], [d_lim]))
         bp = np.concatenate((p[:k], [level]))
     else:  # fraction == 1

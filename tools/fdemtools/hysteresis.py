@@ -26,13 +26,14 @@ round the loop clockwise in the (d, P) plane); cumulative E_i = sum_{j<=i} W_j; 
 Discrete form: the record is a polyline, W_i = sum over its segments of (P_k + P_{k+1})/2 (d_{k+1} - d_k), exact for
 piecewise-linear branches. A negative W_i (a loop run anticlockwise: energy returned, which a passive structure
 cannot do; noise, an unclosed loop or a wrong load sign) is flagged in the cycle's row and printed as a warning.
-Load sign: the tools' one rule (common.resolve_sign; the README's tools section).
+Load sign: the tools' one rule (curves.resolve_sign; the README's tools section).
 """
 from __future__ import annotations
 
 import numpy as np
 
-from .common import ToolError, loading_work_sign, warn
+from .common import ToolError, warn
+from .curves import loading_work_sign, polyline_area
 
 
 def split_cycles(d, deadband: float = 1e-3) -> list:
@@ -66,7 +67,7 @@ def split_cycles(d, deadband: float = 1e-3) -> list:
 def analyse(d, p, k_el: float | None = None, e_h: float | None = None, deadband: float = 1e-3,
             source: str = "curve", load_sign: float | None = None, tip_band: float = 0.05) -> dict:
     """Per-cycle peaks at the excursions' extreme displacements, k_i, W_i, E_i, k_d, E_d (module docstring).
-    load_sign: +1 / -1 (given or stated by the case), None: common.loading_work_sign."""
+    load_sign: +1 / -1 (given or stated by the case), None: curves.loading_work_sign."""
     d = np.asarray(d, dtype=float)
     p = np.asarray(p, dtype=float)
     if d.shape != p.shape or d.ndim != 1 or len(d) < 3:
@@ -96,7 +97,7 @@ def analyse(d, p, k_el: float | None = None, e_h: float | None = None, deadband:
             pn = float(cp[near[np.argmin(cp[near])]])
         else:
             pn = float(cp[jn])
-        w = float(np.sum(0.5 * (cp[1:] + cp[:-1]) * np.diff(cd)))
+        w = polyline_area(cd, cp)
         has_both = cd[jx] > 0 and cd[jn] < 0
         k = (abs(px) + abs(pn)) / (cd[jx] - cd[jn]) if has_both else float("nan")  # M-DEM paper Eq. 8
         pos, neg = cd > 0, cd < 0

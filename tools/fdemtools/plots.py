@@ -13,7 +13,8 @@ import os
 import numpy as np
 
 from .common import (DEFAULT_X_UNIT, DEFAULT_Y_UNIT, FORCE_UNITS, LENGTH_UNITS, SIGN_CHOICES, ToolError, load_curve,
-                     load_run, resolve_sign)
+                     load_run)
+from .curves import resolve_sign
 
 ENERGY_COLUMNS = [  # column, label, style
     ("W_ext", "external work $W_{ext}$", {"color": "k", "lw": 2.0}),
@@ -43,7 +44,7 @@ def run_labels(paths: list, runs: list) -> list:
 
 def plot_curves(curves: list, experiments: list, prefix: str, xu=("mm", 1e-3), yu=("kN", 1e3),
                 load_sign: str = "auto", stamp: str = "", drift_height: float | None = None) -> list:
-    """Every run and experiment, each load with the tools' one sign rule (common.resolve_sign; experiments too).
+    """Every run and experiment, each load with the tools' one sign rule (curves.resolve_sign; experiments too).
     A turned load is labelled so and a note printed. drift_height (m): a drift-ratio axis on top."""
     from .figures import add_drift_axis, new_figure, save
     fig, ax = new_figure()

@@ -2,8 +2,8 @@
 
 Every figure the tools write carries a stamp (figures.run_stamp): "fdem VERSION build BUILD | CASE [HASH], ...",
 small in a corner and as the PNG text chunk / SVG metadata "Source". This command reads the stamps of the PNG files
-under the given paths, finds each named case among the case files under --cases (by its [case] name), asks
-`fdem check` for the case's hash as it stands now, and reports per figure:
+under the given paths, finds each named case among the case files under --cases (by its [case] name, as `fdem check
+--json` reads it), takes the case's hash as it stands now from the same answer, and reports per figure:
   ok          every case it names hashes as when the figure was made;
   stale       a case changed since (the figure must be regenerated: it no longer shows what the case gives);
   unknown     a case it names is not found (renamed or removed);
@@ -16,10 +16,8 @@ from __future__ import annotations
 
 import os
 import re
-import subprocess
 
-from .batch import fdem_binary
-from .common import ToolError, write_csv
+from .common import ToolError, fdem_binary, resolved_case, write_csv
 
 STAMP = re.compile(r"^fdem (?P<version>\S+) build (?P<build>\S+)(?:; fdem .*?)? \| (?P<cases>.*)$")
 CASE = re.compile(r"(?P<name>[^,\[\]]+?) \[(?P<hash>[0-9a-f]{16}|no hash)\]")
@@ -48,33 +46,46 @@ def parse_stamp(stamp: str) -> dict | None:
     return {"version": m.group("version"), "build": m.group("build"), "cases": cases}
 
 
-def case_files(root: str) -> dict:
-    """[case] name -> case file, over the TOML files under root."""
-    import tomllib
-    out = {}
-    for d, _, files in os.walk(root):
-        for f in sorted(files):
-            if not f.endswith(".toml"):
-                continue
-            p = os.path.join(d, f)
+def _norm(name: str) -> str:
+    return "".join(ch for ch in name.lower() if ch.isalnum())
+
+
+class CaseFinder:
+    """[case] name -> case file among the TOML files under root, each name as the engine resolves the file
+    (common.resolved_case); files whose stem looks like the name are asked first, so that a figure's case costs one
+    `fdem check` or a few, not one per case file. The answers (the name and the case hash) are kept."""
+
+    def __init__(self, root: str, fdem: str):
+        self.fdem = fdem
+        self.files = []
+        for d, _, files in os.walk(root):
+            self.files += [os.path.join(d, f) for f in sorted(files) if f.endswith(".toml")]
+        self.resolved = {}  # path -> resolved case, or the engine's message (str) for a file it refuses
+
+    def _resolve(self, path: str):
+        if path not in self.resolved:
             try:
-                with open(p, "rb") as fh:
-                    name = (tomllib.load(fh).get("case") or {}).get("name")
-            except (OSError, tomllib.TOMLDecodeError):
-                continue
-            if isinstance(name, str):
-                out.setdefault(name, p)
-    return out
+                self.resolved[path] = resolved_case(path, fdem=self.fdem)
+            except ToolError as e:
+                self.resolved[path] = str(e)
+        return self.resolved[path]
 
+    def find(self, name: str) -> str | None:
+        want = _norm(name)
+        for p in sorted(self.files, key=lambda f: _norm(os.path.splitext(os.path.basename(f))[0]) != want):
+            rc = self._resolve(p)
+            if isinstance(rc, dict) and rc["resolved"].get("name") == name:
+                return p
+        return None
 
-def case_hash(fdem: str, path: str) -> str:
-    path = os.path.abspath(path)
-    r = subprocess.run([fdem, "check", path], capture_output=True, text=True, cwd=os.path.dirname(path))
-    m = re.search(r"case hash ([0-9a-f]{16})", r.stdout)
-    if r.returncode != 0 or not m:
-        raise ToolError(f"fdem check {path} gave no case hash (exit {r.returncode}): "
-                        + (r.stderr.strip().splitlines() or ["no output"])[-1])
-    return m.group(1)
+    def refused(self) -> list:
+        return [f"{p}: {m}" for p, m in self.resolved.items() if isinstance(m, str)]
+
+    def hash(self, path: str) -> str:
+        rc = self._resolve(path)
+        if isinstance(rc, str):
+            raise ToolError(f"fdem check {path} gave no case hash: {rc}")
+        return rc["case_hash"]
 
 
 def check(paths: list, cases_root: str, fdem: str) -> list:
@@ -88,8 +99,7 @@ def check(paths: list, cases_root: str, fdem: str) -> list:
             pngs.append(p)
         else:
             raise ToolError(f"{p}: not a folder, a PNG file or a Markdown report")
-    names = case_files(cases_root)
-    hashes = {}
+    finder = CaseFinder(cases_root, fdem)
     rows = []
     for png in sorted(pngs):
         stamp = read_stamp(png)
@@ -104,20 +114,22 @@ def check(paths: list, cases_root: str, fdem: str) -> list:
         for name, h in parsed["cases"]:
             by_name.setdefault(name, []).append(h)
         for name, hs in by_name.items():
-            path = names.get(name)
+            path = finder.find(name)
             if path is None:
                 status = "unknown" if status == "ok" else status
-                detail.append(f"{name}: no case of that name under {cases_root}")
+                refused = finder.refused()
+                detail.append(f"{name}: no case of that name under {cases_root}"
+                              + (f" ({len(refused)} file(s) there fdem check refuses, e.g. {refused[0]})"
+                                 if refused else ""))
                 continue
-            if path not in hashes:
-                hashes[path] = case_hash(fdem, path)
+            now = finder.hash(path)
             if all(h is None for h in hs):
                 status = "stale" if status in ("ok", "unknown") else status
                 detail.append(f"{name}: the figure's run carried no hash")
-            elif hashes[path] not in hs:
+            elif now not in hs:
                 status = "stale"
                 made = ", ".join(f"[{h}]" for h in hs if h)
-                detail.append(f"{name}: made from {made}, {os.path.relpath(path)} now hashes [{hashes[path]}]")
+                detail.append(f"{name}: made from {made}, {os.path.relpath(path)} now hashes [{now}]")
         if parsed["build"].endswith("-dirty"):
             detail.append(f"made by build {parsed['build']}, which had uncommitted changes: regenerate it from a "
                           "committed build to make it reproducible")

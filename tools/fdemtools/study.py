@@ -41,6 +41,7 @@ import numpy as np
 
 from .batch import Batch, fdem_binary, parse_assignment, split_values
 from .common import ToolError, load_run, write_csv, write_json
+from .curves import loading_branch, smooth_curve  # noqa: F401
 
 
 def _num(v: str):
@@ -56,7 +57,7 @@ SHOWN_UNITS = {"N": ("kN", 1e-3), "m": ("mm", 1e3), "J": ("J", 1.0), "s": ("s", 
 
 def reference_shown(run, ref: dict) -> dict:
     """The case's reference quantity as study mesh tabulates and draws it: in kN (forces) or mm (lengths), and a force
-    with the tools' one load sign rule (common.resolve_sign: the case's output.curve.sign for the curve's load, else
+    with the tools' one load sign rule (curves.resolve_sign: the case's output.curve.sign for the curve's load, else
     the sign whose loading work along the curve's displacement is positive), as plot, eeep and validate draw it. The
     reference value is compared by magnitude (the engine's relative_error is (|computed| - |value|) / |value|), so
     it is shown as |value|. Before, a reaction's -74 kN was drawn against +74 kN on an axis of +-80,000 (N)."""
@@ -65,7 +66,8 @@ def reference_shown(run, ref: dict) -> dict:
     shown, factor = SHOWN_UNITS.get(unit, (unit or "as recorded", 1.0))
     sign, rule = 1.0, "as recorded"
     if unit == "N":
-        from .common import Curve, load_curve, loading_work_sign, resolve_sign
+        from .common import load_curve
+        from .curves import loading_work_sign, resolve_sign
         try:
             c = load_curve(run.path, partial=True)
             if mon == c.y_name:
@@ -191,22 +193,11 @@ def pareto_front(times, errors) -> list:
 CURVE_POINTS = 2001
 
 
-def loading_branch(x, y):
-    """The rows of a curve where x exceeds every earlier x (the monotonic loading branch; a pause or a step back of
-    the control displacement is dropped), as two arrays."""
-    x, y = np.asarray(x, float), np.asarray(y, float)
-    if len(x) == 0:
-        return x, y
-    prev = np.maximum.accumulate(np.concatenate(([-np.inf], x[:-1])))
-    keep = x > prev
-    return x[keep], y[keep]
-
-
 def curve_errors(x, y, xr, yr, u_to, u_from, smooth: float = 0.0) -> dict:
     """Whole-curve difference of H(u) = (x, y) from the reference (xr, yr), as shares of the reference peak:
     curve_rms over [0, u_to], curve_max over [u_from, u_to] (module doc). Either is None, with a reason, when a
     curve does not reach u_to. With smooth > 0 (m of travel) also curve_max_smoothed: curve_max of the two loading
-    branches each averaged over smooth of travel first (validate.smooth_curve)."""
+    branches each averaged over smooth of travel first (curves.smooth_curve)."""
     xb, yb = loading_branch(x, y)
     xrb, yrb = loading_branch(xr, yr)
     p_ref = float(np.max(yrb)) if len(yrb) else 0.0
@@ -226,7 +217,6 @@ def curve_errors(x, y, xr, yr, u_to, u_from, smooth: float = 0.0) -> dict:
     out["curve_rms"] = float(np.sqrt(np.mean(d * d)))
     out["curve_max"] = float(np.max(np.abs(d[g >= u_from])))
     if smooth > 0:
-        from .validate import smooth_curve
         ds = (np.interp(g, xb, smooth_curve(xb, yb, smooth)) - np.interp(g, xrb, smooth_curve(xrb, yrb, smooth))) / p_ref
         out["curve_max_smoothed"] = float(np.max(np.abs(ds[g >= u_from])))
     return out

@@ -3,9 +3,9 @@
 Per case: peak load and displacement at peak (of the case's load-displacement curve, in the last stage, from
 its start), initial stiffness (least-squares line through the origin up to 40 % of the peak, as `eeep`), error
 against the experiment and against the published FDEM (from the family's reference.csv, else the case's
-[reference]), triangles, steps, wall time, and the numerical settings read from the case file with the --set
-overrides applied (mesh size, loading rate, local, contact and mass damping, penalties and stiffnesses, time
-step).
+[reference]), triangles, steps, wall time, and the numerical settings as the engine resolves the case with the --set
+overrides (`fdem check --json`: mesh size, loading rate, the local, contact and mass damping each stage runs with,
+penalties and stiffnesses, time step).
 
 Is the peak a peak: the load at the last history row of the same curve and drop_after_peak = (peak - load at
 end) / peak; past_peak = "yes" when the drop is at least PAST_PEAK_DROP (5 %); "plateau" when it is less but the
@@ -62,35 +62,23 @@ import os
 import shlex
 import sys
 import time
-import tomllib
 from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 
 from .batch import Batch, collect, default_jobs, fdem_binary, is_finished, parse_assignment, run_name
 from .eeep import eeep
-from .common import SIGN_CHOICES, ToolError, load_curve, load_run, stage_curve, write_csv
+from .common import SIGN_CHOICES, ToolError, load_curve, load_run, resolved_case, stage_curve, write_csv
+from .curves import (FIRST_PEAK_DROP, FIRST_PEAK_FLOOR, PAST_PEAK_DROP, PEAK_RULES, PLATEAU_REACH,  # noqa: F401
+                     cut_at, oscillation, peak_index, peak_up_to, plateau_or, polyline_area, smooth_curve)
 
 QS_LIMIT = 0.02  # the peak may change by less than this when the rate is halved
-PAST_PEAK_DROP = 0.05  # the load at the end must be this far below the peak (fraction of it) to call it a peak
 BOUND_TOL = 0.02  # a peak more than this fraction above its case's rigid-block bound is flagged (it cannot be right)
-PLATEAU_REACH = 0.75  # a curve with less drop whose largest load lies before this fraction of its travel: a plateau
-FIRST_PEAK_DROP = 0.05  # --peak first: the load must fall this far below the largest value so far (fraction)
-FIRST_PEAK_FLOOR = 0.5  # --peak first: only a maximum of at least this fraction of the largest load is a peak
-PEAK_RULES = ("largest", "first")
 SAME_END_RTOL = 0.005  # two runs whose control displacements reached differ by less than this (relative) end alike
 
 
 # ----------------------------------------------------------------------------------------------
-# Case files: the settings as fdem reads them (TOML + --set overrides)
-
-
-def parse_value(text: str):
-    """A --set value as fdem parses it: TOML, or a bare word as a string."""
-    try:
-        return tomllib.loads("v = " + text)["v"]
-    except tomllib.TOMLDecodeError:
-        return text
+# Case settings: as the engine resolves them (common.resolved_case: fdem check --json, the --set overrides applied)
 
 
 def list_index(p: str, n: int) -> int:
@@ -101,39 +89,11 @@ def list_index(p: str, n: int) -> int:
     return i - 1
 
 
-def apply_set(tree: dict, key: str, text: str) -> None:
-    cur = tree
-    parts = key.split(".")
-    for p in parts[:-1]:
-        if isinstance(cur, list):
-            cur = cur[list_index(p, len(cur))]
-        else:
-            cur = cur.setdefault(p, {})
-    last = parts[-1]
-    if isinstance(cur, list):
-        cur[list_index(last, len(cur))] = parse_value(text)
-    else:
-        cur[last] = parse_value(text)
-
-
-def read_case(path: str, sets: list | None = None) -> dict:
-    try:
-        with open(path, "rb") as f:
-            tree = tomllib.load(f)
-    except (OSError, tomllib.TOMLDecodeError) as e:
-        raise ToolError(f"{path}: cannot read the case file ({e})") from None
-    for k, v in sets or []:
-        try:
-            apply_set(tree, k, v)
-        except (KeyError, IndexError, ValueError, TypeError):
-            raise ToolError(f"--set {k}={v}: no such place in {path}") from None
-    return tree
-
-
-def rate_key(tree: dict) -> tuple:
-    """(dotted key, value) of the loading rate: the last stage's non-zero prescribed velocity (vx or vy), else the
-    rate of its cyclic protocol."""
-    stages = tree.get("stages") or []
+def rate_key(rc: dict) -> tuple:
+    """(dotted key, value) of the loading rate of a resolved case (resolved_case): the last stage's non-zero
+    prescribed velocity (vx or vy), else the rate of its cyclic protocol, found in the case's tree after the overrides
+    (the key is one --set can change)."""
+    stages = rc["case"].get("stages") or []
     for si in range(len(stages) - 1, -1, -1):
         for i, sup in enumerate(stages[si].get("supports") or []):
             for comp in ("vx", "vy"):
@@ -145,41 +105,58 @@ def rate_key(tree: dict) -> tuple:
     return None, None
 
 
-def numerical_settings(tree: dict) -> dict:
-    """The settings the issue asks to report, as text per field (same order for every case)."""
-    geo = tree.get("geometry") or {}
-    out = {"mesh_size_m": geo.get("mesh_size", "")}
-    for k in ("mesh_size_beam", "mesh_size_base"):
-        if k in geo:
-            out[k + "_m"] = geo[k]
-    key, rate = rate_key(tree)
+def _penalty_text(what: str, pen, ref) -> str:
+    """"NAME p_j=1e+10 Pa", or with penalty = "auto" (from the element size, at most penalty_ref; fracture/README.md)
+    "NAME p_j=auto (ref 1e+10 Pa)"."""
+    if isinstance(pen, (int, float)):
+        return f"{what} p_j={pen:g} Pa"
+    return f"{what} p_j={pen}" + (f" (ref {ref:g} Pa)" if isinstance(ref, (int, float)) else "")
+
+
+def numerical_settings(rc: dict) -> dict:
+    """The settings the issue asks to report, as text per field (same order for every case), from the resolved case
+    (resolved_case): the values the run uses, defaults applied; the damping of each stage is the one it runs with
+    (a stage that does not set it keeps the stage before's)."""
+    r = rc["resolved"]
+    geo = r.get("geometry") or {}
+    out = {"mesh_size_m": "" if geo.get("mesh_size_m") is None else geo["mesh_size_m"]}
+    for k in ("mesh_size_beam", "mesh_size_base"):  # generated walls and piers with a beam / a base
+        if geo.get(k + "_m") is not None:
+            out[k + "_m"] = geo[k + "_m"]
+    key, rate = rate_key(rc)
     out["loading_rate_m_s"] = rate if rate is not None else ""
-    out["local_damping"] = " / ".join(str(s.get("local_damping", 0)) for s in tree.get("stages") or [])
-    out["contact_damping"] = " / ".join(str(s.get("contact_damping", 0)) for s in tree.get("stages") or [])
-    out["mass_damping_1_s"] = " / ".join(str(s.get("mass_damping", 0)) for s in tree.get("stages") or [])
+    stages = r.get("stages") or []
+    out["local_damping"] = " / ".join(str(s["local_damping"]) for s in stages)
+    out["contact_damping"] = " / ".join(str(s["contact_damping"]) for s in stages)
+    out["mass_damping_1_s"] = " / ".join(str(s["mass_damping_1_s"]) for s in stages)
     pens = []
-    for name, m in (tree.get("materials") or {}).items():
-        fr = m.get("fracture") if isinstance(m, dict) else None
-        if isinstance(fr, dict) and "penalty" in fr:
-            if isinstance(fr["penalty"], (int, float)):
-                pens.append(f"{name} p_j={fr['penalty']:g} Pa")
-            else:  # penalty = "auto" (from the element size), at least penalty_ref (fracture/README.md)
-                ref = fr.get("penalty_ref")
-                pens.append(f"{name} p_j={fr['penalty']}" + (f" (ref {ref:g} Pa)" if isinstance(ref, (int, float))
-                                                              else ""))
-            if isinstance(fr.get("contact_penalty"), (int, float)):  # the crack faces' contact penalty
-                pens.append(f"{name} crack faces p_n={fr['contact_penalty']:g} Pa")
+    for name, m in (r.get("materials") or {}).items():
+        fr = m.get("fracture")
+        if isinstance(fr, dict):
+            pens.append(_penalty_text(name, fr["penalty"], fr.get("penalty_ref_Pa")))
+            if fr.get("contact_penalty_Pa") is not None:  # the crack faces' contact penalty
+                pens.append(f"{name} crack faces p_n={fr['contact_penalty_Pa']:g} Pa")
             if fr.get("insertion") == "extrinsic":
                 pens[-1] += " (extrinsic insertion)"
-    for itf in tree.get("interfaces") or []:
+    for itf in r.get("interfaces") or []:
         regs = "/".join(itf.get("regions", []))
         for k, unit in (("normal_penalty", "Pa"), ("tangential_penalty", "Pa"), ("normal_stiffness", "Pa/m"),
-                        ("shear_stiffness", "Pa/m"), ("penalty", "Pa")):
-            if k in itf:
-                pens.append(f"{regs} {k}={itf[k]:g} {unit}")
+                        ("shear_stiffness", "Pa/m")):
+            v = itf.get(f"{k}_{unit.replace('/', '_')}")
+            if v is not None:
+                pens.append(f"{regs} {k}={v:g} {unit}")
+        bond = itf.get("bond")
+        if isinstance(bond, dict):  # bonded: the cohesive law's penalty (or "auto") and stiffnesses
+            if bond.get("penalty") is not None:
+                text = _penalty_text(regs, bond["penalty"], bond.get("penalty_ref_Pa"))
+                pens.append(text.replace(" p_j=", " penalty=", 1))
+            for k in ("normal_stiffness", "shear_stiffness"):
+                if bond.get(k + "_Pa_m") is not None:
+                    pens.append(f"{regs} {k}={bond[k + '_Pa_m']:g} Pa/m")
     out["penalties"] = "; ".join(pens)
-    num = tree.get("numerics") or {}
-    out["dt_setting"] = f"dt={num['dt']:g} s" if "dt" in num else f"safety={num.get('safety', 0.8)}"
+    num = r.get("numerics") or {}
+    out["dt_setting"] = (f"dt={num['dt_fixed_s']:g} s" if num.get("dt_fixed_s") is not None
+                         else f"safety={num['safety']}")
     return out
 
 
@@ -213,63 +190,12 @@ def _float(v):
 # Results of one run
 
 
-def smooth_curve(x: np.ndarray, y: np.ndarray, window: float) -> np.ndarray:
-    """y averaged over the rows whose x lies within window / 2 of each row's x (x in the same unit as window; x is
-    the control displacement, made non-decreasing first so that a stalled or jittering actuator does not break the
-    search). Near the ends the window is cut (one-sided mean). window <= 0 returns y unchanged."""
-    y = np.asarray(y, float)
-    if window <= 0 or len(y) == 0:
-        return y
-    xm = np.maximum.accumulate(np.asarray(x, float))
-    cs = np.concatenate(([0.0], np.cumsum(y)))
-    lo = np.searchsorted(xm, xm - 0.5 * window, side="left")
-    hi = np.searchsorted(xm, xm + 0.5 * window, side="right")
-    return (cs[hi] - cs[lo]) / (hi - lo)
-
-
-def peak_index(y: np.ndarray, rule: str = "largest") -> tuple:
-    """(index of the peak, whether the curve fell past it) by --peak's rule. largest: the first row of the largest
-    value, past when the last row is PAST_PEAK_DROP below it. first: the running maximum at the first row that lies
-    FIRST_PEAK_DROP below it, counting only maxima of at least FIRST_PEAK_FLOOR times the curve's largest value (so
-    the inertia spike when an actuator starts is not a peak); then past by construction. A curve that never falls
-    that far gives its largest value and past = False (None when that value is not positive)."""
-    y = np.asarray(y, float)
-    if rule == "first" and len(y):
-        floor = FIRST_PEAK_FLOOR * float(np.max(y))
-        best = 0
-        for k in range(1, len(y)):
-            if y[k] > y[best]:
-                best = k
-            elif y[best] >= floor and y[k] <= (1.0 - FIRST_PEAK_DROP) * y[best]:
-                return best, True
-        rule = "largest"
-    if rule != "largest":
-        raise ToolError(f"--peak must be one of {', '.join(PEAK_RULES)}, got '{rule}'")
-    i = int(np.argmax(y))
-    return i, (None if not y[i] > 0 else bool((y[i] - y[-1]) / y[i] >= PAST_PEAK_DROP))
-
-
-def plateau_or(past, x: np.ndarray, y: np.ndarray, i: int):
-    """"plateau" for a curve not past its peak (past False) whose largest load y[i] lies well inside the run (at or
-    before PLATEAU_REACH of its travel) and that ends below it, by less than PAST_PEAK_DROP: an inner maximum followed
-    by a slow fall (a rigid mechanism losing load to the P-delta of its weights); otherwise `past` unchanged."""
-    if past is False and len(x) and float(x[i]) <= PLATEAU_REACH * float(np.max(x)) and float(y[-1]) < float(y[i]):
-        return "plateau"
-    return past
-
-
-def cut_at(x: np.ndarray, d: float) -> int:
-    """Number of rows of a curve up to and including the first row whose control displacement reaches d (m)."""
-    hit = np.nonzero(np.asarray(x) >= d * (1 - 1e-12))[0]
-    return int(hit[0]) + 1 if len(hit) else len(x)
-
-
 def curve_metrics(run_dir: str, smooth_m: float = 0.0, rule: str = "largest", up_to_m: float | None = None,
                   load_sign: str = "auto") -> dict:
     """Peak load (N), displacement at peak (m, from the start of the stage) and initial stiffness (N/m) of the
     load-displacement curve in the run's last stage (the loading after precompression); the load at the last
     history row (N), the drop after the peak (fraction of the peak) and the largest control displacement reached
-    (m). The load is taken with the tools' one sign rule (common.resolve_sign: --load-sign, else the case's
+    (m). The load is taken with the tools' one sign rule (curves.resolve_sign: --load-sign, else the case's
     output.curve.sign, else the sign that makes the loading work positive), the same curve `eeep` reads
     (common.stage_curve). `x`, `y` (|x - x0| in m, signed load in N) are kept for comparing two runs over the
     same range. With
@@ -378,7 +304,7 @@ def damping_work_shares(run, stage, c, n: int | None = None) -> dict:
         return out
     keep = h.numeric("stage") == stage
     xs, ys = np.asarray(c.x, float)[:n], np.asarray(c.y, float)[:n]
-    work = abs(float(np.sum(0.5 * (ys[1:] + ys[:-1]) * np.diff(xs)))) if len(xs) > 1 else 0.0
+    work = abs(polyline_area(xs, ys)) if len(xs) > 1 else 0.0
     if not work > 0:
         return out
     for col, key in (("D_damp", "local_damping_work_share"), ("D_visc", "viscous_work_share")):
@@ -388,29 +314,12 @@ def damping_work_shares(run, stage, c, n: int | None = None) -> dict:
     return out
 
 
-def oscillation(x: np.ndarray, raw: np.ndarray, smooth: np.ndarray, window: float) -> float:
-    """Largest |raw - smoothed| (N) over the rows whose window is whole (x - window / 2 >= 0 and x + window / 2 <=
-    the largest x): the one-sided means at the two ends of the curve would count the curve's own slope there."""
-    if window <= 0:
-        return 0.0
-    whole = (x - 0.5 * window >= 0) & (x + 0.5 * window <= np.max(x))
-    return float(np.max(np.abs(raw - smooth)[whole])) if np.any(whole) else float("nan")
-
-
 def past_peak(past) -> str | None:
     if past is None:
         return None
     if past == "plateau":
         return "plateau (an inner maximum, then falling less than 5 %)"
     return "yes" if past else "no (still rising / flat)"
-
-
-def peak_up_to(m: dict, d: float) -> float:
-    """The peak (N) of a run's curve, by the run's --peak rule, up to the first row where the control displacement
-    reaches d (m)."""
-    x, y = m["x"], m["y"]
-    y = y[: cut_at(x, d)]
-    return float(y[peak_index(y, m.get("rule", "largest"))[0]])
 
 
 def compare_rates(m_full: dict, m_half: dict) -> dict:
@@ -485,15 +394,16 @@ def rate_cases(cases: list, requested: list | None, family: str) -> list:
     return [c for c in cases if _stem(c) in requested]
 
 
-def rate_setting(tree: dict, case: str, given_key: str | None) -> tuple:
-    """(dotted key, value) of the loading rate of one case: --rate-key if given, else the detected one."""
+def rate_setting(rc: dict, case: str, given_key: str | None) -> tuple:
+    """(dotted key, value) of the loading rate of one resolved case: --rate-key if given (read from the case's tree
+    after the overrides), else the detected one."""
     if not given_key:
-        key, rate = rate_key(tree)
+        key, rate = rate_key(rc)
         if key is None:
             raise ToolError(f"{case}: no prescribed velocity in its stages; give --rate-key or --no-rate-check")
         return key, rate
     try:
-        cur = tree
+        cur = rc["case"]
         for p in given_key.split("."):
             cur = cur[list_index(p, len(cur))] if isinstance(cur, list) else cur[p]
         return given_key, float(cur)
@@ -551,7 +461,7 @@ def run_family(args) -> int:
     threads = args.threads = slurm.cpus_per_task if slurm else args.threads  # the report states it
     fdem = fdem_binary(args.fdem, must_exist=not args.dry_run)
     refs = read_reference(family)
-    trees = {c: read_case(c, fixed) for c in cases}
+    cases_resolved = {c: resolved_case(c, fixed, fdem=fdem) for c in cases}
     log = lambda m: print(m, flush=True)  # noqa: E731
 
     # the tasks: every case once, plus one rerun at half the rate per checked case. The half-rate run lives in the
@@ -563,7 +473,7 @@ def run_family(args) -> int:
     checks = []
     if not args.no_rate_check:
         for c in rate_cases(cases, args.rate_case, family):
-            key, rate = rate_setting(trees[c], c, args.rate_key)
+            key, rate = rate_setting(cases_resolved[c], c, args.rate_key)
             stem = _stem(c)
             checks.append({"case": stem, "key": key, "rate": rate, "half": rate / 2})
             tasks.append((stem + "__half_rate", Batch(c, os.path.join(out, stem), fdem, threads=threads,
@@ -670,7 +580,7 @@ def run_family(args) -> int:
                "energy_balance_error": ((rec.get("summary") or {}).get("energy") or {}).get("balance_error"),
                "local_damping_work_share": m.get("local_damping_work_share"),
                "viscous_work_share": m.get("viscous_work_share")}
-        row.update(numerical_settings(trees[c]))
+        row.update(numerical_settings(cases_resolved[c]))
         rows.append(row)
 
     header = list(rows[0].keys())

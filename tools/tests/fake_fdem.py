@@ -13,6 +13,9 @@ F is recorded as a reaction (negative: -peak), and so is the reference's compute
 Like fdem, SIGTERM stops it with status "interrupted" and exit 143; it then also writes a checkpoint file
 (checkpoint.bin). `run --help` lists `--restart RUN_DIR` only when $FAKE_FDEM_RESTART is 1; `--restart DIR` is
 logged (key "--restart") and skips the `slow` sleep.
+`fake_fdem.py check CASE [--set k=v ...] [--unset k ...] --json` answers as `fdem check --json` does, for any TOML file
+(no validation, no mesh): the tree with the overrides applied, a case hash of that tree, and a "resolved" object of
+the same shape as the engine's for the keys the tools read (check_json). Not logged.
 """
 import json
 import os
@@ -21,7 +24,91 @@ import sys
 import time
 
 
+def _value(text: str):
+    """A --set value as fdem parses it: TOML, or a bare word as a string."""
+    import tomllib
+    try:
+        return tomllib.loads("v = " + text)["v"]
+    except tomllib.TOMLDecodeError:
+        return text
+
+
+def _walk(tree, parts):
+    cur = tree
+    for p in parts:
+        cur = cur[int(p) - 1] if isinstance(cur, list) else cur.setdefault(p, {})
+    return cur
+
+
+def check_json(case: str, overrides: list) -> dict:
+    """What `fdem check CASE --json` prints, for a stand-in case: overrides are ("k", "v") to set or ("k", None) to
+    unset, in order. Defaults as the engine's (numerics.safety 0.8, damping 0 and kept by later stages)."""
+    import hashlib
+    import tomllib
+    with open(case, "rb") as f:
+        tree = tomllib.load(f)
+    for k, v in overrides:
+        parts = k.split(".")
+        parent = _walk(tree, parts[:-1])
+        if v is None:
+            del parent[parts[-1]]
+        elif isinstance(parent, list):
+            parent[int(parts[-1]) - 1] = _value(v)
+        else:
+            parent[parts[-1]] = _value(v)
+    geo = tree.get("geometry") or {}
+    here = os.path.dirname(case)
+    gfile = os.path.join(here, geo["file"]) if isinstance(geo.get("file"), str) else None
+    num = tree.get("numerics") or {}
+    stages, damp = [], {"local_damping": 0, "contact_damping": 0, "mass_damping": 0}
+    for st in tree.get("stages") or []:
+        damp.update({k: st[k] for k in damp if k in st})
+        stages.append({"name": st.get("name", ""), "local_damping": damp["local_damping"],
+                       "contact_damping": damp["contact_damping"], "mass_damping_1_s": damp["mass_damping"]})
+    curve = (tree.get("output") or {}).get("curve")
+    resolved = {
+        "name": (tree.get("case") or {}).get("name", os.path.splitext(os.path.basename(case))[0]),
+        "geometry": {"type": geo.get("type", "rectangle"), "mesh_size_m": geo.get("mesh_size"),
+                     "mesh_size_beam_m": geo.get("mesh_size_beam"), "mesh_size_base_m": geo.get("mesh_size_base"),
+                     "file": gfile},
+        "numerics": {"dt_fixed_s": num.get("dt"), "dt_automatic": "dt" not in num, "safety": num.get("safety", 0.8),
+                     "dt_s": 1e-6},
+        "materials": {}, "interfaces": [], "stages": stages,
+        "curve": None if not isinstance(curve, dict) else {"x": curve.get("x"), "y": curve.get("y"),
+                                                           "sign": curve.get("sign")},
+        "reference": tree.get("reference"),
+        "files": [gfile] if gfile and os.path.isfile(gfile) else [],
+    }
+    text = json.dumps(tree, sort_keys=True, default=str)
+    return {"case_file": case, "case_hash": hashlib.sha256(text.encode()).hexdigest()[:16],
+            "overrides": [[k, "(unset)" if v is None else v] for k, v in overrides], "case": tree,
+            "resolved": resolved, "mesh": {"triangles": 0, "nodes": 0, "cohesive_elements": 0}, "notes": [],
+            "warnings": []}
+
+
+def check(argv) -> int:
+    case, overrides, i = argv[0], [], 1
+    while i < len(argv):
+        if argv[i] == "--set":
+            k, v = argv[i + 1].split("=", 1); overrides.append((k, v)); i += 2
+        elif argv[i] == "--unset":
+            overrides.append((argv[i + 1], None)); i += 2
+        elif argv[i] == "--threads":
+            i += 2
+        else:
+            i += 1
+    try:
+        j = check_json(case, overrides)
+    except Exception as e:  # a stand-in: any failure is bad input
+        print(f"error: {case}: {type(e).__name__}: {e}", file=sys.stderr)
+        return 1
+    print(json.dumps(j, default=str))
+    return 0
+
+
 def main(argv):
+    if argv[:1] == ["check"] and len(argv) > 1:
+        return check(argv[1:])
     if argv[:2] == ["run", "--help"]:
         print("usage: fake_fdem.py run CASE --out DIR [--set KEY=VALUE] [--threads N] [--quiet]"
               + (" [--restart RUN_DIR]" if os.environ.get("FAKE_FDEM_RESTART") == "1" else ""))

@@ -13,6 +13,8 @@ import pytest
 
 from fdemtools import common, eeep, hysteresis, validate
 
+DATA = os.path.join(os.path.dirname(os.path.abspath(__file__)), "data")
+
 
 def pushover(n=201):
     """A softening pushover: H rises linearly to 40 kN at 3 mm, then falls linearly to 10 kN at 10 mm."""
@@ -53,8 +55,10 @@ def make_run(path, x, y, sign=None, case_sign=None, precompression=True):
     s = {"case": os.path.basename(path), "status": "completed", "curve": curve, "columns": {"u": "m", "H": "N"}}
     if case_sign is not None:
         cf = os.path.join(path, "case.toml")
+        with open(os.path.join(DATA, "tiny_shear.toml")) as f:  # a case the engine reads, its curve's sign stated
+            text = f.read().replace('"u_top"', '"u"').replace('"F_base"', '"H"')
         with open(cf, "w") as f:
-            f.write(f'[output]\ncurve = {{ x = "u", y = "H", sign = {case_sign} }}\n')
+            f.write(text.replace('curve = { x = "u", y = "H" }', f'curve = {{ x = "u", y = "H", sign = {case_sign} }}'))
         s["case_file"] = cf
     with open(os.path.join(path, "summary.json"), "w") as f:
         json.dump(s, f)

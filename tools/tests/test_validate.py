@@ -5,7 +5,7 @@ import os
 import numpy as np
 import pytest
 
-from fdemtools import validate
+from fdemtools import common, validate
 
 FAKE = os.path.join(os.path.dirname(os.path.abspath(__file__)), "fake_fdem.py")
 REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
@@ -125,11 +125,13 @@ def test_rate_and_settings_of_the_wall_cases():
     case = os.path.join(REPO, "cases", "lourenco2005", "k25_N100.toml")
     if not os.path.isfile(case):
         pytest.skip("wall cases not present")
-    tree = validate.read_case(case, [("stages.2.supports.1.vx", "0.05")])
-    key, rate = validate.rate_key(tree)
+    rc = common.resolved_case(case, [("stages.2.supports.1.vx", "0.05")])  # the engine's reading (fdem check --json)
+    key, rate = validate.rate_key(rc)
     assert key == "stages.2.supports.1.vx" and rate == 0.05
-    s = validate.numerical_settings(tree)
+    s = validate.numerical_settings(rc)
     assert s["mesh_size_m"] == 0.025
+    # the damping each stage runs with (a stage without contact_damping has 0), the case's time-step setting
+    assert s["local_damping"] == "0.8 / 0.05" and s["contact_damping"] == "0 / 0.3" and s["dt_setting"] == "safety=0.7"
     assert "stone p_j=auto (ref 1e+10 Pa)" in s["penalties"] and "units/units normal_penalty=1e+09 Pa" in s["penalties"]
     assert "stone crack faces p_n=1e+09 Pa (extrinsic insertion)" in s["penalties"]
 

@@ -21,6 +21,10 @@ FAKE_SRC = r'''#!/usr/bin/python3
 import json, os, sys, tomllib
 
 def main(argv):
+    if argv[0] == "check":  # the resolved case (fdem check --json): the stand-in of tests/fake_fdem.py
+        sys.path.insert(0, "@TESTS@")
+        import fake_fdem
+        return fake_fdem.check(argv[1:])
     if argv[0] != "run":  # validate's rigid-block bound asks `fdem mesh`: this stand-in has no mesh (not a run)
         print("fake fdem: only 'run'", file=sys.stderr)
         return 1
@@ -86,7 +90,7 @@ KEY = "stages.1.supports.1.vx"  # the rate key validate detects in CASE
 @pytest.fixture
 def fake(tmp_path):
     p = tmp_path / "fake_fdem_curves.py"
-    p.write_text(FAKE_SRC)
+    p.write_text(FAKE_SRC.replace("@TESTS@", os.path.dirname(os.path.abspath(__file__))))
     p.chmod(p.stat().st_mode | stat.S_IXUSR)
     return str(p)
 
