@@ -471,7 +471,7 @@ static void read_numerics(Ctx& ctx, Reader& top, CaseSpec& spec) {
     }
 }
 
-CaseSpec load_case(const std::string& path, const std::vector<std::string>& overrides) {
+CaseSpec load_case(const std::string& path, const std::vector<std::string>& overrides, std::vector<std::string>* keys_read) {
     namespace fs = std::filesystem;
     if (!fs::exists(path)) throw InputError(path + ": no such case file");
     toml::table root;
@@ -517,6 +517,7 @@ CaseSpec load_case(const std::string& path, const std::vector<std::string>& over
     read_numerics(ctx, top, spec);
     read_stages(ctx, top, spec);
     top.finish();
+    if (keys_read) keys_read->assign(ctx.keys_read.begin(), ctx.keys_read.end());
 
     // Until-targets on a driven displacement must lie in the direction of the velocity (from zero for stage 1).
     if (!ctx.errors.empty()) throw InputError(ctx.errors);
