@@ -23,12 +23,12 @@ namespace {
 // oversubscribed machine its barrier can cost milliseconds. Results are the same bits either way.
 constexpr int kParallelMin = 4096;
 // Pairs per block of the pair loop (the unit of its threads' shares and of the lists of pairs with something to add):
-// four batches, so that shares of a wall's 5662 pairs (22 blocks) are cut to a few per cent (64 and 128 measured
-// alike on two threads and 1 % slower on one: lourenco2005/RESULTS.md §41).
+// four batches, so that shares of a wall's 5662 pairs (22 blocks) are cut to a few per cent (64 and 128 ran alike on
+// two threads and 1 % slower on one).
 constexpr int kPairBlock = 256;
 // Pairs per batch of edge integrals (PairBatch): its queued edges (about one per pair, 160 bytes each) and the pairs'
 // geometry and history stay in the core's first-level cache from the first stage to the loads.
-// (32 and 64 measured alike, 512 took as long as one pair at a time: lourenco2005/RESULTS.md §39)
+// (32 and 64 ran alike, 512 took as long as one pair at a time)
 constexpr int kBatchPairs = 64;
 constexpr int kPrefetchPairs = 8;  // how far ahead the pair loop asks for the boxes and geometry it will read
 static_assert(kPairBlock % kBatchPairs == 0, "a block is whole batches");
@@ -318,7 +318,7 @@ double ContactSystem::effective_buffer(const double* x) const {
             lmin = std::min(lmin, std::hypot(T[2 * j] - T[2 * k], T[2 * j + 1] - T[2 * k + 1]));
         }
     }
-    return std::isfinite(lmin) ? lmin / 5.0 : 0.0;  // README.md 'Physics', contact default
+    return std::isfinite(lmin) ? lmin / 5.0 : 0.0;  // cases/REFERENCE.md, contact.buffer
 }
 
 void ContactSystem::detect(const double* x) {
@@ -505,8 +505,8 @@ void ContactSystem::step(const double* x, const double* v, double dt, double* f,
     // nearly the same every step, a pair's friction history, forces and triangles stay in the cache of the core that
     // evaluated it the step before, and in the list's order (NBS cells) a thread's pairs are mostly on the nodes its
     // node loop integrates and its scatter adds (93 % of its pairs' nodes in the wall of k25_N100_quick.toml on 2
-    // threads). A dynamic schedule balanced the blocks but sent each to either core; the contiguous shares measured
-    // faster (lourenco2005/RESULTS.md §41). Which thread evaluates a pair does not change its result.
+    // threads). A dynamic schedule balanced the blocks but sent each to either core; the contiguous shares ran
+    // faster. Which thread evaluates a pair does not change its result.
     if (block_cost_.size() != static_cast<std::size_t>(n_blocks)) block_cost_.assign(n_blocks, 1);
     cut_shares(block_cost_, team, block_share_);
     list_idx_.resize(static_cast<std::size_t>(team) * np);

@@ -72,8 +72,8 @@ public:
     // Triangles joined by an intact cohesive element never form a pair; include_pair when it breaks.
     void exclude_pair(int ta, int tb);
     void include_pair(int ta, int tb);
-    // Copies of one mesh vertex (README.md 'Physics' duplicates a node wherever a crack may open; §5: triangles sharing a
-    // node never form a pair). vertex[k], one per node (or empty: off, the default), is the mesh vertex node k is a
+    // Copies of one mesh vertex (mesh/README.md 'Topology' duplicates a node wherever a crack may open; triangles sharing a node
+    // never form a pair). vertex[k], one per node (or empty: off, the default), is the mesh vertex node k is a
     // copy of. Two triangles of one body that meet only at copies of a vertex (corner neighbours inside a crackable
     // unit) then form no pair until release_vertex_of(k) is called for a copy k of that vertex, which the engine
     // does for the nodes of every cohesive element that breaks. Without it, the corners of intact neighbours
@@ -82,7 +82,7 @@ public:
     void set_vertex_copies(std::vector<int> vertex);
     void release_vertex_of(int node);
 
-    // README.md 'Physics': min over nodes of 2 sqrt(m / k), m the node's mass (kg), k its Gershgorin row sum: over
+    // fdem/README.md 'Time step': min over nodes of 2 sqrt(m / k), m the node's mass (kg), k its Gershgorin row sum: over
     // the edges at the node that are or may become faces (all but the edges inside a continuum; any triangle may
     // become capable), (stiffest normal or tangential slope of the laws the triangle's material can meet, Pa/m) *
     // t * (edge length). x: positions (m) for the element sizes.

@@ -1,4 +1,4 @@
-// contact/nbs.hpp: NBS broad-phase contact detection ([MA98]; [M04] ch. 3; README.md 'Physics', contact).
+// contact/nbs.hpp: NBS broad-phase contact detection ([MA98]; [M04] ch. 3; fdem/README.md 'Contact').
 //
 // DATA LAYOUT
 //   Input : structure of arrays over the n "items" taking part (contact-capable triangles):

@@ -1,5 +1,5 @@
 // contact/potential.hpp: distributed-potential contact force and Coulomb friction of one triangle pair
-// ([MA00]; [M04] ch. 2; [K25] Eqs. 2-5; README.md 'Physics', contact). Pure functions on small fixed arrays, and
+// ([MA00]; [M04] ch. 2; [K25] Eqs. 2-5; fdem/README.md 'Contact'). Pure functions on small fixed arrays, and
 // PairBatch, the same kernel run on many pairs at once (their edge integrals side by side).
 //
 // DATA LAYOUT

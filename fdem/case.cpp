@@ -492,7 +492,7 @@ toml::table resolved_case_tree(const std::string& path, const std::vector<std::s
     return read_tree(path, overrides, ctx);
 }
 
-CaseSpec load_case(const std::string& path, const std::vector<std::string>& overrides) {
+CaseSpec load_case(const std::string& path, const std::vector<std::string>& overrides, std::vector<std::string>* keys_read) {
     namespace fs = std::filesystem;
     Ctx ctx;
     ctx.file = path;
@@ -530,6 +530,7 @@ CaseSpec load_case(const std::string& path, const std::vector<std::string>& over
     read_numerics(ctx, top, spec);
     read_stages(ctx, top, spec);
     top.finish();
+    if (keys_read) keys_read->assign(ctx.keys_read.begin(), ctx.keys_read.end());
 
     // Until-targets on a driven displacement must lie in the direction of the velocity (from zero for stage 1).
     if (!ctx.errors.empty()) throw InputError(ctx.errors);

@@ -310,7 +310,10 @@ struct CaseSpec {
 // fine can still be a unit slip. Printed by fdem check, run and mesh on stderr.
 std::vector<std::string> plausibility_warnings(const CaseSpec& spec);
 
-CaseSpec load_case(const std::string& path, const std::vector<std::string>& overrides = {});
+// keys_read (optional): every key the reader asked for, sorted, as cases/REFERENCE.md writes it
+// ("stages[].supports[].vx", "materials.NAME.E"); tests/core/test_case_reference.cpp checks them against it.
+CaseSpec load_case(const std::string& path, const std::vector<std::string>& overrides = {},
+                   std::vector<std::string>* keys_read = nullptr);
 
 // Checks that concern the mesh: every region has a material, every group a case refers to exists.
 // `groups` are the mesh's physical group names, `regions` its 2D physical groups. Throws InputError.

@@ -60,6 +60,23 @@ struct Ctx {
     std::string file;
     std::vector<std::string> errors;
     std::set<std::string> set_paths;
+    // Every key a Reader was asked for, as its documented path (cases/REFERENCE.md): an array element's index
+    // becomes "[]" and the name of a material or group "NAME" ("stages[].supports[].vx", "materials.NAME.E").
+    std::set<std::string> keys_read;
+
+    void record(const std::string& path) {
+        std::string out, part;
+        std::stringstream ss(path);
+        for (int i = 0; std::getline(ss, part, '.'); ++i) {
+            if (!part.empty() && part.find_first_not_of("0123456789") == std::string::npos) {
+                out += "[]";
+                continue;
+            }
+            if (i == 1 && (out == "materials" || out == "groups")) part = "NAME";
+            out += (out.empty() ? "" : ".") + part;
+        }
+        keys_read.insert(out);
+    }
 
     std::string where(const std::string& path, int line) const {
         for (const auto& p : set_paths)
@@ -89,10 +106,12 @@ public:
     std::string key_path(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
     bool has(const std::string& key) {
         known_.insert(key);
+        ctx_.record(key_path(key));
         return t_.contains(key);
     }
     const toml::node* node(const std::string& key, bool required, const std::string& expect) {
         known_.insert(key);
+        ctx_.record(key_path(key));
         const toml::node* n = t_.get(key);
         if (!n && required) ctx_.error(key_path(key), line(), "missing; expected " + expect);
         return n;

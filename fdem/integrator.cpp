@@ -1,7 +1,7 @@
 // fdem/integrator.cpp: the explicit central-difference integrator of Simulation: the time step, the tied groups of
 // extrinsic insertion and one step.
 //
-// One step (central differences with local damping, README "Physics"; [M04] ch. 4, [C79]), with x^n, v^{n-1/2}
+// One step (central differences with local damping, fdem/README.md 'Time step'; [M04] ch. 4, [C79]), with x^n, v^{n-1/2}
 // known, in the order step() runs its stages:
 //   1. triangle forces f_int(x^n, v^{n-1/2}) in parallel, one 6-double record per triangle (triangle_stage);
 //   2. extrinsic insertion: dormant edges whose traction reached the strength get their element, the step may shrink;
@@ -61,9 +61,9 @@ double Simulation::contact_xi_max() const {
 // the whole mass. Here the step is the triangles' limit at mass_scale, and only the nodes whose springs are not
 // stable at `margin` (below) times it are made heavier, each just enough (m = k dt^2 / 4 with the bounds of
 // stable_dt), as the Itasca codes scale each gridpoint's mass for its own stiffness. The result is only as safe as
-// those bounds: both are Gershgorin row sums per node (counting the other side's nodes; the contact one counted a
-// single face and no other side until 27 Nov, and a stack on stiff dry joints went unstable at the default safety
-// under it). A tied group (extrinsic insertion) is raised as one: its copies
+// those bounds: both are Gershgorin row sums per node, counting the other side's nodes and every face at the node
+// (a bound that counts a single face and not the other side is not safe: a stack on stiff dry joints goes unstable
+// at the default safety under it). A tied group (extrinsic insertion) is raised as one: its copies
 // keep their shares. Done once, at set-up, on the reference configuration: the masses stay constant in the run (the
 // energy books and the restart stay exact), and cracks inserted later may still shrink the step
 // (reduce_dt_after_insertion). Gravity keeps the physical mass.
@@ -73,8 +73,8 @@ void Simulation::scale_node_masses() {
     // Each node (a tied group as one: its copies' shares summed at its first node) is made heavy enough that its
     // assembled nodal bound (nodal_step_limit: its triangles' share plus its joint and contact springs' row sums, over
     // its mass) allows the triangles' exact limit dt_t; the step is then safety * dt_t, as in a case without mass
-    // scaling whose triangles set the step. (Until 28 Nov the springs alone were made stable at a margin over dt_t
-    // and the sum bounded by Weyl's inequality, which asked more mass wherever the springs dominate.)
+    // scaling whose triangles set the step. (Making the springs alone stable at a margin over dt_t and bounding the
+    // sum by Weyl's inequality asks more mass wherever the springs dominate.)
     const double dt = triangle_step_limit(spec_, model_).dt;
     const int* rep = ties_ ? tie_rep_.data() : nullptr;
     // The shares of nodal_step_limit, the triangles' summed per triangle into the groups (nodal_step_limit sums its
@@ -176,8 +176,8 @@ void Simulation::compute_dt() {
     dt_contact_ = inter_.contact_stable_dt(model_);
     dt_springs_ = inter_.stable_dt(model_, xi_max, mass, rep, alpha);
     // The assembled bound: triangles and springs at each node together. The springs' own limit dt_springs_ (logged)
-    // ignores the triangles at the same nodes and counts the faces of intact joints, which cannot touch yet; it was
-    // taken alone until 28 Nov.
+    // ignores the triangles at the same nodes (alone it can overestimate the limit where both are alike) and counts
+    // the faces of intact joints, which cannot touch yet.
     dt_nodal_ = nodal_step_limit(mass ? mass : model_.mass.data(), rep, xi_max, alpha);
     if (dt_nodal_.dt < dt_limit_) dt_limit_ = dt_nodal_.dt, dt_element_ = -1;
     dt_ = spec_.dt_override ? *spec_.dt_override : spec_.safety * dt_limit_;

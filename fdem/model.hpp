@@ -79,7 +79,7 @@ struct StepLimit {
 };
 StepLimit triangle_step_limit(const CaseSpec& spec, const Model& model, double alpha = 0.0);
 
-// The triangles' share of the assembled system's nodal bound (README.md 'Time step'): adds to k[node] (or to
+// The triangles' share of the assembled system's nodal bound (fdem/README.md 'Time step'): adds to k[node] (or to
 // k[rep[node]] when rep is given: tied copies that move as one) sum over the node's triangles of omega_e^2 m_e / 3
 // (N/m), omega_e the triangle's highest frequency (damped: divided by triangle_damped_factor) and m_e / 3 its lumped
 // share at mass_scale. With u^T K_e u <= omega_e^2 u^T M_e u per triangle (the element eigenvalue inequality behind

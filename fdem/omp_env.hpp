@@ -12,9 +12,8 @@ namespace fdem {
 // threads need when the cores are shared (a batch of runs, CI running tests in parallel): a step can then take a
 // whole scheduler slice, measured 25x slower on 2 busy cores. Sleeping at once (OMP_WAIT_POLICY=passive) avoids
 // that, but then every parallel loop of a step waits for a sleeping thread to be woken: a step has five of them.
-// A short spin of 3,000 catches the next loop on an idle machine and gives the core back soon after.
-// Measured on the default case to 0.5 mm, 2 threads, 2 cores (23 Nov): passive 82.0 / 78.6 s, 3,000 spins
-// 62.5 / 61.1 s, same bits; two 2-thread runs sharing the cores: 18 % slower each than with passive.
+// A short spin of 3,000 catches the next loop on an idle machine and gives the core back soon after; the same bits
+// under every policy (measurements: BENCHMARKS.md, "OpenMP wait policy").
 // libgomp reads its settings when it loads, so this program runs itself again with GOMP_SPINCOUNT=3000 unless the
 // user chose a policy (OMP_WAIT_POLICY or GOMP_SPINCOUNT).
 inline void ensure_wait_policy(char** argv) {

@@ -249,12 +249,10 @@ void Simulation::run() {
     log("energy: kinetic " + sci(e.kinetic) + " J, elastic " + sci(e.elastic) + " J, joints " + sci(e.joint) + " J, contact " +
         sci(e.contact) + " J, external work " + sci(e.external) + " J, damping " + sci(e.damping) + " J, viscous " + sci(e.viscous) +
         " J, fracture " + sci(e.fracture) + " J, friction " + sci(e.friction) + " J, balance error " + sci(100 * e.balance_error(), 3) + " %");
-    // A large balance error means the bookkeeping and the forces disagree. Until 25 Nov, contacts chattering with
-    // friction were one cause (a friction spring's energy changed with its contact length and vanished unbooked when
-    // it let go: 20.7 % on a rocking block, 0.02 % since). The known cause left is damaged cohesive joints that vibrate: their shear traction follows the slip with a strength c + |sigma| tan(phi)
-    // that changes with the compression, which is not derived from a potential, so a joint slipping back while more
-    // compressed than when it slipped forward returns more work than it took (a per-class audit of a mortared wall with
-    // local damping 0.05: the joints' books short by 62 J of 99 J of work by 1.6 mm; with 0.3, by 0.1 J).
+    // A large balance error means the bookkeeping and the forces disagree. The known cause is damaged cohesive joints
+    // that vibrate: their shear traction follows the slip with a strength c + |sigma| tan(phi) that changes with the
+    // compression, which is not derived from a potential, so a joint slipping back while more compressed than when it
+    // slipped forward returns more work than it took (measured on a mortared wall: fdem/RESULTS.md, "Energy balance").
     if (const std::string crushed = crushed_broken_note(); !crushed.empty()) log("warning: " + crushed);
     if (e.balance_error() > kBalanceWarning) {
         std::string why =

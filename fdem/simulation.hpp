@@ -89,7 +89,7 @@ public:
     // since (initial conditions, a restart, model()), and the contact step scans v itself.
     double speed2_of_node_loop() const { return v2max_; }
     double dt() const { return dt_; }
-    // The assembled system's stable step (README.md 'Time step'): 2 / sqrt(max over nodes of k / m), k the node's
+    // The assembled system's stable step (fdem/README.md 'Time step'): 2 / sqrt(max over nodes of k / m), k the node's
     // triangles' share (add_triangle_node_stiffness) plus its joint and contact springs' row sums, m its mass (a tied
     // group's, summed over its copies, with rep). Bounds the highest frequency of triangles and springs together, which
     // the smaller of their separate limits does not.

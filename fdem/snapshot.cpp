@@ -1,4 +1,4 @@
-// fdem/snapshot.cpp: Simulation's snapshots (README "Output files"): the mesh with its point and cell data as a VTU
+// fdem/snapshot.cpp: Simulation's snapshots (fdem/README.md 'The run folder'): the mesh with its point and cell data as a VTU
 // file per snapshot (run.pvd lists them), and beside it the loaded contact faces (contacts_N.vtu, contacts.pvd).
 #include <cmath>
 #include <cstdint>

@@ -518,7 +518,7 @@ std::vector<double> CohesiveSystem::node_stiffness(const int* rep) const {
   // Gershgorin bound of one element's stiffness row for a node: the 2x2 block R^T diag(K_n, K_s) R has absolute row
   // sum <= K_max + |K_n - K_s| / 2, and the Simpson-lumped couplings of a node to the 4 nodes sum to h t (1/3 + 1/6 +
   // 1/3 + 1/6) = h t. So omega^2 <= k / m with k = h t (K_max + |K_n - K_s|/2) summed over the node's elements,
-  // and central difference is stable for dt <= 2 / omega = 2 sqrt(m / k) (README.md 'Physics').
+  // and central difference is stable for dt <= 2 / omega = 2 sqrt(m / k) (fdem/README.md 'Time step').
   std::vector<double> k_node(num_nodes_, 0.0);
   for (int e : active_) {
     const JointLaw& L = law_[e];

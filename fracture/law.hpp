@@ -21,7 +21,7 @@
 // by the pre-peak shear energy (2/3) f_s s_p per cycle and vanishes at constant compression. A closed loop below the
 // peak takes K_s^2 s^3 / 12 (1/f_s1 - 1/f_s2) (tests/fracture/test_law.cpp); run backwards it gives that out, and
 // thousands of joints oscillating under light damping can pump a run up until it fails the energy check
-// (cases/lourenco2005/RESULTS.md §36: `numerics.energy_audit` names the joints).
+// (`numerics.energy_audit` names the joints: fdem/README.md 'Energy').
 //
 // Energy-exact ranges: the whole area under sigma(o) in pure mode I is (2/3) f_t o_p + kappa f_t o_t with
 // kappa = int_0^1 z(D) dD, so o_t = (G_I - (2/3) f_t o_p) / (kappa f_t) makes it exactly G_I (likewise s_t, G_II).

@@ -1,4 +1,4 @@
-// mesh/topology.cpp: edge classification and node splitting (README "Physics", [M04] ch. 7 for the cohesive
+// mesh/topology.cpp: edge classification and node splitting (mesh/README.md 'Topology', [M04] ch. 7 for the cohesive
 // element's two coincident edges).
 //
 // DATA LAYOUT

@@ -27,7 +27,7 @@ W_BEAM = RHO * G * L * BEAM_H * T       # N
 # 16.92 kN (RESULTS.md §6).
 LOAD_HEIGHT = 1.0   # m, the actuator node: the beam's left end at the top of the wall
 
-# Numerical settings shared by every wall of a variant (README.md 'Physics'). The [K25] time step is fixed so that all
+# Numerical settings shared by every wall of a variant (fdem/README.md 'Mass scaling and damping'). The [K25] time step is fixed so that all
 # four walls use the same one: 1.5e-6 s = 0.76 of the joint-spring limit 1.985e-6 s of this mesh (before engine commit
 # 0b03ca9 the engine took 0.8 x the triangle limit, 1.5e-5 s, and the wall blew up at step 9).
 # Loading rate 0.01 m/s for both variants: a single dry block pushed over its base at 0.1 m/s shows a mean force 38 %

@@ -43,7 +43,7 @@ Result measure(int threads, bool boundary_only) {
     s.finish(laws);
     s.fix_body(0);
     if (boundary_only) {
-        // contact-capable = triangles with an edge on their brick's boundary (README.md 'Physics', contact)
+        // contact-capable = triangles with an edge on their brick's boundary (fdem/README.md 'Contact')
         for (int e = 0; e < s.n_tri(); ++e) {
             const int* q = &s.tri[3 * e];
             const int b = s.tri_body[e];

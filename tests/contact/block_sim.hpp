@@ -1,6 +1,6 @@
 // tests/contact/block_sim.hpp: a tiny explicit leap-frog integrator for elastic blocks in contact, used only by the
-// contact tests until the engine's integrator exists. Neo-Hookean CST triangles (README.md 'Physics'), lumped masses,
-// gravity, nodal loads, fixed DOFs, optional local damping ([C79], README.md 'Physics'), contact from ContactSystem.
+// contact tests until the engine's integrator exists. Neo-Hookean CST triangles (fdem/README.md 'Triangles'), lumped masses,
+// gravity, nodal loads, fixed DOFs, optional local damping ([C79], fdem/README.md 'Mass scaling and damping'), contact from ContactSystem.
 //
 // DATA LAYOUT: x, v, f, m as 2-per-node arrays (m, m/s, N, kg); tri 3 per triangle (CCW); per triangle the
 // reference inverse D0^-1 (4 doubles, row-major) and area A0 (m^2).
@@ -117,7 +117,7 @@ struct BlockSim {
         return std::min(dt, cs->stable_dt(x.data(), mn.data()));
     }
 
-    // Neo-Hookean CST forces (README.md 'Physics'): f_a = -t A0 tau F^-T grad0 N_a; returns the strain energy (J) if asked.
+    // Neo-Hookean CST forces (fdem/README.md 'Triangles'): f_a = -t A0 tau F^-T grad0 N_a; returns the strain energy (J) if asked.
     double elastic(bool add_forces) {
         const double mu = E / (2.0 * (1.0 + nu)), lam = E * nu / (1.0 - nu * nu);
         double W = 0.0;

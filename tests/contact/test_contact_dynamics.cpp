@@ -1,5 +1,5 @@
 // tests/contact/test_contact_dynamics.cpp: closed-form dynamics of blocks in contact, integrated with the test-only
-// leap-frog of block_sim.hpp (README.md 'Physics') until the engine's integrator exists.
+// leap-frog of block_sim.hpp (fdem/README.md 'Time step') until the engine's integrator exists.
 #include <catch2/catch.hpp>
 
 #include <algorithm>

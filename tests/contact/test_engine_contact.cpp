@@ -11,8 +11,8 @@
 //   Body quantities are taken over the nodes of the region's physical surface (model numbering): centre of mass
 //   and mean velocity weighted by the lumped nodal mass (kg).
 //
-// CLOSED FORMS (cases/README.md §C; contact laws README.md 'Physics', contact, [K25] Eqs. 2-5, [MA00]; integrator §3;
-// local damping §4 [C79]):
+// CLOSED FORMS (cases/README.md §C; contact laws fdem/README.md 'Contact', [K25] Eqs. 2-5, [MA00]; local damping
+// [C79]):
 //   rest:      static overlap d = rho g h / k_n (uniform pressure rho g h on a k_n joint); no drift once settled.
 //   slide:     Coulomb friction mu N decelerates a block launched at v0: s = v0^2 / (2 mu g), all of 1/2 M v0^2 dissipated.
 //   incline:   sticks iff tan(theta) <= mu; sliding x(t) = x0 + v0 t + g (sin theta - mu cos theta) t^2 / 2.

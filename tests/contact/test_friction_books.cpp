@@ -14,12 +14,12 @@
 // (kinetic, elastic, contact energy) plus what it dissipated (friction, dashpots).
 //
 // ASSERTIONS. Books within 0.5 % of W at the default step (safety 0.8) and within 0.1 % at half of it (the error
-// is that of the discretisation: -0.23, -0.041, -0.013 % at safety 0.8, 0.4, 0.2 with dashpots at mid-height);
-// before 28 Nov, with the dashpots' work booked on v^{n-1/2} and each slip's at the cap alone, they were -8 % at
-// mid-height with dashpots 0.3. mu_eff within 0.1 % of mu in every run at half the default step, and at the default
+// is that of the discretisation: -0.23, -0.041, -0.013 % at safety 0.8, 0.4, 0.2 with dashpots at mid-height;
+// booking the dashpots' work on v^{n-1/2} alone and each slip's at the cap alone is off by 8 %: tests/contact/RESULTS.md).
+// mu_eff within 0.1 % of mu in every run at half the default step, and at the default
 // step in every run but one: undamped with the load on the contact nodes, this block hops there (by 0.07 mm) and
 // slides with 1.1 % less than mu N (at half the step: -0.016 %, no hop), the friction-induced flutter of an undamped
-// elastic block on stiff contact springs (README "Physics", contact), which the dashpots remove.
+// elastic block on stiff contact springs (fdem/README.md 'Contact'), which the dashpots remove.
 #include <catch2/catch.hpp>
 
 #include <cmath>

@@ -1,14 +1,14 @@
 // tests/contact/test_stable_step.cpp: the automatic time step is stable at the default safety for any stiffness of
 // blocks and contacts (issue 50, "Stable by default").
 //
-// THE BOUND (README.md 'Time step'). Central differences are stable while dt <= 2 / omega_max. The engine bounds
+// THE BOUND (fdem/README.md 'Time step'). Central differences are stable while dt <= 2 / omega_max. The engine bounds
 // omega_max^2 of the assembled system node by node: max over nodes of (k_tri + k_joint + k_contact) / m, where k_tri
 // sums omega_e^2 m_e / 3 over the node's triangles (u^T K_e u <= omega_e^2 u^T M_e u for each lumped-mass triangle)
 // and k_joint, k_contact are the Gershgorin row sums of the joint and contact springs at the node (every edge that is
-// or may become a face counted). Until 28 Nov the step was the smaller of the triangles' limit and the springs' limit
-// taken apart, which overestimates the assembled limit where both are alike: on the 10-block stack below with
-// E = 1e11 Pa and k_n = 3e12 Pa/m the two separate limits were 3.61e-6 and 3.59e-6 s, the default step 2.87e-6 s,
-// and the undamped stack blew up at 3.09e-6 s (energy grew without work), its energy books off by 0.29 % at 2.83e-6 s.
+// or may become a face counted). The smaller of the triangles' limit and the springs' limit taken apart
+// overestimates the assembled limit where both are alike: on the 10-block stack below with E = 1e11 Pa and
+// k_n = 3e12 Pa/m the two separate limits are 3.61e-6 and 3.59e-6 s, and the undamped stack blows up at 3.09e-6 s
+// (fdem/RESULTS.md, "The assembled nodal step bound").
 //
 // SCENES. A block on a base (0.2 x 0.1 m on a 0.6 x 0.1 m base), a stack of 5 blocks from the wall generator, a
 // running-bond wall of 3 courses; thickness 0.1 m, density 2000 kg/m^3, dry joints (friction 30 deg, k_s = k_n).
@@ -173,8 +173,8 @@ TEST_CASE("time step: the faces of intact cohesive elements join the contact cou
           "[engine][regression]") {
     // cases/lourenco2005/stone_tension_50mm.toml: a 0.2 x 0.1 m stone (50 mm mesh), every inner edge an intrinsic cohesive
     // element, pulled apart until one crack crosses it. Intact, an element's two faces cannot touch (an excluded pair,
-    // inside the body), so the start step is above the one that counts every inner edge as a contact face (the rule
-    // before 28 Nov); once elements break, the step is checked again and shrinks (measured at the pull stage's local
+    // inside the body), so the start step is above the one that counts every inner edge as a contact face; once
+    // elements break, the step is checked again and shrinks (measured at the pull stage's local
     // damping 0.8: 3 broken, from 1.55e-6 to 1.24e-6 s).
     fdem::Simulation sim = simulation_of(std::string(FDEM_CASES_DIR) + "/lourenco2005/stone_tension_50mm.toml");
     REQUIRE(sim.interactions().has_joints());
@@ -193,10 +193,10 @@ TEST_CASE("time step: the faces of intact cohesive elements join the contact cou
 
 // LOCAL DAMPING AND THE STEP (fdem/model.hpp damped_step_factor). In the highest mode the [C79] local damping force
 // -alpha |f| sign(v^{n-1/2}) adds alpha |f| to the force (f opposes v^{n-1/2} there), so the step is stable only
-// while omega dt <= 2 (sqrt(xi^2 + 1 / (1 + alpha)) - xi), xi the viscous fraction of critical. Until 28 Nov the
-// step ignored alpha: a lone triangle pulled at a corner with local damping 0.7 inverted at step 750 at the default
-// safety (0.8 > 1 / sqrt(1.7) = 0.767), and a 4-triangle block with viscous_damping 0.3 under local damping 0.8
-// inverted at step 29.
+// while omega dt <= 2 (sqrt(xi^2 + 1 / (1 + alpha)) - xi), xi the viscous fraction of critical. A step that
+// ignores alpha is not safe: a lone triangle pulled at a corner with local damping 0.7 inverts at the default safety
+// (0.8 > 1 / sqrt(1.7) = 0.767), and a 4-triangle block with viscous_damping 0.3 under local damping 0.8 too
+// (fdem/RESULTS.md, "Damping in the step bound").
 namespace {
 
 // A lone triangle, free, pulled at its apex (no supports: its highest mode is the element's, at the bound).

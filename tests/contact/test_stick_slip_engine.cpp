@@ -1,5 +1,5 @@
 // tests/contact/test_stick_slip_engine.cpp: the stick-slip block of issue #30 through the engine (case text -> Gmsh
-// .geo -> topology -> Interactions -> Simulation), driven by a load time function (README "Case files", loads
+// .geo -> topology -> Interactions -> Simulation), driven by a load time function (cases/REFERENCE.md, stages[].loads[]
 // `function = { type = "sin", ... }`).
 //
 // SCENE. Block 0.2 x 0.025 m, thickness 0.1 m, 2000 kg/m^3: m = 1 kg, on a fixed base through a dry interface,

@@ -442,8 +442,7 @@ TEST_CASE("output.curve.sign: a stated load sign reaches summary.json for the to
 
 TEST_CASE("a fixed numerics.dt beyond the mesh's stable limit is refused by fdem check, naming the key and the limit",
           "[unit]") {
-    // The single-stone case at the 100 mm mesh with numerics.dt = 3.23e-6 s (what the shipped case fixed until 28 Nov)
-    // runs; refined to 25 mm the joint springs' limit is 9.5e-7 s and the run blew up at step 155 (issue 51): now exit 1.
+    // The single-stone case at the 100 mm mesh with numerics.dt = 3.23e-6 s runs; refined to 25 mm the joint springs' limit is 9.5e-7 s and the run blew up at step 155 (issue 51): now exit 1.
     const auto dir = testing::tmp_dir("cli_fixed_dt");
     const std::string path = std::string(FDEM_CASES_DIR) + "/lourenco2005/stone_tension_100mm.toml";
     const auto ok = testing::run_fdem("check \"" + path + "\" --set numerics.dt=3.23e-6", dir);

@@ -143,7 +143,7 @@ TEST_CASE("mutated shipped cases give fdem check exit code 0 or 1 naming the fil
         testing::write_text(dir / file, out);
         // At most 30 s of CPU per input (`ulimit -t`: SIGXCPU or SIGKILL, exit 152 or 137) and 300 s of wall time (`timeout`, exit 124, for
         // a blocked process): either fails the input, as does a signal (code -1) or exit 2/3. A wall-clock bound alone
-        // failed an input that takes 1.6 s of CPU on a machine loaded by six other jobs (27 Nov).
+        // would fail an input that takes 1.6 s of CPU on a machine loaded by other jobs.
         testing::CliResult r;
         {
             const auto o = dir / "stdout.txt", e = dir / "stderr.txt";

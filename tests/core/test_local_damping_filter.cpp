@@ -1,7 +1,7 @@
 // Stage key local_damping_filter = tau (s): the local damping force -alpha |f| sign(v - vbar) is signed by each DOF's
 // velocity relative to its exponential moving mean vbar over tau, so a steady motion is not braked and only the
-// fluctuations about it are damped (cases/lourenco2005/RESULTS.md §8: a wall driven at a constant rate whose
-// oscillation rides on the drive's motion).
+// fluctuations about it are damped (a wall driven at a constant rate whose oscillation rides on the drive's
+// motion; fdem/README.md 'Mass scaling and damping').
 //
 // CONSERVATION LAW
 //   A free body of mass M pulled by a spring k whose anchor moves at a constant v from t = 0 (the spring-load test's

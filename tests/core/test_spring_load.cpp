@@ -1,6 +1,6 @@
 // Load kind spring: a compliant actuator. A spring of stiffness k pulls a group towards an anchor moving at a
 // constant velocity (the loading rig's compliance: actuator and load cell), so a mechanism is driven at a rate
-// while the group is loaded by a force, not a prescribed velocity (cases/lourenco2005/RESULTS.md §7.9).
+// while the group is loaded by a force, not a prescribed velocity (cases/REFERENCE.md, stages[].loads[].spring).
 //
 // CLOSED FORM
 //   A free body of mass M (no gravity, no support) pulled along x at one edge by a spring k whose anchor moves at v

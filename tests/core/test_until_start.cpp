@@ -1,6 +1,7 @@
 // tests/core/test_until_start.cpp: a stage whose `until` condition already holds when it starts ends at once (issue
-// 54, 4). Before 28 Nov the direction towards the target was taken from the start value, so a monitor already past
-// the target made the stage wait for it to come back, to max_duration (a fallen wall "held" 3 s more while it fell 13 m).
+// 54, 4): a monitor already at or beyond the target, seen from zero (monitor / value >= 1), ends the stage at once
+// (seen from the start value, a monitor already past the target would make the stage wait for it to come back, to
+// max_duration).
 //
 // SCENE. The elastic column of the rigid-support tests (0.2 x 1.0 m), bottom fixed, top driven at vx = 0.01 m/s (vy free),
 // monitor u_top (x displacement of the top). Stage 1 runs 1 s (u_top = 0.01 m); stage 2 keeps the drive with

@@ -1,4 +1,4 @@
-// The joint forces under the engine's integrator (central difference / leap-frog, README.md 'Physics'), on one element
+// The joint forces under the engine's integrator (central difference / leap-frog, fdem/README.md 'Time step'), on one element
 // with lumped node masses: the stable step is right, and kinetic + elastic + dissipated energy is conserved through
 // softening and breaking.
 #include <catch2/catch.hpp>

@@ -78,7 +78,7 @@ std::vector<Crack> broken_elements(const fdem::Simulation& sim) {
     return out;
 }
 
-// Contact pairs of one body whose triangles meet only at copies of one vertex (corner neighbours, README.md 'Physics'):
+// Contact pairs of one body whose triangles meet only at copies of one vertex (corner neighbours, fdem/README.md 'Contact'):
 // the contact system drops them until a cohesive element at that vertex breaks.
 int corner_pairs(const fdem::Simulation& sim) {
     const auto* c = sim.interactions().contact();

@@ -1,5 +1,5 @@
 // Test helpers for the fracture tests: a fully split structured triangle grid (every edge crackable, the classic
-// FDEM limit of README.md 'Physics') and a kinematic driver for one element.
+// FDEM limit of mesh/README.md 'Topology') and a kinematic driver for one element.
 #pragma once
 
 #include <algorithm>

@@ -1,4 +1,4 @@
-// tests/mesh/test_topology.cpp: edge classes, node splitting, cohesive and contact sets (README.md 'Physics').
+// tests/mesh/test_topology.cpp: edge classes, node splitting, cohesive and contact sets (mesh/README.md 'Topology').
 #include <catch2/catch.hpp>
 
 #include <algorithm>

@@ -78,8 +78,7 @@ void check_peak_against_test(const std::string& rel_case, const std::string& nam
 }  // namespace
 
 // cases/README.md §A2 / §C: a single stone pulled apart carries f_t A = 3.7 MPa x 0.1 m x 0.2 m = 74 kN at its peak. The
-// 25 mm mesh of the wall cases gives +1.5 % (75.11 kN, lourenco2005/RESULTS.md §10, the same with the build of
-// 24 Nov); 5 % is the case file's tolerance.
+// 25 mm mesh of the wall cases gives about +1.5 % (cases/lourenco2005/RESULTS.md); 5 % is the case file's tolerance.
 TEST_CASE("single stone in tension, 25 mm: peak force f_t A within 5 %", "[regression]") {
     const std::string s = run_case("lourenco2005/stone_tension_25mm.toml", "stone25");
     const double computed = reference_number(s, "computed");
@@ -90,11 +89,9 @@ TEST_CASE("single stone in tension, 25 mm: peak force f_t A within 5 %", "[regre
 // A [K25]-style dry-stone wall (cases/README.md §A, seeds/004 set-up): issue 5's acceptance, the peak within 25 % of
 // the test (issue 27 §2: none worse than 25 %), and issue 27 §2's, within 8 % of the published FDEM prediction of
 // [K25] Table 3 (the same model). The engine's reference check takes the raw largest load; the family report's peaks
-// are averaged over 0.5 mm. Measured on 27 Nov (lourenco2005/RESULTS.md §33, averaged; raw largest loads 13.83 /
-// 39.54 / 75.76 / 92.69 kN): 13.69 / 39.43 / 74.95 / 91.67 kN against the tests' 20.23 / 44.73 / 69.96 / 102.95 kN
-// and the published 17.10 / 47.75 / 86.82 / 106.17 kN: 30 kN misses both limits, the others the published one, so
-// THESE TESTS FAIL until the model ingredient RESULTS.md §30 looks for is found (kept failing on purpose: they state
-// the acceptance, they are not loosened). Family setting (per-node mass scaling 10, 0.01 m/s to 10 mm): about a
+// are averaged over 0.5 mm. The tests' peaks are 20.23 / 44.73 / 69.96 / 102.95 kN, the published ones 17.10 / 47.75 /
+// 86.82 / 106.17 kN; where the model misses them (cases/lourenco2005/RESULTS.md has the measured peaks) THESE TESTS
+// FAIL (kept failing on purpose: they state the acceptance, they are not loosened). Family setting (per-node mass scaling 10, 0.01 m/s to 10 mm): about a
 // minute each on one thread.
 static void check_dry_stone_wall(const std::string& rel_case, const std::string& name, double published) {
     const std::string s = run_case(rel_case, name);
@@ -128,7 +125,7 @@ TEST_CASE("dry-stone wall, N = 250 kN, [K25] style: peak within 25 % of the expe
 
 // Issue 27 acceptance for the mortared walls (cases/README.md §B): the three held walls (top beam neither rotating nor moving
 // vertically after the precompression) with the published values and the composite joint law (law = "composite",
-// fracture/composite_law.hpp), no calibration, each peak within +-15 % of 50 / 120 / 175 kN. Measured on 25 Nov
+// fracture/composite_law.hpp), no calibration, each peak within +-15 % of 50 / 120 / 175 kN. Measured
 // (vermeltfoort/RESULTS.md, "Composite law"): 0.30 MPa in its band; the 1.21 and 2.12 MPa walls about 38 % and 36 %
 // low, so THE LAST TWO TESTS FAIL until the model ingredient RESULTS.md names is resolved (kept failing on purpose:
 // they state the acceptance, they are not loosened). About 1 minute of CPU each on 1 thread.
@@ -150,7 +147,7 @@ TEST_CASE("mortared wall, 2.12 MPa (Vermeltfoort J7D), composite law: peak withi
 // The engine's energy balance W_ext = K + E_el + E_joint + E_contact + D_damp + D_visc + D_frac + D_fric, read from the
 // "energy" object of summary.json. Damaged mortar joints that vibrate pumped energy with the [K25] law (its
 // Mohr-Coulomb coupling has no potential, fracture/README.md): the 1.21 MPa wall closed its books to 2.3 % only with
-// the bricks' element viscous damping. With the composite law (since 25 Nov; dissipative plastic slip) it closes them
+// the bricks' element viscous damping. With the composite law (dissipative plastic slip) it closes them
 // to 0.20 % with 158.7 J of fracture dissipation (vermeltfoort/RESULTS.md). The engine warns above 5 %, the limit
 // checked here. About 50 s on 1 thread.
 TEST_CASE("mortared wall, 1.21 MPa (Vermeltfoort J6D): the energy balance closes within 5 % through the cracking",
