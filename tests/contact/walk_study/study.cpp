@@ -29,6 +29,7 @@ struct P {
     double A = 1.02, omega = 1.0, T = 8.0;  // A in units of mu m g; F = A cos(omega t)
     double F = 0.0;                         // constant force (N), if > 0
     std::string where = "top";              // top | mid | bottom | all
+    std::string rigid;                      // "", "x", "y", "xy": the block a rigid group in those components
     double settle = 0.05, dt = 0, hb = 0.05, x0 = 0.0, bw = 0.1, bh = 0.1;                          // fixed dt if > 0
     int every = 0; int tf = 0;                          // print every n steps
 };
@@ -53,6 +54,7 @@ int main(int argc, char** argv) {
         else if (k == "tf") p.tf = std::stoi(v);
         else if (k == "every") p.every = std::stoi(v); else if (k == "mu") p.mu = std::stod(v);
         else if (k == "e") p.e = std::stod(v);
+        else if (k == "rigid") p.rigid = v;
         else { std::fprintf(stderr, "unknown %s\n", k.c_str()); return 1; }
     }
     const double g = 9.81, m = 1.0;
@@ -77,6 +79,7 @@ int main(int argc, char** argv) {
     if (p.settle > 0) c << "[[stages]]\nname = \"settle\"\nduration = " << p.settle << "\nlocal_damping = 0.7\ngravity = [0.0, -9.81]\n  [[stages.supports]]\n  group = \"base\"\n  fix = \"xy\"\n";
     c << "[[stages]]\nname = \"go\"\nduration = " << p.T << "\nlocal_damping = 0.0\ncontact_damping = " << p.xi
       << "\ngravity = [0.0, -9.81]\n  [[stages.supports]]\n  group = \"base\"\n  fix = \"xy\"\n"
+      << (p.rigid.empty() ? std::string() : "  [[stages.supports]]\n  group = \"block\"\n  rigid = \"" + p.rigid + "\"\n")
       << "  [[stages.loads]]\n  group = \"" << grp << "\"\n";
     if (p.F > 0) c << "  force = [" << p.F << ", 0.0]\n";
     else c << "  force = [" << p.A * p.mu * m * g << ", 0.0]\n  function = { type = \"sin\", amplitude = 1.0, omega = " << p.omega
