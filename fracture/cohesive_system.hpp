@@ -72,6 +72,9 @@ struct BreakCounts {
 void orient_elements(std::vector<CohesiveElement>& elems, const int* tri_nodes);
 
 namespace detail {
+inline constexpr double kPi = 3.14159265358979323846;
+inline constexpr double kSimpson[3] = {1.0 / 6.0, 4.0 / 6.0, 1.0 / 6.0};  // end 0, midpoint, end 1 of a face
+
 // One intact element of CohesiveSystem's plain group (see CohesiveSystem::plain_): everything its force loop reads of
 // it but the positions and the point histories, in one 128-byte record (two cache lines).
 struct alignas(64) PlainJoint {
