@@ -74,13 +74,48 @@ const char* mode_name(DofMode m) {
     }
 }
 
-}  // namespace
 
-void write_limit_model(const std::string& path, const CaseSpec& spec, const mesh::Topology& topo) {
+// A rigid body of the limit model: triangles joined through shared node copies and across crackable edges.
+struct Body {
+    double area = 0, mass = 0, mx = 0, my = 0, ax = 0, ay = 0;
+    int triangles = 0;
+    std::vector<int> regions;
+};
+
+struct Bodies {
+    std::vector<int> tri_body, node_body;  // the body of each triangle and node (-1: a node on no triangle)
+    std::vector<Body> list;
+    std::vector<std::string> region_material;  // per region, "" when no material is assigned
+};
+
+// An interface segment between two different rigid bodies.
+struct Segment {
+    std::string kind;
+    int body_a, body_b;
+    std::array<double, 2> p0, p1;
+    double friction = std::nan(""), cohesion = 0, tensile = 0;
+    std::string region_a, region_b;
+};
+
+struct Segments {
+    std::vector<Segment> list;
+    int internal_joints = 0, missing_rule = 0;  // joint segments inside one body; touching faces with no dry rule
+};
+
+struct Owner {
+    int stage = -1, block = -1, comp = 0;
+};
+
+struct Active {
+    int stage, block;
+};
+
+std::string region_name(const mesh::Mesh& m, int tri) { return m.tri_region[tri] >= 0 ? m.regions[m.tri_region[tri]] : std::string(); }
+
+Bodies rigid_bodies(const CaseSpec& spec, const mesh::Topology& topo) {
     const mesh::Mesh& m = topo.mesh;
     const int nn = m.n_nodes(), nt = m.n_triangles();
     const double t = spec.thickness;
-
     // Rigid bodies: triangles joined through shared node copies, and across crackable edges (cohesive elements of
     // kind crackable: a potential crack inside a unit, not a joint).
     UnionFind uf(nt);
@@ -113,11 +148,6 @@ void write_limit_model(const std::string& path, const CaseSpec& spec, const mesh
         const int mi = spec.material_index(it->second);
         if (mi >= 0) region_density[r] = spec.materials[mi].density, region_material[r] = it->second;
     }
-    struct Body {
-        double area = 0, mass = 0, mx = 0, my = 0, ax = 0, ay = 0;
-        int triangles = 0;
-        std::vector<int> regions;
-    };
     std::vector<Body> bodies(nb);
     for (int e = 0; e < nt; ++e) {
         const int* n = &m.tri[3 * e];
@@ -134,22 +164,17 @@ void write_limit_model(const std::string& path, const CaseSpec& spec, const mesh
         if (r >= 0 && std::find(b.regions.begin(), b.regions.end(), r) == b.regions.end()) b.regions.push_back(r);
     }
 
-    // Interface segments between two different rigid bodies.
-    struct Segment {
-        std::string kind;
-        int body_a, body_b;
-        std::array<double, 2> p0, p1;
-        double friction = std::nan(""), cohesion = 0, tensile = 0;
-        std::string region_a, region_b;
-    };
-    std::vector<Segment> segs;
-    int internal_joints = 0, missing_rule = 0;
-    auto region_name = [&](int tri) { return m.tri_region[tri] >= 0 ? m.regions[m.tri_region[tri]] : std::string(); };
+    return {std::move(tri_rigid), std::move(node_body), std::move(bodies), std::move(region_material)};
+}
+
+// The bonded and dry joints of the topology between two different bodies.
+void add_joint_segments(const CaseSpec& spec, const mesh::Topology& topo, const std::vector<int>& tri_body, Segments& out) {
+    const mesh::Mesh& m = topo.mesh;
     auto add_joint = [&](const mesh::CohesiveElement& c, bool bonded) {
         if (c.tri_a < 0 || c.tri_b < 0) return;
-        const int ba = tri_rigid[c.tri_a], bb = tri_rigid[c.tri_b];
+        const int ba = tri_body[c.tri_a], bb = tri_body[c.tri_b];
         if (ba == bb) {
-            ++internal_joints;
+            ++out.internal_joints;
             return;
         }
         Segment s;
@@ -158,7 +183,7 @@ void write_limit_model(const std::string& path, const CaseSpec& spec, const mesh
         // Midpoint of the two faces' copies (they coincide unless the faces were roughened).
         s.p0 = {0.5 * (m.xy[2 * c.n[0]] + m.xy[2 * c.n[2]]), 0.5 * (m.xy[2 * c.n[0] + 1] + m.xy[2 * c.n[2] + 1])};
         s.p1 = {0.5 * (m.xy[2 * c.n[1]] + m.xy[2 * c.n[3]]), 0.5 * (m.xy[2 * c.n[1] + 1] + m.xy[2 * c.n[3] + 1])};
-        s.region_a = region_name(c.tri_a), s.region_b = region_name(c.tri_b);
+        s.region_a = region_name(m, c.tri_a), s.region_b = region_name(m, c.tri_b);
         const InterfaceSpec* is = find_interface(spec, s.region_a, s.region_b);
         if (is) {
             if (bonded) {
@@ -167,14 +192,19 @@ void write_limit_model(const std::string& path, const CaseSpec& spec, const mesh
                 s.tensile = std::isfinite(is->bond.tensile_strength) ? is->bond.tensile_strength : 0.0;
             } else s.friction = is->friction;
         }
-        segs.push_back(s);
+        out.list.push_back(s);
     };
     for (const auto& c : topo.cohesive)
         if (c.kind == mesh::EdgeClass::bonded) add_joint(c, true);
     for (const auto& c : topo.dry_joints) add_joint(c, false);
 
-    // Free faces of two bodies that touch without shared nodes (non-conforming meshes of dry pairs): collinear,
-    // opposite, overlapping free-boundary edges. The overlap is one segment, oriented around the first face's body.
+}
+
+// Free faces of two bodies that touch without shared nodes (non-conforming meshes of dry pairs): collinear,
+// opposite, overlapping free-boundary edges. The overlap is one segment, oriented around the first face's body.
+void add_contact_segments(const CaseSpec& spec, const mesh::Topology& topo, const std::vector<int>& tri_body, Segments& out) {
+    const mesh::Mesh& m = topo.mesh;
+    const int nn = m.n_nodes(), nt = m.n_triangles();
     {
         struct Face {
             int tri, n0, n1;
@@ -206,7 +236,7 @@ void write_limit_model(const std::string& path, const CaseSpec& spec, const mesh
             for (std::size_t j = i + 1; j < free_faces.size(); ++j) {
                 const Face& g = free_faces[j];
                 if (std::min(g.a[0], g.b[0]) > fxmax + tol) break;
-                const int ba = tri_rigid[f.tri], bb = tri_rigid[g.tri];
+                const int ba = tri_body[f.tri], bb = tri_body[g.tri];
                 if (ba == bb) continue;
                 // The two faces of one edge of the input mesh (a joint of the topology, listed above): skip.
                 if (!origin.empty() && origin[f.n0] == origin[g.n1] && origin[f.n1] == origin[g.n0]) continue;
@@ -227,22 +257,24 @@ void write_limit_model(const std::string& path, const CaseSpec& spec, const mesh
                 s.body_a = ba, s.body_b = bb;
                 s.p0 = {f.a[0] + lo * sx, f.a[1] + lo * sy};
                 s.p1 = {f.a[0] + hi * sx, f.a[1] + hi * sy};
-                s.region_a = region_name(f.tri), s.region_b = region_name(g.tri);
+                s.region_a = region_name(m, f.tri), s.region_b = region_name(m, g.tri);
                 const InterfaceSpec* is = find_interface(spec, s.region_a, s.region_b);
                 if (!is || is->kind != "dry") {
-                    ++missing_rule;
+                    ++out.missing_rule;
                     continue;
                 }
                 s.friction = is->friction;
-                segs.push_back(s);
+                out.list.push_back(s);
             }
         }
     }
 
-    // Supports after the last stage: DOF ownership with the engine's carry-over rule (fdem/stages.cpp).
-    struct Owner {
-        int stage = -1, block = -1, comp = 0;
-    };
+}
+
+// Supports after the last stage: DOF ownership with the engine's carry-over rule (fdem/stages.cpp); (stage, block,
+// component) -> nodes.
+std::map<std::array<int, 3>, std::vector<int>> last_supports(const CaseSpec& spec, const mesh::Mesh& m) {
+    const int nn = m.n_nodes();
     std::vector<Owner> owner(2 * static_cast<std::size_t>(nn));
     auto group_of = [&](const std::string& name) -> const mesh::PhysicalGroup& { return m.require_group(name); };
     for (std::size_t s = 0; s < spec.stages.size(); ++s)
@@ -258,10 +290,11 @@ void write_limit_model(const std::string& path, const CaseSpec& spec, const mesh
         for (int c = 0; c < 2; ++c)
             if (owner[2 * n + c].stage >= 0) owned[{owner[2 * n + c].stage, owner[2 * n + c].block, c}].push_back(n);
 
-    // Loads in force at the last stage: a block on a group replaces that group's load of the same kind.
-    struct Active {
-        int stage, block;
-    };
+    return owned;
+}
+
+// Loads in force at the last stage: a block on a group replaces that group's load of the same kind.
+std::vector<Active> last_loads(const CaseSpec& spec) {
     std::vector<Active> loads;
     for (std::size_t s = 0; s < spec.stages.size(); ++s)
         for (std::size_t i = 0; i < spec.stages[s].loads.size(); ++i) {
@@ -276,16 +309,13 @@ void write_limit_model(const std::string& path, const CaseSpec& spec, const mesh
             loads.push_back({static_cast<int>(s), static_cast<int>(i)});
         }
 
-    // Gravity: the last vector a stage set; tilt_rate and gravity_function of the last stage(s).
-    std::array<double, 2> gravity{0, 0};
-    bool gravity_function = false;
-    for (const auto& st : spec.stages) {
-        if (st.gravity) gravity = *st.gravity, gravity_function = false;
-        if (st.gravity_function.present()) gravity_function = true;
-    }
-    const StageSpec* last = spec.stages.empty() ? nullptr : &spec.stages.back();
+    return loads;
+}
 
-    std::ostringstream o;
+// The case, the mesh (nodes, triangles with their bodies and regions) and the bodies' mass properties.
+void write_geometry(std::ostream& o, const CaseSpec& spec, const mesh::Mesh& m, const Bodies& B) {
+    const int nn = m.n_nodes(), nt = m.n_triangles();
+    const double t = spec.thickness;
     o << "{\n\"format\": \"fdem-limit-model\",\n\"version\": 1,\n";
     o << "\"case\": {\"name\": " << str(spec.name) << ", \"file\": " << str(spec.file) << ", \"thickness\": " << num(t)
       << ", \"overrides\": " << list(spec.overrides, [](const auto& p) { return str(p.first + "=" + p.second); }) << "},\n";
@@ -294,33 +324,35 @@ void write_limit_model(const std::string& path, const CaseSpec& spec, const mesh
     std::vector<int> idx(nn);
     std::iota(idx.begin(), idx.end(), 0);
     o << "\"nodes\": {\"xy\": " << list(idx, [&](int n) { return "[" + num(m.xy[2 * n]) + "," + num(m.xy[2 * n + 1]) + "]"; })
-      << ",\n  \"body\": " << list(node_body, [](int b) { return std::to_string(b); }) << "},\n";
+      << ",\n  \"body\": " << list(B.node_body, [](int b) { return std::to_string(b); }) << "},\n";
     std::vector<int> tidx(nt);
     std::iota(tidx.begin(), tidx.end(), 0);
     o << "\"triangles\": {\"nodes\": "
       << list(tidx, [&](int e) {
              return "[" + std::to_string(m.tri[3 * e]) + "," + std::to_string(m.tri[3 * e + 1]) + "," + std::to_string(m.tri[3 * e + 2]) + "]";
          })
-      << ",\n  \"body\": " << list(tri_rigid, [](int b) { return std::to_string(b); })
+      << ",\n  \"body\": " << list(B.tri_body, [](int b) { return std::to_string(b); })
       << ",\n  \"region\": " << list(m.tri_region, [](int r) { return std::to_string(r); }) << "},\n";
-    std::vector<int> bidx(nb);
-    std::iota(bidx.begin(), bidx.end(), 0);
-    o << "\"bodies\": [\n"
+        o << "\"bodies\": [\n"
       << [&] {
              std::string s;
-             for (int b = 0; b < nb; ++b) {
-                 const Body& B = bodies[b];
+             for (int b = 0; b < static_cast<int>(B.list.size()); ++b) {
+                 const Body& Bb = B.list[b];
                  std::vector<std::string> rn, mn;
-                 for (int r : B.regions) rn.push_back(m.regions[r]), mn.push_back(region_material[r]);
+                 for (int r : Bb.regions) rn.push_back(m.regions[r]), mn.push_back(B.region_material[r]);
                  s += std::string(b ? ",\n" : "") + "  {\"id\": " + std::to_string(b) + ", \"regions\": " + list(rn, str) +
-                      ", \"materials\": " + list(mn, str) + ", \"triangles\": " + std::to_string(B.triangles) +
-                      ", \"area\": " + num(B.area) + ", \"mass\": " + num(B.mass) +
-                      ", \"density\": " + num(B.mass / (B.area * t)) + ", \"centroid\": [" + num(B.mx / B.mass) + "," +
-                      num(B.my / B.mass) + "], \"area_centroid\": [" + num(B.ax / B.area) + "," + num(B.ay / B.area) + "]}";
+                      ", \"materials\": " + list(mn, str) + ", \"triangles\": " + std::to_string(Bb.triangles) +
+                      ", \"area\": " + num(Bb.area) + ", \"mass\": " + num(Bb.mass) +
+                      ", \"density\": " + num(Bb.mass / (Bb.area * t)) + ", \"centroid\": [" + num(Bb.mx / Bb.mass) + "," +
+                      num(Bb.my / Bb.mass) + "], \"area_centroid\": [" + num(Bb.ax / Bb.area) + "," + num(Bb.ay / Bb.area) + "]}";
              }
              return s;
          }()
       << "\n],\n";
+}
+
+void write_interfaces(std::ostream& o, const Segments& S) {
+    const std::vector<Segment>& segs = S.list;
     o << "\"interfaces\": [\n";
     for (std::size_t i = 0; i < segs.size(); ++i) {
         const Segment& s = segs[i];
@@ -330,13 +362,11 @@ void write_limit_model(const std::string& path, const CaseSpec& spec, const mesh
           << ", \"tensile_strength\": " << num(s.tensile) << ", \"region_a\": " << str(s.region_a)
           << ", \"region_b\": " << str(s.region_b) << "}";
     }
-    o << "\n],\n\"interface_notes\": {\"internal_joint_segments\": " << internal_joints
-      << ", \"touching_faces_without_dry_rule\": " << missing_rule << "},\n";
-    o << "\"groups\": {\n";
-    for (std::size_t g = 0; g < m.groups.size(); ++g)
-        o << (g ? ",\n" : "") << "  " << str(m.groups[g].name) << ": {\"dim\": " << m.groups[g].dim
-          << ", \"nodes\": " << list(m.groups[g].nodes, [](int n) { return std::to_string(n); }) << "}";
-    o << "\n},\n";
+    o << "\n],\n\"interface_notes\": {\"internal_joint_segments\": " << S.internal_joints
+      << ", \"touching_faces_without_dry_rule\": " << S.missing_rule << "},\n";
+}
+
+void write_supports(std::ostream& o, const CaseSpec& spec, const std::map<std::array<int, 3>, std::vector<int>>& owned) {
     o << "\"supports\": [\n";
     {
         bool first = true;
@@ -358,6 +388,14 @@ void write_limit_model(const std::string& path, const CaseSpec& spec, const mesh
             first = false;
         }
     }
+}
+
+// Each load in force with its nodal forces (pressure on the group's edges at the mesh's placement; a force shared by
+// tributary length; a spring's force depends on the motion and is left out).
+void write_loads(std::ostream& o, const CaseSpec& spec, const mesh::Mesh& m, const std::vector<Active>& loads) {
+    const int nt = m.n_triangles();
+    const double t = spec.thickness;
+    auto group_of = [&](const std::string& name) -> const mesh::PhysicalGroup& { return m.require_group(name); };
     o << "\n],\n\"loads\": [\n";
     for (std::size_t i = 0; i < loads.size(); ++i) {
         const LoadSpec& ls = spec.stages[loads[i].stage].loads[loads[i].block];
@@ -390,6 +428,37 @@ void write_limit_model(const std::string& path, const CaseSpec& spec, const mesh
         }
         o << "]}";
     }
+}
+
+}  // namespace
+
+void write_limit_model(const std::string& path, const CaseSpec& spec, const mesh::Topology& topo) {
+    const mesh::Mesh& m = topo.mesh;
+    const Bodies bodies = rigid_bodies(spec, topo);
+    Segments segs;
+    add_joint_segments(spec, topo, bodies.tri_body, segs);
+    add_contact_segments(spec, topo, bodies.tri_body, segs);
+    const auto owned = last_supports(spec, m);
+    const std::vector<Active> loads = last_loads(spec);
+    // Gravity: the last vector a stage set; tilt_rate and gravity_function of the last stage(s).
+    std::array<double, 2> gravity{0, 0};
+    bool gravity_function = false;
+    for (const auto& st : spec.stages) {
+        if (st.gravity) gravity = *st.gravity, gravity_function = false;
+        if (st.gravity_function.present()) gravity_function = true;
+    }
+    const StageSpec* last = spec.stages.empty() ? nullptr : &spec.stages.back();
+
+    std::ostringstream o;
+    write_geometry(o, spec, m, bodies);
+    write_interfaces(o, segs);
+    o << "\"groups\": {\n";
+    for (std::size_t g = 0; g < m.groups.size(); ++g)
+        o << (g ? ",\n" : "") << "  " << str(m.groups[g].name) << ": {\"dim\": " << m.groups[g].dim
+          << ", \"nodes\": " << list(m.groups[g].nodes, [](int n) { return std::to_string(n); }) << "}";
+    o << "\n},\n";
+    write_supports(o, spec, owned);
+    write_loads(o, spec, m, loads);
     o << "\n],\n\"gravity\": {\"vector\": [" << num(gravity[0]) << "," << num(gravity[1])
       << "], \"tilt_rate_deg_s\": " << num(last ? last->tilt_rate : 0.0)
       << ", \"has_function\": " << (gravity_function ? "true" : "false") << "}\n}\n";
