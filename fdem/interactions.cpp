@@ -49,6 +49,10 @@ fracture::CohesiveProps to_props(const JointSpec& j, double E) {
     return p;
 }
 
+const Material& material_of(const CaseSpec& spec, const Model& model, int region) {
+    return spec.materials[spec.material_index(spec.region_material.at(model.mesh.regions[region]))];
+}
+
 const InterfaceSpec* find_interface(const CaseSpec& spec, const std::string& a, const std::string& b) {
     for (const auto& i : spec.interfaces)
         if ((i.region_a == a && i.region_b == b) || (i.region_a == b && i.region_b == a)) return &i;
@@ -59,6 +63,23 @@ const InterfaceSpec* find_interface(const CaseSpec& spec, const std::string& a, 
 
 Interactions::Interactions(const CaseSpec& spec, const Model& model) {
     if (!model.has_topology) return;
+    setup_dry_joints(spec, model);
+    const int nr = static_cast<int>(model.mesh.regions.size());
+    // The joint penalty of each cracking region's crack faces and each bonded interface after breaking, p_j (Pa):
+    // the case's value, or with penalty = "auto" the value setup_joints resolves (its reference where no element
+    // uses it).
+    std::vector<double> crack_penalty(static_cast<std::size_t>(nr), std::nan(""));
+    std::vector<double> bond_penalty(spec.interfaces.size(), std::nan(""));
+    for (int r = 0; r < nr; ++r)
+        if (const JointSpec& j = material_of(spec, model, r).fracture; j.present)
+            crack_penalty[static_cast<std::size_t>(r)] = j.penalty_auto ? to_props(j, material_of(spec, model, r).E).penalty_ref : j.penalty;
+    for (std::size_t i = 0; i < spec.interfaces.size(); ++i) bond_penalty[i] = spec.interfaces[i].bond.penalty;
+    if (!model.cohesive.empty()) setup_joints(spec, model, crack_penalty, bond_penalty);
+    setup_contact(spec, model, crack_penalty, bond_penalty);
+}
+
+// The dry joints' records: reference lengths and midpoints, and the opening and slip they start with.
+void Interactions::setup_dry_joints(const CaseSpec& spec, const Model& model) {
     dry_ = model.dry_joints;
     dry_open_.assign(dry_.size(), 0), dry_slip_.assign(dry_.size(), 0);
     for (const auto& d : dry_) {
@@ -72,96 +93,93 @@ Interactions::Interactions(const CaseSpec& spec, const Model& model) {
         dry_motion0_.push_back(opening), dry_motion0_.push_back(slip);
     }
     set_dry_record(spec.joint_open, spec.joint_slip);
+}
+
+// Cohesive elements: crackable edges take their material's fracture properties, bonded edges their interface's. One
+// props entry per material / interface, in that order. Resolves penalty = "auto" into crack_penalty / bond_penalty.
+void Interactions::setup_joints(const CaseSpec& spec, const Model& model, std::vector<double>& crack_penalty,
+                                std::vector<double>& bond_penalty) {
     const auto& regions = model.mesh.regions;
     const int nr = static_cast<int>(regions.size());
-    auto material_of = [&](int region) -> const Material& {
-        return spec.materials[spec.material_index(spec.region_material.at(regions[region]))];
-    };
-
-    // Cohesive elements: crackable edges take their material's fracture properties, bonded edges their
-    // interface's. One props entry per material / interface, in that order.
-    // The joint penalty of each cracking region's crack faces and each bonded interface after breaking, p_j (Pa):
-    // the case's value, or with penalty = "auto" the value resolved below (its reference where no element uses it).
-    std::vector<double> crack_penalty(static_cast<std::size_t>(nr), std::nan(""));
-    std::vector<double> bond_penalty(spec.interfaces.size(), std::nan(""));
+    auto material_of = [&](int region) -> const Material& { return fdem::material_of(spec, model, region); };
+    std::vector<fracture::CohesiveProps> props;
+    std::vector<int> crack_props(nr, -1);
+    std::vector<std::string> props_key;
     for (int r = 0; r < nr; ++r)
-        if (const JointSpec& j = material_of(r).fracture; j.present)
-            crack_penalty[static_cast<std::size_t>(r)] = j.penalty_auto ? to_props(j, material_of(r).E).penalty_ref : j.penalty;
-    for (std::size_t i = 0; i < spec.interfaces.size(); ++i) bond_penalty[i] = spec.interfaces[i].bond.penalty;
-    if (!model.cohesive.empty()) {
-        std::vector<fracture::CohesiveProps> props;
-        std::vector<int> crack_props(nr, -1);
-        std::vector<std::string> props_key;
-        for (int r = 0; r < nr; ++r)
-            if (material_of(r).fracture.present) {
-                crack_props[r] = static_cast<int>(props.size());
-                props.push_back(to_props(material_of(r).fracture, material_of(r).E));
-                props_key.push_back("materials." + material_of(r).name + ".fracture");
-            }
-        std::vector<int> bond_props(spec.interfaces.size(), -1);
-        for (std::size_t i = 0; i < spec.interfaces.size(); ++i)
-            if (spec.interfaces[i].kind == "bonded") {
-                bond_props[i] = static_cast<int>(props.size());
-                const auto region_E = [&](const std::string& name) {
-                    return spec.materials[spec.material_index(spec.region_material.at(name))].E;
-                };
-                props.push_back(to_props(spec.interfaces[i].bond,
-                                         std::min(region_E(spec.interfaces[i].region_a), region_E(spec.interfaces[i].region_b))));
-                props_key.push_back("interfaces." + std::to_string(i + 1));
-            }
-        // Too-soft penalties: checked against the longest element of each class.
-        std::vector<double> h_max(props.size(), 0.0);
-        std::vector<fracture::CohesiveElement> elems;
-        elems.reserve(model.cohesive.size());
-        for (const auto& c : model.cohesive) {
-            fracture::CohesiveElement e;
-            for (int k = 0; k < 4; ++k) e.n[k] = c.n[k];
-            e.tri_a = c.tri_a;
-            e.tri_b = c.tri_b;
-            e.unit_a = c.body_a;
-            e.unit_b = c.body_b;
-            if (c.kind == mesh::EdgeClass::crackable) {
-                e.kind = fracture::JointClass::unit_interior;
-                e.props = crack_props[c.region_a];
-            } else {
-                e.kind = fracture::JointClass::interface;
-                const InterfaceSpec* in = find_interface(spec, regions[c.region_a], regions[c.region_b]);
-                e.props = in ? bond_props[static_cast<std::size_t>(in - spec.interfaces.data())] : -1;
-            }
-            if (e.props < 0)
-                throw InputError(spec.file + ": no cohesive properties for a joint between regions '" + regions[c.region_a] +
-                                 "' and '" + regions[c.region_b] + "'");
-            const double h = std::hypot(model.X[2 * c.n[1]] - model.X[2 * c.n[0]], model.X[2 * c.n[1] + 1] - model.X[2 * c.n[0] + 1]);
-            h_max[e.props] = std::max(h_max[e.props], h);
-            elems.push_back(e);
+        if (material_of(r).fracture.present) {
+            crack_props[r] = static_cast<int>(props.size());
+            props.push_back(to_props(material_of(r).fracture, material_of(r).E));
+            props_key.push_back("materials." + material_of(r).name + ".fracture");
         }
-        // penalty = "auto": resolved per class from its longest element (fracture/properties.hpp).
-        for (std::size_t p = 0; p < props.size(); ++p)
-            if (props[p].penalty_auto && h_max[p] > 0) {
-                props[p].penalty = fracture::auto_penalty(props[p], h_max[p]);
-                auto_notes_.push_back("[" + props_key[p] + "]: penalty = \"auto\": p_j = " + fmt_g(props[p].penalty) +
-                                      " Pa at h_max = " + fmt_g(h_max[p]) + " m");
-            }
-        for (int r = 0; r < nr; ++r)
-            if (crack_props[r] >= 0 && props[static_cast<std::size_t>(crack_props[r])].penalty_auto &&
-                h_max[static_cast<std::size_t>(crack_props[r])] > 0)
-                crack_penalty[static_cast<std::size_t>(r)] = props[static_cast<std::size_t>(crack_props[r])].penalty;
-        for (std::size_t i = 0; i < spec.interfaces.size(); ++i)
-            if (bond_props[i] >= 0) bond_penalty[i] = props[static_cast<std::size_t>(bond_props[i])].penalty;
-        std::vector<std::string> problems;
-        for (std::size_t p = 0; p < props.size(); ++p)
-            for (const auto& msg : fracture::check(props[p], h_max[p])) problems.push_back(spec.file + ": [" + props_key[p] + "]: " + msg);
-        if (!problems.empty()) throw InputError(problems);
-        try {
-            fracture::orient_elements(elems, model.mesh.tri.data());
-            joints_ = std::make_unique<fracture::CohesiveSystem>(std::move(elems), std::move(props), spec.thickness,
-                                                                 model.X.data(), model.n_nodes());
-        } catch (const std::invalid_argument& e) {
-            throw InputError(spec.file + ": cohesive elements: " + e.what());
+    std::vector<int> bond_props(spec.interfaces.size(), -1);
+    for (std::size_t i = 0; i < spec.interfaces.size(); ++i)
+        if (spec.interfaces[i].kind == "bonded") {
+            bond_props[i] = static_cast<int>(props.size());
+            const auto region_E = [&](const std::string& name) {
+                return spec.materials[spec.material_index(spec.region_material.at(name))].E;
+            };
+            props.push_back(to_props(spec.interfaces[i].bond,
+                                     std::min(region_E(spec.interfaces[i].region_a), region_E(spec.interfaces[i].region_b))));
+            props_key.push_back("interfaces." + std::to_string(i + 1));
         }
+    // Too-soft penalties: checked against the longest element of each class.
+    std::vector<double> h_max(props.size(), 0.0);
+    std::vector<fracture::CohesiveElement> elems;
+    elems.reserve(model.cohesive.size());
+    for (const auto& c : model.cohesive) {
+        fracture::CohesiveElement e;
+        for (int k = 0; k < 4; ++k) e.n[k] = c.n[k];
+        e.tri_a = c.tri_a;
+        e.tri_b = c.tri_b;
+        e.unit_a = c.body_a;
+        e.unit_b = c.body_b;
+        if (c.kind == mesh::EdgeClass::crackable) {
+            e.kind = fracture::JointClass::unit_interior;
+            e.props = crack_props[c.region_a];
+        } else {
+            e.kind = fracture::JointClass::interface;
+            const InterfaceSpec* in = find_interface(spec, regions[c.region_a], regions[c.region_b]);
+            e.props = in ? bond_props[static_cast<std::size_t>(in - spec.interfaces.data())] : -1;
+        }
+        if (e.props < 0)
+            throw InputError(spec.file + ": no cohesive properties for a joint between regions '" + regions[c.region_a] +
+                             "' and '" + regions[c.region_b] + "'");
+        const double h = std::hypot(model.X[2 * c.n[1]] - model.X[2 * c.n[0]], model.X[2 * c.n[1] + 1] - model.X[2 * c.n[0] + 1]);
+        h_max[e.props] = std::max(h_max[e.props], h);
+        elems.push_back(e);
     }
+    // penalty = "auto": resolved per class from its longest element (fracture/properties.hpp).
+    for (std::size_t p = 0; p < props.size(); ++p)
+        if (props[p].penalty_auto && h_max[p] > 0) {
+            props[p].penalty = fracture::auto_penalty(props[p], h_max[p]);
+            auto_notes_.push_back("[" + props_key[p] + "]: penalty = \"auto\": p_j = " + fmt_g(props[p].penalty) +
+                                  " Pa at h_max = " + fmt_g(h_max[p]) + " m");
+        }
+    for (int r = 0; r < nr; ++r)
+        if (crack_props[r] >= 0 && props[static_cast<std::size_t>(crack_props[r])].penalty_auto &&
+            h_max[static_cast<std::size_t>(crack_props[r])] > 0)
+            crack_penalty[static_cast<std::size_t>(r)] = props[static_cast<std::size_t>(crack_props[r])].penalty;
+    for (std::size_t i = 0; i < spec.interfaces.size(); ++i)
+        if (bond_props[i] >= 0) bond_penalty[i] = props[static_cast<std::size_t>(bond_props[i])].penalty;
+    std::vector<std::string> problems;
+    for (std::size_t p = 0; p < props.size(); ++p)
+        for (const auto& msg : fracture::check(props[p], h_max[p])) problems.push_back(spec.file + ": [" + props_key[p] + "]: " + msg);
+    if (!problems.empty()) throw InputError(problems);
+    try {
+        fracture::orient_elements(elems, model.mesh.tri.data());
+        joints_ = std::make_unique<fracture::CohesiveSystem>(std::move(elems), std::move(props), spec.thickness,
+                                                             model.X.data(), model.n_nodes());
+    } catch (const std::invalid_argument& e) {
+        throw InputError(spec.file + ": cohesive elements: " + e.what());
+    }
+}
 
-    // Contact laws per pair of regions.
+// Contact laws per pair of regions, and the contact system when any surfaces can touch.
+void Interactions::setup_contact(const CaseSpec& spec, const Model& model, const std::vector<double>& crack_penalty,
+                                 const std::vector<double>& bond_penalty) {
+    const auto& regions = model.mesh.regions;
+    const int nr = static_cast<int>(regions.size());
+    auto material_of = [&](int region) -> const Material& { return fdem::material_of(spec, model, region); };
     bool any_contact = false;
     for (const auto& i : spec.interfaces) any_contact = any_contact || i.kind != "tied";
     for (const auto& m : spec.materials) any_contact = any_contact || m.fracture.present;
@@ -198,7 +216,7 @@ Interactions::Interactions(const CaseSpec& spec, const Model& model) {
                                           " of the work its contact took; unloading at k_n / e^2 = " +
                                           fmt_g(1.0 / (in->restitution * in->restitution)) +
                                           " k_n bounds the step (for impacts and rocking; a joint that carries "
-                                          "friction while it vibrates can gain energy: README, impacts)");
+                                          "friction while it vibrates can gain energy: fdem/README.md, Contact)");
             } else {  // bonded: after breaking, contact with the joint's stiffness and the residual friction
                 if (const double pb = bond_penalty[static_cast<std::size_t>(in - spec.interfaces.data())]; !std::isnan(pb)) l.p_n = pb;
                 if (!std::isnan(in->bond.normal_stiffness)) l.k_n = in->bond.normal_stiffness;

@@ -116,6 +116,13 @@ public:
     const std::vector<std::string>& penalty_notes() const { return auto_notes_; }
 
 private:
+    // The constructor's parts, in order (fdem/interactions.cpp).
+    void setup_dry_joints(const CaseSpec& spec, const Model& model);
+    void setup_joints(const CaseSpec& spec, const Model& model, std::vector<double>& crack_penalty,
+                      std::vector<double>& bond_penalty);
+    void setup_contact(const CaseSpec& spec, const Model& model, const std::vector<double>& crack_penalty,
+                       const std::vector<double>& bond_penalty);
+
     std::vector<std::string> auto_notes_;
     std::unique_ptr<contact::ContactSystem> contact_;
     std::unique_ptr<fracture::CohesiveSystem> joints_;
