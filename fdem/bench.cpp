@@ -207,26 +207,18 @@ int bench_nodes(long n, long steps, long repeats, const std::vector<int>& thread
     return 0;
 }
 
-int main(int argc, char** argv) {
-    // --probe [--csv FILE]: the machine, not a model
-    for (int i = 1; i < argc; ++i)
-        if (std::strcmp(argv[i], "--probe") == 0) {
-            std::string csv = "probe.csv";
-            for (int j = 1; j < argc; ++j) {
-                if (j == i) continue;
-                if (std::strcmp(argv[j], "--csv") == 0 && j + 1 < argc) {
-                    csv = argv[++j];
-                } else {
-                    std::cerr << "fdem_bench --probe: takes only --csv FILE (got '" << argv[j] << "')\n";
-                    return 1;
-                }
-            }
-            return probe(csv);
-        }
-    fdem::ensure_wait_policy(argv);
-    long triangles = 120000, steps = 200, repeats = 5;
-    std::string csv = "bench.csv", threads_list = "1,2", case_file;
+namespace {
+
+struct BenchOptions {
+    long triangles = 120000, steps = 200, repeats = 5, nodes = 0;
+    std::string csv = "bench.csv", case_file;
     std::vector<std::string> sets;
+    std::vector<int> thread_counts;
+};
+
+// The command line (after --probe, which main handles); false after printing what is wrong. --help exits.
+bool parse_options(int argc, char** argv, BenchOptions& o) {
+    std::string threads_list = "1,2";
     const char* usage =
         "usage: fdem_bench [--triangles N | --case FILE [--set k=v ...] | --nodes N] [--steps S] [--repeats R] "
         "[--threads 1,2] [--csv FILE]\n"
@@ -236,52 +228,52 @@ int main(int argc, char** argv) {
     for (int i = 1; i < argc; ++i)
         if (std::strcmp(argv[i], "--help") == 0 || std::strcmp(argv[i], "-h") == 0) {
             std::cout << usage;
-            return 0;
+            std::exit(0);
         }
-    long nodes = 0;
     for (int i = 1; i + 1 < argc; i += 2) {
         const std::string a = argv[i], v = argv[i + 1];
-        if (a == "--triangles") triangles = std::atol(v.c_str());
-        else if (a == "--nodes") nodes = std::atol(v.c_str());
-        else if (a == "--steps") steps = std::atol(v.c_str());
-        else if (a == "--repeats") repeats = std::atol(v.c_str());
+        if (a == "--triangles") o.triangles = std::atol(v.c_str());
+        else if (a == "--nodes") o.nodes = std::atol(v.c_str());
+        else if (a == "--steps") o.steps = std::atol(v.c_str());
+        else if (a == "--repeats") o.repeats = std::atol(v.c_str());
         else if (a == "--threads") threads_list = v;
-        else if (a == "--csv") csv = v;
-        else if (a == "--case") case_file = v;
-        else if (a == "--set") sets.push_back(v);
+        else if (a == "--csv") o.csv = v;
+        else if (a == "--case") o.case_file = v;
+        else if (a == "--set") o.sets.push_back(v);
         else {
             std::cerr << "fdem_bench: unknown option '" << a << "'\n" << usage;
-            return 1;
+            return false;
         }
     }
     if ((argc - 1) % 2 != 0) {
         std::cerr << "fdem_bench: option '" << argv[argc - 1] << "' has no value\n";
-        return 1;
+        return false;
     }
-    std::vector<int> thread_counts;
     {
         std::stringstream tl(threads_list);
-        for (std::string tok; std::getline(tl, tok, ',');) thread_counts.push_back(std::atoi(tok.c_str()));
+        for (std::string tok; std::getline(tl, tok, ',');) o.thread_counts.push_back(std::atoi(tok.c_str()));
     }
-    const bool bad_threads = thread_counts.empty() ||
-                             std::any_of(thread_counts.begin(), thread_counts.end(), [](int n) { return n < 1; });
-    if (steps < 1 || repeats < 1 || triangles < 1 || bad_threads) {
+    const bool bad_threads = o.thread_counts.empty() ||
+                             std::any_of(o.thread_counts.begin(), o.thread_counts.end(), [](int n) { return n < 1; });
+    if (o.steps < 1 || o.repeats < 1 || o.triangles < 1 || bad_threads) {
         std::cerr << "fdem_bench: --steps, --repeats and --triangles take positive integers and --threads a list of "
-                     "positive integers such as 1,2 (got steps " << steps << ", repeats " << repeats << ", triangles "
-                  << triangles << ", threads '" << threads_list << "')\n";
-        return 1;
+                     "positive integers such as 1,2 (got steps " << o.steps << ", repeats " << o.repeats << ", triangles "
+                  << o.triangles << ", threads '" << threads_list << "')\n";
+        return false;
     }
-    if (nodes > 0) return bench_nodes(nodes, steps, repeats, thread_counts, csv);
-    fdem::CaseSpec spec;
-    fdem::Model model;
-    std::string label;
+    return true;
+}
+
+// The benchmark's scene: the case file, or a 2 x 1 m plate of unstructured triangles of size h (about
+// o.triangles of them) fixed at its left end under gravity.
+bool bench_scene(const BenchOptions& o, fdem::CaseSpec& spec, fdem::Model& model) {
     try {
-        if (!case_file.empty()) {
-            spec = fdem::load_case(case_file, sets);
+        if (!o.case_file.empty()) {
+            spec = fdem::load_case(o.case_file, o.sets);
             model = fdem::build_scene(spec);
         } else {
             // A 2 x 1 m plate of unstructured triangles of size h (about `triangles` of them).
-            const double h = std::sqrt(2.0 * 2.0 / (triangles * 0.866));
+            const double h = std::sqrt(2.0 * 2.0 / (o.triangles * 0.866));
             spec.file = "bench";
             spec.name = "plate";
             spec.thickness = 0.1;
@@ -302,16 +294,21 @@ int main(int argc, char** argv) {
             spec.stages.push_back(st);
             model = fdem::build_model(spec, fdem::mesh::mesh_rectangle(0, 0, 2.0, 1.0, h));
         }
-        label = spec.name;
     } catch (const std::exception& e) {
         std::cerr << "error: " << e.what() << "\n";
-        return 1;
+        return false;
     }
+    return true;
+}
+
+// Steps of the scene on each thread count: throughput, steps per CPU second and per-kernel times (median of the
+// repeats), one CSV row per repeat, and whether the end positions have the same bits on every thread count.
+int run_bench(const BenchOptions& o, const fdem::CaseSpec& spec, const fdem::Model& model, const std::string& label) {
     std::printf("%s: %d triangles, %d nodes, %zu cohesive elements; %ld steps x %ld repeats\n", label.c_str(),
-                model.n_triangles(), model.n_nodes(), model.cohesive.size(), steps, repeats);
-    std::ofstream out(csv);
+                model.n_triangles(), model.n_nodes(), model.cohesive.size(), o.steps, o.repeats);
+    std::ofstream out(o.csv);
     if (!out) {
-        std::cerr << "error: cannot write the CSV file '" << csv << "'\n";
+        std::cerr << "error: cannot write the CSV file '" << o.csv << "'\n";
         return 1;
     }
     out << "case,threads,triangles,nodes,steps,repeat,seconds,triangle_steps_per_s,steps_per_s,us_triangles,us_cohesive,"
@@ -337,7 +334,7 @@ int main(int argc, char** argv) {
     std::vector<std::pair<int, double>> medians;
     std::vector<double> first_x;  // end state of the first thread count: every count runs the same steps
     bool same_bits = true;
-    for (const int nth : thread_counts) {
+    for (const int nth : o.thread_counts) {
         fdem::RunOptions opt;
         opt.quiet = true;
         opt.threads = nth;
@@ -349,22 +346,22 @@ int main(int argc, char** argv) {
         // Process CPU time per step (all threads): on a shared machine a thread that waits for a core is not
         // charged, so on 1 thread steps / cpu_seconds is the rate of a quiet core (spin-waits count on 2).
         std::vector<double> cpu_rates;
-        for (long r = 0; r < repeats; ++r) {
+        for (long r = 0; r < o.repeats; ++r) {
             double k0[kKernels], k1[kKernels];
             kernel_clock(sim, k0);
             const std::clock_t c0 = std::clock();
             const auto t0 = std::chrono::steady_clock::now();
-            for (long s = 0; s < steps; ++s) sim.step();
+            for (long s = 0; s < o.steps; ++s) sim.step();
             const double sec = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
             const double cpu = static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC;
-            cpu_rates.push_back(static_cast<double>(steps) / cpu);
+            cpu_rates.push_back(static_cast<double>(o.steps) / cpu);
             kernel_clock(sim, k1);
-            const double rate = static_cast<double>(steps) * model.n_triangles() / sec;
+            const double rate = static_cast<double>(o.steps) * model.n_triangles() / sec;
             rates.push_back(rate);
-            out << label << "," << nth << "," << model.n_triangles() << "," << model.n_nodes() << "," << steps << "," << r
-                << "," << sec << "," << rate << "," << steps / sec;
+            out << label << "," << nth << "," << model.n_triangles() << "," << model.n_nodes() << "," << o.steps << "," << r
+                << "," << sec << "," << rate << "," << o.steps / sec;
             for (int k = 0; k < kKernels; ++k) {
-                const double us = 1e6 * (k1[k] - k0[k]) / static_cast<double>(steps);
+                const double us = 1e6 * (k1[k] - k0[k]) / static_cast<double>(o.steps);
                 kernel_us[k].push_back(us);
                 out << "," << us;
             }
@@ -392,6 +389,34 @@ int main(int argc, char** argv) {
                     medians.back().second / medians.front().second);
         std::printf("end positions bit-identical across thread counts: %s\n", same_bits ? "yes" : "NO");
     }
-    std::printf("CSV: %s\n", csv.c_str());
+    std::printf("CSV: %s\n", o.csv.c_str());
     return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    // --probe [--csv FILE]: the machine, not a model
+    for (int i = 1; i < argc; ++i)
+        if (std::strcmp(argv[i], "--probe") == 0) {
+            std::string csv = "probe.csv";
+            for (int j = 1; j < argc; ++j) {
+                if (j == i) continue;
+                if (std::strcmp(argv[j], "--csv") == 0 && j + 1 < argc) {
+                    csv = argv[++j];
+                } else {
+                    std::cerr << "fdem_bench --probe: takes only --csv FILE (got '" << argv[j] << "')\n";
+                    return 1;
+                }
+            }
+            return probe(csv);
+        }
+    fdem::ensure_wait_policy(argv);
+    BenchOptions o;
+    if (!parse_options(argc, argv, o)) return 1;
+    if (o.nodes > 0) return bench_nodes(o.nodes, o.steps, o.repeats, o.thread_counts, o.csv);
+    fdem::CaseSpec spec;
+    fdem::Model model;
+    if (!bench_scene(o, spec, model)) return 1;
+    return run_bench(o, spec, model, spec.name);
 }
