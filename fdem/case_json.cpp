@@ -141,36 +141,7 @@ Json load(const LoadSpec& l) {
     return o;
 }
 
-}  // namespace
-
-Json toml_to_json(const toml::node& n) {
-    if (const toml::table* t = n.as_table()) {
-        Json o = Json::object();
-        for (const auto& [k, v] : *t) o[std::string(k.str())] = toml_to_json(v);
-        return o;
-    }
-    if (const toml::array* a = n.as_array()) {
-        Json o = Json::array();
-        for (const toml::node& v : *a) o.push_back(toml_to_json(v));
-        return o;
-    }
-    if (const auto* v = n.as_string()) return Json(v->get());
-    if (const auto* v = n.as_integer()) return Json(static_cast<long long>(v->get()));
-    if (const auto* v = n.as_floating_point()) return Json::real(v->get());  // 1.0 stays 1.0; non-finite: null
-    if (const auto* v = n.as_boolean()) return Json(v->get());
-    std::ostringstream s;  // date, time, date-time
-    n.visit([&](const auto& x) { s << x; });
-    return Json(s.str());
-}
-
-Json resolved_values_json(const CaseSpec& spec) {
-    Json r = Json::object();
-    r["name"] = spec.name;
-    r["description"] = spec.description;
-    r["thickness_m"] = spec.thickness;
-    r["plane"] = spec.plane == Plane::stress ? "stress" : "strain";
-    r["geometry"] = geometry(spec.geometry);
-
+Json numerics_json(const CaseSpec& spec) {
     Json num = Json::object();
     num["dt_fixed_s"] = opt(spec.dt_override);  // null: the time step is automatic, safety x the stable limit
     num["dt_automatic"] = !spec.dt_override.has_value();
@@ -178,8 +149,12 @@ Json resolved_values_json(const CaseSpec& spec) {
     num["mass_scale"] = spec.mass_scale;
     num["mass_scaling"] = spec.per_node_mass ? "per_node" : "uniform";
     num["energy_audit"] = spec.energy_audit;
-    r["numerics"] = num;
+    return num;
 
+}
+
+// The materials, and the regions' materials.
+Json materials_json(const CaseSpec& spec, Json& regions) {
     Json mats = Json::object();
     for (const Material& m : spec.materials) {
         Json o = Json::object();
@@ -198,11 +173,13 @@ Json resolved_values_json(const CaseSpec& spec) {
         }
         mats[m.name] = o;
     }
-    r["materials"] = mats;
-    Json regions = Json::object();
+    regions = Json::object();
     for (const auto& [reg, mat] : spec.region_material) regions[reg] = mat;
-    r["regions"] = regions;
+    return mats;
 
+}
+
+Json interfaces_json(const CaseSpec& spec) {
     Json itfs = Json::array();
     for (const InterfaceSpec& in : spec.interfaces) {
         Json o = Json::object();
@@ -220,9 +197,11 @@ Json resolved_values_json(const CaseSpec& spec) {
         o["bond"] = joint(in.bond);
         itfs.push_back(o);
     }
-    r["interfaces"] = itfs;
-    r["contact_buffer_m"] = spec.contact_buffer;  // 0: the smallest contact edge / 5
+    return itfs;
 
+}
+
+Json monitors_json(const CaseSpec& spec) {
     Json mons = Json::array();
     for (const MonitorSpec& m : spec.monitors) {
         Json o = Json::object();
@@ -233,8 +212,11 @@ Json resolved_values_json(const CaseSpec& spec) {
         o["unit"] = m.unit();
         mons.push_back(o);
     }
-    r["monitors"] = mons;
+    return mons;
 
+}
+
+Json stages_json(const CaseSpec& spec) {
     // The damping a stage runs with: its own, else the stage before's (Simulation::stage_damping_and_gravity), from 0.
     double alpha = 0, tau = 0, xi = 0, beta = 0;
     Json stages = Json::array();
@@ -282,8 +264,12 @@ Json resolved_values_json(const CaseSpec& spec) {
         o["loads"] = loads;
         stages.push_back(o);
     }
-    r["stages"] = stages;
+    return stages;
 
+}
+
+// The output settings, the curve the tools read and the reference result.
+void output_json(const CaseSpec& spec, Json& r) {
     Json out = Json::object();
     out["history_interval_s"] = spec.history_interval;    // 0: every 100 steps
     out["snapshot_interval_s"] = spec.snapshot_interval;  // 0: at the end of each stage
@@ -313,6 +299,46 @@ Json resolved_values_json(const CaseSpec& spec) {
     } else {
         r["reference"] = Json();
     }
+}
+
+}  // namespace
+
+Json toml_to_json(const toml::node& n) {
+    if (const toml::table* t = n.as_table()) {
+        Json o = Json::object();
+        for (const auto& [k, v] : *t) o[std::string(k.str())] = toml_to_json(v);
+        return o;
+    }
+    if (const toml::array* a = n.as_array()) {
+        Json o = Json::array();
+        for (const toml::node& v : *a) o.push_back(toml_to_json(v));
+        return o;
+    }
+    if (const auto* v = n.as_string()) return Json(v->get());
+    if (const auto* v = n.as_integer()) return Json(static_cast<long long>(v->get()));
+    if (const auto* v = n.as_floating_point()) return Json::real(v->get());  // 1.0 stays 1.0; non-finite: null
+    if (const auto* v = n.as_boolean()) return Json(v->get());
+    std::ostringstream s;  // date, time, date-time
+    n.visit([&](const auto& x) { s << x; });
+    return Json(s.str());
+}
+
+Json resolved_values_json(const CaseSpec& spec) {
+    Json r = Json::object();
+    r["name"] = spec.name;
+    r["description"] = spec.description;
+    r["thickness_m"] = spec.thickness;
+    r["plane"] = spec.plane == Plane::stress ? "stress" : "strain";
+    r["geometry"] = geometry(spec.geometry);
+    r["numerics"] = numerics_json(spec);
+    Json regions;
+    r["materials"] = materials_json(spec, regions);
+    r["regions"] = regions;
+    r["interfaces"] = interfaces_json(spec);
+    r["contact_buffer_m"] = spec.contact_buffer;  // 0: the smallest contact edge / 5
+    r["monitors"] = monitors_json(spec);
+    r["stages"] = stages_json(spec);
+    output_json(spec, r);
     // Every file the case reads besides itself, as the engine opens it (relative paths from the case's folder).
     Json files = Json::array();
     if (!spec.geometry.file.empty()) files.push_back(spec.geometry.file);
