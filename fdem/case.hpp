@@ -139,12 +139,13 @@ struct LoadSpec {
     int line = 0;
 };
 
-enum class DofMode { inherit, free, fixed, velocity, protocol, rigid };
+enum class DofMode { inherit, free, fixed, velocity, protocol, rigid, body };
 
 // A support on a group: per component free, fixed, a prescribed velocity (smooth ramp-up), a
 // piecewise-linear displacement-versus-time protocol, or rigid: the group's nodes share one velocity in that
 // component, free as a whole (e.g. rigid = "y" with vx on a loading beam: the beam stays horizontal, moves up
-// and down freely, and cannot rotate). Kept in later stages until changed.
+// and down freely, and cannot rotate), or body (rigid = "body", both components): the group moves as one rigid body,
+// translating and rotating under its resultant force and moment, free. Kept in later stages until changed.
 struct SupportSpec {
     std::string group;
     std::array<DofMode, 2> mode{DofMode::inherit, DofMode::inherit};

@@ -29,6 +29,7 @@ const char* dof_mode(DofMode m) {
         case DofMode::velocity: return "velocity";
         case DofMode::protocol: return "protocol";
         case DofMode::rigid: return "rigid";
+        case DofMode::body: return "rigid_body";
     }
     return "inherit";
 }

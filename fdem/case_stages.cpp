@@ -10,7 +10,18 @@ namespace fdem::case_detail {
 namespace {
 
 void read_dof_set(Ctx& ctx, Reader& r, const std::string& key, DofMode mode, SupportSpec& s) {
-    if (auto v = r.string(key, false, "\"x\", \"y\" or \"xy\"", {"x", "y", "xy"}))
+    const bool rigid = mode == DofMode::rigid;
+    const std::vector<std::string> allowed = rigid ? std::vector<std::string>{"x", "y", "xy", "body"} : std::vector<std::string>{"x", "y", "xy"};
+    if (auto v = r.string(key, false, rigid ? "\"x\", \"y\", \"xy\" or \"body\"" : "\"x\", \"y\" or \"xy\"", allowed)) {
+        if (*v == "body") {  // one rigid body: both components, and the rotation
+            for (int comp = 0; comp < 2; ++comp) {
+                if (s.mode[comp] != DofMode::inherit)
+                    ctx.error(r.key_path(key), r.line(), "component " + kComponents[comp] + " already has a support in this block");
+                else
+                    s.mode[comp] = DofMode::body;
+            }
+            return;
+        }
         for (char c : *v) {
             const int comp = c == 'y' ? 1 : 0;
             if (s.mode[comp] != DofMode::inherit)
@@ -18,6 +29,7 @@ void read_dof_set(Ctx& ctx, Reader& r, const std::string& key, DofMode mode, Sup
             else
                 s.mode[comp] = mode;
         }
+    }
 }
 
 // key = { type = "sin", amplitude, omega, phase, offset } or { type = "table", points = [[t, f], ...] }.

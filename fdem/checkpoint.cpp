@@ -35,7 +35,7 @@ namespace fdem {
 namespace {
 
 constexpr char kMagic[8] = {'F', 'D', 'E', 'M', 'C', 'K', 'P', 'T'};
-constexpr std::uint32_t kFormat = 4;  // 4: a seventh double per contact slot (restitution)
+constexpr std::uint32_t kFormat = 5;  // 4: a seventh double per contact slot (restitution); 5: rigid bodies
 
 std::uint64_t fnv1a(const char* p, std::size_t n, std::uint64_t h = 1469598103934665603ull) {
     for (std::size_t i = 0; i < n; ++i) h = (h ^ static_cast<unsigned char>(p[i])) * 1099511628211ull;
@@ -132,7 +132,7 @@ void Simulation::save_state(StateWriter& w) const {
     // (not saved: the energy audit's sums, a diagnostic of one process; after a restart it starts over; the node
     // loop's sums node_sums_ and v2max_, which load_state marks unknown)
     static_assert(sizeof(Simulation) == 4976, "Simulation changed: update state_io (fdem/checkpoint.cpp) and this size");
-    static_assert(sizeof(ActiveSupport) == 376, "ActiveSupport changed: update state_io and this size");
+    static_assert(sizeof(ActiveSupport) == 400, "ActiveSupport changed: update state_io and this size");
     static_assert(sizeof(ActiveLoad) == 296, "ActiveLoad changed: update state_io and this size");
 #endif
     const_cast<Simulation*>(this)->state_io(w);  // (the writer only reads the fields)
@@ -182,6 +182,7 @@ void Simulation::state_io(IO& io) {
             for (int k : a.nodes) check_index(k, nn, "support node");
         io.pod(a.comp), io.pod(a.mode);
         io.pod(a.v_start), io.pod(a.v_target), io.pod(a.ramp), io.pod(a.t0), io.pod(a.v_common), io.pod(a.v_ref);
+        io.pod(a.omega), io.pod(a.omega_ref), io.pod(a.body_y);
         io.vec(a.pt), io.vec(a.pu), io.vec(a.pI);
         fn_io(io, a.fn);
         io.pod(a.servo_ratio), io.pod(a.servo_time), io.pod(a.servo_min), io.pod(a.servo_factor), io.pod(a.servo_rbar);

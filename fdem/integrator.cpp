@@ -457,6 +457,9 @@ void Simulation::step() {
         for (int k : s.nodes)
             if (dof_owner_[2 * k + c] == static_cast<int>(id)) dof_vel_[2 * k + c] = vnew;
     }
+    for (std::size_t id = 0; id < supports_.size(); ++id)
+        if (supports_[id].mode == DofMode::body && supports_[id].comp == 0)
+            body_step(static_cast<int>(id), tf, dt, dtv, wf, hm, rigid_damp, rigid_damp_half, rigid_mass, rigid_mass_half);
 
     // 6. Node loop, one unit at a time: a node, or a group of tied copies (extrinsic insertion), which moves as one
     // node of the group's mass M: the resultant F of its members' forces gives every member the same velocity
@@ -562,6 +565,65 @@ void Simulation::observe(double dt) {
         const Energies e = energies();
         if (spec_.energy_audit) log(audit_text(e));
         check_energy(e);
+    }
+}
+
+// A rigid body (rigid = "body"): the nodes whose x and y the body's two supports still own move as one rigid body.
+// With M, the centre of mass c, I = sum m_k |r_k|^2 (r_k = x_k - c at t^n, lumped masses), the resultant F and
+// moment T about c of the nodes' forces at t^n:
+//   V^{n+1/2} = V^{n-1/2} + dt (F + F_d) / M,   omega^{n+1/2} = omega^{n-1/2} + dt (T + T_d) / I
+// (local damping F_d = -alpha |F| sign(V) per component and T_d = -alpha |T| sign(omega); mass damping as for the
+// nodes: the semi-implicit factor on V and omega). The nodes then move rigidly to
+//   x_k^{n+1} = c + dt V^{n+1/2} + R(dtheta) r_k,   sin(dtheta) = dt omega^{n+1/2},
+// given to the node loop as their prescribed velocities (x_k^{n+1} - x_k^n) / dt: the distances between the nodes
+// stay as they were (to round-off), and the chord velocities carry exactly the momentum M V and the angular
+// momentum I omega (sum m r x (R - 1) r / dt = I sin(dtheta) / dt), so the reactions the node loop books inside the
+// body add up to the damping force and moment alone.
+void Simulation::body_step(int id, const double* tf, double dt, double dtv, double wf, double hm, double& damp,
+                           double& damp_half, double& mass_w, double& mass_half) {
+    ActiveSupport& sx = supports_[id];
+    ActiveSupport& sy = supports_[sx.body_y];
+    double M = 0, mx = 0, my = 0;
+    auto owned = [&](int k) { return dof_owner_[2 * k] == id && dof_owner_[2 * k + 1] == sx.body_y; };
+    for (int k : sx.nodes)
+        if (owned(k)) M += model_.mass[k], mx += model_.mass[k] * model_.x[2 * k], my += model_.mass[k] * model_.x[2 * k + 1];
+    if (!(M > 0)) return;
+    const double cx = mx / M, cy = my / M;
+    double F[2] = {0, 0}, T = 0, I = 0;
+    for (int k : sx.nodes) {
+        if (!owned(k)) continue;
+        double f[2];
+        for (int c = 0; c < 2; ++c) {
+            const int d = 2 * k + c;
+            f[c] = f_mod_[d] + f_ext_[d] + model_.grav_mass[k] * applied_gravity_[c];
+            for (int j = model_.inc_ptr[k]; j < model_.inc_ptr[k + 1]; ++j) f[c] += tf[2 * static_cast<std::size_t>(model_.inc_idx[j]) + c];
+            F[c] += f[c];
+        }
+        const double rx = model_.x[2 * k] - cx, ry = model_.x[2 * k + 1] - cy;
+        T += rx * f[1] - ry * f[0];
+        I += model_.mass[k] * (rx * rx + ry * ry);
+    }
+    auto advance = [&](double vold, double ref, double force, double inertia, double& vnew) {
+        const double vrel = tau_ld_ > 0 ? vold - ref : vold;
+        const double fd = vrel > 0 ? -alpha_ * std::abs(force) : vrel < 0 ? alpha_ * std::abs(force) : 0.0;
+        vnew = ((1 - hm) * vold + dtv * (force + fd) / inertia) / (1 + hm);
+        const double fm = -beta_mass_ * inertia * 0.5 * (vold + vnew);
+        damp += dt * fd * 0.5 * (vold + vnew), damp_half += 0.5 * dt * fd * vnew;
+        mass_w += dt * fm * 0.5 * (vold + vnew), mass_half += 0.5 * dt * fm * vnew;
+    };
+    double V[2], w = 0;
+    advance(sx.v_common, sx.v_ref, F[0], M, V[0]);
+    advance(sy.v_common, sy.v_ref, F[1], M, V[1]);
+    if (I > 0) advance(sx.omega, sx.omega_ref, T, I, w);
+    sx.v_common = V[0], sy.v_common = V[1], sx.omega = w;
+    if (tau_ld_ > 0) sx.v_ref += wf * (V[0] - sx.v_ref), sy.v_ref += wf * (V[1] - sy.v_ref), sx.omega_ref += wf * (w - sx.omega_ref);
+    const double sn = std::max(-1.0, std::min(1.0, dt * w)), cs = std::sqrt(1.0 - sn * sn);  // sin, cos of dtheta
+    for (int k : sx.nodes) {
+        if (!owned(k)) continue;
+        const double rx = model_.x[2 * k] - cx, ry = model_.x[2 * k + 1] - cy;
+        // (x^{n+1} - x^n) / dt = V + (R(dtheta) - 1) r / dt
+        dof_vel_[2 * k] = V[0] + ((cs - 1.0) * rx - sn * ry) / dt;
+        dof_vel_[2 * k + 1] = V[1] + (sn * rx + (cs - 1.0) * ry) / dt;
     }
 }
 

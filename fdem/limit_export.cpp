@@ -70,6 +70,7 @@ const char* mode_name(DofMode m) {
         case DofMode::velocity: return "velocity";
         case DofMode::protocol: return "protocol";
         case DofMode::rigid: return "rigid";
+        case DofMode::body: return "rigid_body";
         default: return "inherit";
     }
 }

@@ -165,6 +165,10 @@ private:
         double v_start = 0, v_target = 0, ramp = 0, t0 = 0;
         double v_common = 0;         // rigid: the group's common velocity (m/s) at the last half step
         double v_ref = 0;            // rigid: its moving mean for the filtered local damping (m/s)
+        // body (on its x entry): the angular velocity (rad/s) at the last half step, its moving mean, and the index
+        // in supports_ of its y entry (-1: none left, the x entry then moves as rigid in x alone)
+        double omega = 0, omega_ref = 0;
+        int body_y = -1;
         std::vector<double> pt, pu;  // protocol: times (s, from t0) and displacements (m)
         std::vector<double> pI;      // protocol: INT_pt[0]^pt[i] u dt at each knot (m s), for the corner smoothing
         TimeFunction fn;             // velocity: factor on the prescribed velocity, of t - t0
@@ -174,6 +178,10 @@ private:
         double servo_t = 0, servo_r_int = 0, servo_f_int = 0, servo_r_max = 0, servo_f_min = 1;  // stage statistics
         std::string group;
     };
+    // step(), rigid bodies (rigid = "body"): the body whose x entry is supports_[id] (integrator.cpp); adds its
+    // damping and mass damping work to the four sums as the rigid groups do.
+    void body_step(int id, const double* tf, double dt, double dtv, double wf, double hm, double& damp, double& damp_half,
+                   double& mass_w, double& mass_half);
     void update_servos();  // after each step: the servo supports' velocity factors from the unbalanced-force ratio
     void apply_initial_conditions();
     // begin_stage's parts, in its order (fdem/stages.cpp)

@@ -183,12 +183,35 @@ void Simulation::stage_supports(const StageSpec& st) {
                 a.v_common = m > 0 ? p / m : 0.0;
                 a.v_ref = a.v_common;  // the filtered local damping's mean starts there (no kick)
             }
+            if (a.mode == DofMode::body) {
+                // Starts from the group's momentum and angular momentum about its centre of mass: V = P / M,
+                // omega = L / I (lumped masses); the y entry follows the x entry made just before it.
+                double m = 0, mx = 0, my = 0, px = 0, py = 0;
+                for (int k : a.nodes) {
+                    const double mk = model_.mass[k];
+                    m += mk, mx += mk * model_.x[2 * k], my += mk * model_.x[2 * k + 1];
+                    px += mk * model_.v[2 * k], py += mk * model_.v[2 * k + 1];
+                }
+                a.v_common = m > 0 ? (c == 0 ? px : py) / m : 0.0;
+                a.v_ref = a.v_common;
+                if (c == 0 && m > 0) {
+                    const double cx = mx / m, cy = my / m;
+                    double L = 0, I = 0;
+                    for (int k : a.nodes) {
+                        const double mk = model_.mass[k], rx = model_.x[2 * k] - cx, ry = model_.x[2 * k + 1] - cy;
+                        L += mk * (rx * (model_.v[2 * k + 1] - py / m) - ry * (model_.v[2 * k] - px / m));
+                        I += mk * (rx * rx + ry * ry);
+                    }
+                    a.omega = a.omega_ref = I > 0 ? L / I : 0.0;
+                }
+                if (c == 1) supports_.back().body_y = static_cast<int>(supports_.size());
+            }
             const int id = static_cast<int>(supports_.size());
             for (int k : a.nodes) {
                 const int d = 2 * k + c;
                 dof_owner_[d] = a.mode == DofMode::free ? -1 : id;
                 dof_kind_[d] = a.mode == DofMode::free ? 0 : a.mode == DofMode::fixed ? 1 : 2;
-                dof_vel_[d] = a.mode == DofMode::rigid ? a.v_common : 0;
+                dof_vel_[d] = a.mode == DofMode::rigid || a.mode == DofMode::body ? a.v_common : 0;
                 reaction_[d] = 0;
             }
             supports_.push_back(std::move(a));
@@ -206,6 +229,17 @@ void Simulation::stage_supports(const StageSpec& st) {
         for (int d = 0; d < 2 * nn; ++d)
             if (dof_owner_[d] >= 0) dof_owner_[d] = remap[dof_owner_[d]];
         supports_ = std::move(kept);
+        for (auto& s : supports_)
+            if (s.mode == DofMode::body && s.comp == 0) {
+                s.body_y = s.body_y >= 0 ? remap[s.body_y] : -1;
+                if (s.body_y < 0) s.mode = DofMode::rigid;  // its y was taken over: rigid in x alone
+            }
+        for (auto& s : supports_)  // a y entry whose x entry was taken over: rigid in y alone
+            if (s.mode == DofMode::body && s.comp == 1 &&
+                std::none_of(supports_.begin(), supports_.end(), [&](const ActiveSupport& o) {
+                    return o.mode == DofMode::body && o.comp == 0 && o.body_y == static_cast<int>(&s - supports_.data());
+                }))
+                s.mode = DofMode::rigid;
     }
 }
 
@@ -372,7 +406,7 @@ void Simulation::apply_time_dependent(double t) {
     const double th = t + 0.5 * dt_;
     for (std::size_t id = 0; id < supports_.size(); ++id) {
         const ActiveSupport& s = supports_[id];
-        if (s.mode == DofMode::fixed || s.mode == DofMode::rigid) continue;  // rigid: set in step() from the forces
+        if (s.mode == DofMode::fixed || s.mode == DofMode::rigid || s.mode == DofMode::body) continue;  // set in step() from the forces
         double v = 0;
         if (s.mode == DofMode::velocity) {
             const double tau = th - s.t0;
@@ -418,7 +452,9 @@ double Simulation::load_imbalance(double* applied, double* reactions) const {
         for (int c = 0; c < 2; ++c) {
             const int d = 2 * k + c;
             L[c] += f_ext_[d] + model_.grav_mass[k] * applied_gravity_[c];
-            if (dof_kind_[d] != 0 && dof_owner_[d] >= 0 && supports_[dof_owner_[d]].mode != DofMode::rigid) R[c] += reaction_[d];
+            if (dof_kind_[d] != 0 && dof_owner_[d] >= 0 && supports_[dof_owner_[d]].mode != DofMode::rigid &&
+                supports_[dof_owner_[d]].mode != DofMode::body)
+                R[c] += reaction_[d];
         }
     if (applied) applied[0] = L[0], applied[1] = L[1];
     if (reactions) reactions[0] = R[0], reactions[1] = R[1];

@@ -25,6 +25,7 @@ namespace contact_test {
 struct RockingSetup {
     double bw = 0.2, bh = 1.0, foot = 0.01, h = 0.05, E = 1e10, kn = 1e10, e = 0.2, T = 1.1, mu = 0.8;
     double theta0_of_alpha = 0.5;  // theta0 = this x atan(bw / bh)
+    bool body = false;             // the block one rigid body (a support rigid = "body") instead of elastic
 };
 
 // The tests' setting (test_rocking.cpp, test_rocking_long.cpp): 0.01 m pads, E 1e11 Pa, k_n 1e11 Pa/m, e 0.2.
@@ -73,7 +74,8 @@ inline RockingResult rock(const RockingSetup& s, const std::string& name) {
       << "[[interfaces]]\nregions = [\"base\", \"block\"]\nkind = \"dry\"\nfriction = " << std::atan(s.mu) * 180 / M_PI
       << "\nnormal_stiffness = " << s.kn << "\nrestitution = " << s.e << "\n"
       << "[[stages]]\nname = \"rock\"\nduration = " << s.T << "\nlocal_damping = 0.0\ngravity = [0.0, -9.81]\n"
-      << "  [[stages.supports]]\n  group = \"base\"\n  fix = \"xy\"\n";
+      << "  [[stages.supports]]\n  group = \"base\"\n  fix = \"xy\"\n"
+      << (s.body ? "  [[stages.supports]]\n  group = \"block\"\n  rigid = \"body\"\n" : "");
     fdem::Simulation sim = testing::make_simulation(c.str(), name, {}, 1);
     const auto& bn = sim.model().group("block").nodes;
     const auto& X = sim.model().x;

@@ -178,6 +178,10 @@ class Problem:
                 drivers[s["group"]][2] = sorted(set(drivers[s["group"]][2]) | set(nodes))
             elif mode == "rigid":
                 rigid_groups.append((c, list(nodes), s["group"]))
+            elif mode == "rigid_body" and c == 0:
+                if len({int(self.node_body[n]) for n in nodes}) > 1:
+                    self.notes.append(f"support on '{s['group']}' (rigid = \"body\") joins several blocks into one "
+                                      "rigid body in the run; the limit model keeps them separate")
         # a body fixed in x and y at two or more distinct points is fixed
         xy_fixed = [n for (n, c), m in comp_nodes.items() if c == 0 and comp_nodes.get((n, 1)) == "fixed"]
         for n in xy_fixed:

@@ -7,7 +7,8 @@
 //     -o /tmp/rocking $B/fdem/libfdem_core.a $B/mesh/libfdem_mesh.a $B/contact/libfdem_contact.a \
 //     $B/fracture/libfdem_fracture.a -lgmsh -lgomp -lpthread -ltomlplusplus
 //   /tmp/rocking E 1e11 kn 1e11 e 0.2 foot 0.01 T 3
-// Keys (value after each): bw bh foot (0: flat) h E kn e mu T theta (theta0 as a fraction of atan(bw / bh))
+// Keys (value after each): bw bh foot (0: flat) h E kn e mu T theta (theta0 as a fraction of atan(bw / bh)) body (1: the
+// block one rigid body)
 #include <cstdio>
 #include <string>
 #include <unistd.h>
@@ -21,7 +22,7 @@ int main(int argc, char** argv) {
         const double v = std::stod(argv[i + 1]);
         if (k == "bw") s.bw = v; else if (k == "bh") s.bh = v; else if (k == "foot") s.foot = v; else if (k == "h") s.h = v;
         else if (k == "E") s.E = v; else if (k == "kn") s.kn = v; else if (k == "e") s.e = v; else if (k == "mu") s.mu = v;
-        else if (k == "T") s.T = v; else if (k == "theta") s.theta0_of_alpha = v;
+        else if (k == "T") s.T = v; else if (k == "theta") s.theta0_of_alpha = v; else if (k == "body") s.body = v != 0;
         else { std::fprintf(stderr, "unknown key %s\n", k.c_str()); return 1; }
     }
     const contact_test::RockingResult r = contact_test::rock(s, "run_" + std::to_string(getpid()));
