@@ -531,12 +531,9 @@ CaseSpec load_case(const std::string& path, const std::vector<std::string>& over
     read_stages(ctx, top, spec);
     top.finish();
     if (keys_read) keys_read->assign(ctx.keys_read.begin(), ctx.keys_read.end());
-
-    // Until-targets on a driven displacement must lie in the direction of the velocity (from zero for stage 1).
     if (!ctx.errors.empty()) throw InputError(ctx.errors);
     return spec;
 }
-
 
 std::vector<std::string> plausibility_warnings(const CaseSpec& spec) {
     std::vector<std::string> w;

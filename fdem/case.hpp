@@ -47,7 +47,7 @@ struct JointSpec {
     int line = 0;
 };
 
-// How two regions meet (README "Physics"): tied (one continuum), bonded (cohesive element, then contact),
+// How two regions meet (fdem/README.md "Contact", cases/REFERENCE.md "interfaces"): tied (one continuum), bonded (cohesive element, then contact),
 // dry (contact with Coulomb friction only). region_a == region_b: two different bodies of one region.
 struct InterfaceSpec {
     std::string region_a, region_b;

@@ -90,7 +90,7 @@ def run_name(params: dict) -> str:
 
 # ----------------------------------------------------------------------------------------------
 # Run fingerprints: what a run was made from. A completed run is reused only when its fingerprint matches the one
-# the batch would give it now (README "batch": Resumable).
+# the batch would give it now (tools/README.md "batch": Resumable).
 
 FINGERPRINT = "fingerprint.json"
 FINGERPRINT_VERSION = 2  # 2: the case hashed by the engine (fdem check --json); 1: the tools' own TOML reading

@@ -285,7 +285,7 @@ class Curve:
 
 
 # ----------------------------------------------------------------------------------------------
-# The load sign rule: curves.loading_work_sign and curves.resolve_sign (README "Curves, signs and units")
+# The load sign rule: curves.loading_work_sign and curves.resolve_sign (tools/README.md "Curves, signs and units")
 
 SIGN_CHOICES = ("auto", "1", "-1")
 
@@ -328,7 +328,7 @@ def _sign_value(v, where: str) -> float:
 
 
 # ----------------------------------------------------------------------------------------------
-# Units of CSV columns (README "Curves, signs and units")
+# Units of CSV columns (tools/README.md "Curves, signs and units")
 
 DEFAULT_X_UNIT, DEFAULT_Y_UNIT = "m", "N"  # every command's default for a CSV column without a unit in its name
 

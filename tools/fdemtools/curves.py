@@ -27,7 +27,7 @@ PEAK_RULES = ("largest", "first")
 
 
 # ----------------------------------------------------------------------------------------------
-# The load sign rule (one rule for plot, hysteresis, eeep and validate; README "Curves, signs and units")
+# The load sign rule (one rule for plot, hysteresis, eeep and validate; tools/README.md "Curves, signs and units")
 
 
 def loading_work_sign(x, y) -> float:

@@ -26,7 +26,7 @@ round the loop clockwise in the (d, P) plane); cumulative E_i = sum_{j<=i} W_j; 
 Discrete form: the record is a polyline, W_i = sum over its segments of (P_k + P_{k+1})/2 (d_{k+1} - d_k), exact for
 piecewise-linear branches. A negative W_i (a loop run anticlockwise: energy returned, which a passive structure
 cannot do; noise, an unclosed loop or a wrong load sign) is flagged in the cycle's row and printed as a warning.
-Load sign: the tools' one rule (curves.resolve_sign; the README's tools section).
+Load sign: the tools' one rule (curves.resolve_sign; tools/README.md "Curves, signs and units").
 """
 from __future__ import annotations
 

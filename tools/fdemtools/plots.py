@@ -144,7 +144,7 @@ def plot_damage(run, label: str, prefix: str, xu=("mm", 1e-3), yu=("kN", 1e3), l
                               label=f"broken in {'units' if cls == 'unit' else 'interfaces'} "
                                     f"(final {int(n[-1]) if len(n) else 0})")
     if dry is not None:
-        # the dry-joint record of cracks.csv (README "The run folder"): segments first opened / slipped beyond the
+        # the dry-joint record of cracks.csv (fdem/README.md "The run folder"): segments first opened / slipped beyond the
         # output thresholds, counted against the control displacement at which each was recorded
         for mode, colour, ls in (("open", "#ff7f0e", "-."), ("slip", "#2ca02c", ":")):
             d = np.sort(dry[mode]) * (1.0 / xu[1])

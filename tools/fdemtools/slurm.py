@@ -79,7 +79,7 @@ SLURM_ONLY = ("partition", "time", "mem", "account", "sbatch_arg", "no_wait", "c
 def add_arguments(p, dry_run: bool = False) -> None:
     """--scheduler and the Slurm options of a sub-command (batch, study mesh/speed, validate)."""
     g = p.add_argument_group("cluster", "run the grid as a Slurm job array instead of on the local cores "
-                                        "(README: Running on a cluster)")
+                                        "(tools/slurm/README.md)")
     g.add_argument("--scheduler", choices=["local", "slurm"], default="local",
                    help="local: a process pool on this machine (default); slurm: one job array, one task per run")
     g.add_argument("--cpus-per-task", type=int, default=None,

@@ -12,7 +12,7 @@ end) / peak; past_peak = "yes" when the drop is at least PAST_PEAK_DROP (5 %); "
 peak lies at or before PLATEAU_REACH (3/4) of the travel and the curve ends below it (an inner maximum, then a slow
 fall); else the curve is still rising or flat and the "peak" is only the largest load reached so far.
 
-Quasi-static check (README.md 'Physics'): the cases named by --rate-case (repeatable; `all` = every case; default the
+Quasi-static check (fdem/README.md 'Physics and numerics'): the cases named by --rate-case (repeatable; `all` = every case; default the
 first case) are run again with their loading rate halved, each as its own run; per checked case the report gives
 both peaks, their relative change, the verdict (quasi-static when |change| < QS_LIMIT = 2 %) and the status of the
 half-rate run, then "N of M checked cases quasi-static; largest change X %"; quasi_static.csv holds the same table.
