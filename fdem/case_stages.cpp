@@ -1,9 +1,10 @@
 // fdem/case_stages.cpp: the [[stages]] blocks of a case: duration and termination, gravity, damping, supports
-// (fixed, driven, protocols, servos, rigid), loads (force, pressure, spring) and their time functions. Part of the
-// case reader (fdem/case_reader.hpp).
+// (fixed, driven, protocols, servos, rigid), loads (the block's group and kind; each kind reads its own keys in its
+// file, fdem/load.hpp) and time functions. Part of the case reader (fdem/case_reader.hpp).
 
 #include "fdem/case_reader.hpp"
 #include "fdem/common/errors.hpp"
+#include "fdem/load.hpp"
 
 namespace fdem::case_detail {
 
@@ -19,6 +20,8 @@ void read_dof_set(Ctx& ctx, Reader& r, const std::string& key, DofMode mode, Sup
                 s.mode[comp] = mode;
         }
 }
+
+}  // namespace
 
 // key = { type = "sin", amplitude, omega, phase, offset } or { type = "table", points = [[t, f], ...] }.
 TimeFunction read_function(Ctx& ctx, Reader& r, const std::string& key) {
@@ -56,6 +59,8 @@ TimeFunction read_function(Ctx& ctx, Reader& r, const std::string& key) {
     fr.finish();
     return fn;
 }
+
+namespace {
 
 SupportSpec read_support(Ctx& ctx, const toml::table& t, const std::string& path) {
     Reader r(ctx, t, path);
@@ -152,32 +157,35 @@ SupportSpec read_support(Ctx& ctx, const toml::table& t, const std::string& path
     return s;
 }
 
+// A [[stages.loads]] block: its group, then the one kind it gives (fdem/load.hpp), which reads its own keys.
 LoadSpec read_load(Ctx& ctx, const toml::table& t, const std::string& path) {
     Reader r(ctx, t, path);
     LoadSpec l;
     l.line = r.line();
     l.group = r.string("group", true, "the name of a group (Gmsh physical group)").value_or("");
-    auto force = r.vec2("force", false, "[Fx, Fy], the total force on the group in N");
-    auto pressure = r.number("pressure", false, "a pressure in Pa");
-    const bool spring = r.has("spring");
-    if (int(bool(force)) + int(bool(pressure)) + int(spring) > 1)
-        ctx.error(path, l.line, "give one of force, pressure or spring");
-    if (!r.has("force") && !r.has("pressure") && !spring)
-        ctx.error(path, l.line, "missing; expected force = [Fx, Fy] (N), pressure (Pa) or spring = { component, stiffness, velocity }");
-    if (const toml::table* p = r.table("spring", false, "a table { component = \"x\", stiffness = k (N/m), velocity = v (m/s) }")) {
-        Reader sr(ctx, *p, r.key_path("spring"));
-        l.is_spring = true;
-        l.spring_component = component_index(sr.string("component", true, "\"x\" or \"y\"", kComponents).value_or("x"));
-        l.spring_stiffness = sr.number("stiffness", true, "a spring stiffness > 0 in N/m", [](double v) { return v > 0; }).value_or(1.0);
-        l.spring_velocity = sr.number("velocity", true, "the anchor's velocity in m/s").value_or(0.0);
-        sr.finish();
+    const LoadKind* kind = nullptr;
+    int given = 0;
+    std::vector<std::string> keys, expects;
+    for (const LoadKind* k : load_kinds()) {
+        const std::string key = k->key();
+        if (r.has(key)) kind = k, ++given;
+        keys.push_back(key);
+        expects.push_back(k->expect());
     }
-    if (force) l.force = *force;
-    if (pressure) l.is_pressure = true, l.pressure = *pressure;
-    l.ramp = r.number("ramp", false, "a ramp time >= 0 in s", [](double v) { return v >= 0; }).value_or(0.0);
-    l.function = read_function(ctx, r, "function");
-    if (l.function.present() && l.is_spring)
-        ctx.error(r.key_path("function"), r.line(), "a time function multiplies a force or pressure, not a spring");
+    auto one_of = [](const std::vector<std::string>& v) {
+        std::string s;
+        for (std::size_t i = 0; i < v.size(); ++i) s += (i == 0 ? "" : i + 1 == v.size() ? " or " : ", ") + v[i];
+        return s;
+    };
+    if (given > 1) ctx.error(path, l.line, "give one of " + one_of(keys));
+    if (given == 0) ctx.error(path, l.line, "missing; expected " + one_of(expects));
+    if (given == 1) {
+        l.kind = kind->key();
+        kind->read(ctx, r, l);
+    } else {
+        // (the common keys, not read: no kind to read them for)
+        r.has("ramp"), r.has("function");
+    }
     r.finish();
     return l;
 }

@@ -6,11 +6,13 @@
 #include <cstdint>
 #include <fstream>
 #include <limits>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "fdem/case.hpp"
 #include "fdem/interactions.hpp"
+#include "fdem/load.hpp"
 #include "fdem/node_update.hpp"
 #include "fdem/model.hpp"
 #include "fdem/output.hpp"
@@ -145,19 +147,6 @@ public:
     std::string checkpoint_path() const;
 
 private:
-    struct ActiveLoad {
-        std::vector<int> nodes;
-        std::vector<double> weight;                  // force share per node (sums to 1)
-        std::vector<std::array<int, 2>> edges;       // pressure: edges oriented counter-clockwise around the body
-        bool is_pressure = false;
-        bool is_spring = false;                      // spring: k, v and the anchor's start position (m)
-        int comp = 0;
-        double k = 0, v = 0, anchor0 = 0;
-        std::array<double, 2> start{0, 0}, target{0, 0};  // force N or pressure Pa (component 0)
-        double ramp = 0, t0 = 0;
-        TimeFunction fn;                             // factor on the force / pressure, of t - t0
-        std::string group;
-    };
     struct ActiveSupport {
         std::vector<int> nodes;
         int comp = 0;
@@ -263,7 +252,7 @@ private:
     std::vector<double> dof_vel_;    // m/s
     std::vector<double> reaction_;   // N, force the supports exert on each constrained DOF (last step)
     std::vector<ActiveSupport> supports_;
-    std::vector<ActiveLoad> loads_;
+    std::vector<std::unique_ptr<Load>> loads_;  // in the order they began (fdem/load.hpp)
     std::vector<double> f_ext_;      // N, applied loads (no gravity), 2 per node
     std::vector<int> loaded_dofs_;   // DOFs with a nonzero f_ext_ entry
     std::vector<unsigned char> node_loaded_;  // per node: 1 when a DOF of it is in loaded_dofs_ (derived, not saved)

@@ -209,48 +209,22 @@ void Simulation::stage_supports(const StageSpec& st) {
     }
 }
 
-// begin_stage, part 3: loads. A block on a group replaces that group's previous load of the same kind, ramping
-// from its value.
+// begin_stage, part 3: loads (fdem/load.hpp). A block on a group replaces that group's previous load of the same
+// kind, ramping from its value.
 void Simulation::stage_loads(const StageSpec& st) {
     for (const LoadSpec& ls : st.loads) {
-        const auto& grp = model_.group(ls.group);
-        ActiveLoad l;
-        l.group = ls.group;
-        l.is_pressure = ls.is_pressure;
-        l.t0 = time_;
-        l.ramp = ls.ramp;
-        l.fn = ls.function;
-        l.target = ls.is_pressure ? std::array<double, 2>{ls.pressure, 0} : ls.force;
-        l.is_spring = ls.is_spring;
+        const LoadKind* kind = find_load_kind(ls.kind);
+        if (!kind) throw InputError(spec_.file + ":" + std::to_string(ls.line) + ": no load kind '" + ls.kind + "'");
+        auto previous = loads_.end();
         for (auto it = loads_.begin(); it != loads_.end(); ++it)
-            if (it->group == ls.group && it->is_pressure == ls.is_pressure && it->is_spring == ls.is_spring) {
-                const double w = it->ramp > 0 ? std::min(1.0, (time_ - it->t0) / it->ramp) : 1.0;
-                for (int c = 0; c < 2; ++c) l.start[c] = it->start[c] + w * (it->target[c] - it->start[c]);
-                loads_.erase(it);
+            if ((*it)->group == ls.group && (*it)->kind == kind) {
+                previous = it;
                 break;
             }
+        std::unique_ptr<Load> l = kind->begin(ls, previous != loads_.end() ? previous->get() : nullptr, LoadStart{model_, spec_.file, time_});
+        l->group = ls.group;
+        if (previous != loads_.end()) loads_.erase(previous);
         stage_ramp_end_ = std::max(stage_ramp_end_, time_ + ls.ramp);
-        if (ls.is_pressure) {
-            // Orient each edge as it runs counter-clockwise around its triangle, so the outward normal is on its right.
-            std::map<std::pair<int, int>, int> directed;
-            for (int e = 0; e < model_.n_triangles(); ++e)
-                for (int k = 0; k < 3; ++k) directed[{model_.tris[e].n[k], model_.tris[e].n[(k + 1) % 3]}] = e;
-            for (auto ed : grp.edges) {
-                if (directed.count({ed[0], ed[1]})) l.edges.push_back(ed);
-                else if (directed.count({ed[1], ed[0]})) l.edges.push_back({ed[1], ed[0]});
-                else throw InputError(spec_.file + ":" + std::to_string(ls.line) + ": group '" + ls.group +
-                                      "' has an edge that lies on no triangle");
-            }
-        } else {
-            // Total force shared by tributary length along the group's edges, or equally among its nodes.
-            for (const auto& [k, w] : mesh::load_shares(grp, model_.X)) l.nodes.push_back(k), l.weight.push_back(w);
-        }
-        if (ls.is_spring) {
-            // The anchor starts at the group's weighted mean position: no force at the start of the stage.
-            l.comp = ls.spring_component, l.k = ls.spring_stiffness, l.v = ls.spring_velocity;
-            l.anchor0 = 0;
-            for (std::size_t i = 0; i < l.nodes.size(); ++i) l.anchor0 += l.weight[i] * model_.x[2 * l.nodes[i] + l.comp];
-        }
         loads_.push_back(std::move(l));
     }
 }
@@ -329,44 +303,8 @@ void Simulation::apply_time_dependent(double t) {
     // Loads.
     for (int d : loaded_dofs_) f_ext_[d] = 0, node_loaded_[d / 2] = 0;
     loaded_dofs_.clear();
-    for (const ActiveLoad& l : loads_) {
-        if (l.is_spring) {
-            // Anchor displacement: the integral of a velocity ramped up like a prescribed one, (1 - cos) over ramp.
-            const double tau = t - l.t0, R = l.ramp;
-            const double s = R > 0 && tau < R ? l.v * 0.5 * (tau - R / kPi * std::sin(kPi * tau / R))
-                                              : l.v * (tau - (R > 0 ? 0.5 * R : 0.0));
-            double xm = 0;
-            for (std::size_t i = 0; i < l.nodes.size(); ++i) xm += l.weight[i] * model_.x[2 * l.nodes[i] + l.comp];
-            const double F = l.k * (l.anchor0 + s - xm);
-            for (std::size_t i = 0; i < l.nodes.size(); ++i) {
-                const int d = 2 * l.nodes[i] + l.comp;
-                f_ext_[d] += l.weight[i] * F;
-                loaded_dofs_.push_back(d);
-            }
-            continue;
-        }
-        const double w = l.ramp > 0 ? std::min(1.0, (t - l.t0) / l.ramp) : 1.0;
-        const double fac = l.fn.present() ? l.fn(t - l.t0) : 1.0;
-        const double v0 = fac * (l.start[0] + w * (l.target[0] - l.start[0]));
-        const double v1 = fac * (l.start[1] + w * (l.target[1] - l.start[1]));
-        if (l.is_pressure) {
-            // Pressure p on edge a->b (body on its left): force -p t L n_out = -p t (dy, -dx), half to each node.
-            for (auto ed : l.edges) {
-                const double dx = model_.x[2 * ed[1]] - model_.x[2 * ed[0]], dy = model_.x[2 * ed[1] + 1] - model_.x[2 * ed[0] + 1];
-                const double fx = -0.5 * v0 * model_.thickness * dy, fy = 0.5 * v0 * model_.thickness * dx;
-                for (int k : {ed[0], ed[1]}) {
-                    f_ext_[2 * k] += fx, f_ext_[2 * k + 1] += fy;
-                    loaded_dofs_.push_back(2 * k), loaded_dofs_.push_back(2 * k + 1);
-                }
-            }
-        } else {
-            for (std::size_t i = 0; i < l.nodes.size(); ++i) {
-                const int k = l.nodes[i];
-                f_ext_[2 * k] += l.weight[i] * v0, f_ext_[2 * k + 1] += l.weight[i] * v1;
-                loaded_dofs_.push_back(2 * k), loaded_dofs_.push_back(2 * k + 1);
-            }
-        }
-    }
+    const LoadStep step{model_, t, f_ext_.data(), loaded_dofs_};
+    for (const auto& l : loads_) l->add_forces(step);
     for (int d : loaded_dofs_) node_loaded_[d / 2] = 1;  // the node loop reads f_ext_ of these nodes only
     // Prescribed velocities for the update to t + dt (evaluated at the half step).
     const double th = t + 0.5 * dt_;
@@ -420,6 +358,11 @@ double Simulation::load_imbalance(double* applied, double* reactions) const {
             L[c] += f_ext_[d] + model_.grav_mass[k] * applied_gravity_[c];
             if (dof_kind_[d] != 0 && dof_owner_[d] >= 0 && supports_[dof_owner_[d]].mode != DofMode::rigid) R[c] += reaction_[d];
         }
+    // Loads that hold the body as a support does (Load::reacts): with the reactions.
+    std::array<double, 2> r;
+    for (const auto& l : loads_)
+        if (l->reacts(r))
+            for (int c = 0; c < 2; ++c) L[c] -= r[c], R[c] += r[c];
     if (applied) applied[0] = L[0], applied[1] = L[1];
     if (reactions) reactions[0] = R[0], reactions[1] = R[1];
     const double l = std::hypot(L[0], L[1]);
