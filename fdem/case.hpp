@@ -120,11 +120,11 @@ struct TimeFunction {
     double operator()(double tau) const;
 };
 
-// A [[stages.loads]] block: a load of one kind (fdem/load.hpp: force, pressure, spring) on a group, kept
+// A [[stages.loads]] block: a load of one kind (fdem/load.hpp: force, pressure, spring, foundation) on a group, kept
 // (and ramped from its previous value) in later stages until a block of the same kind on the group replaces it.
 struct LoadSpec {
     std::string group;
-    std::string kind;  // the key of its kind (fdem/load.hpp), as given: "force", "pressure", "spring"
+    std::string kind;  // the key of its kind (fdem/load.hpp), as given: "force", "pressure", "spring", "foundation"
     // The fields of the force, pressure and spring kinds (their files read and use them; fdem/case_json.cpp and
     // fdem/limit_export.cpp read them too).
     bool is_pressure = false;
@@ -141,7 +141,7 @@ struct LoadSpec {
     double spring_velocity = 0;          // m/s
     TimeFunction function;               // multiplies the force or pressure (after its ramp); not for springs
     // The parameters of a kind that has no field above (SI units, named by their key in the block): a kind's file
-    // reads and uses them without changing this struct.
+    // reads and uses them without changing this struct (foundation: "normal", "shear", Pa/m).
     std::map<std::string, double> param;
     int line = 0;
 };

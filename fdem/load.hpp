@@ -5,7 +5,7 @@
 //   application   Load::add_forces     at every step, its forces into f_ext (t^n, positions x^n)
 //   state         Load::save / load    what carries from step to step, in the checkpoint's byte stream
 // and registers itself under the TOML key that selects it in fdem/load_registry.cpp. The kinds: fdem/load_force.cpp
-// (force), fdem/load_pressure.cpp (pressure), fdem/load_spring.cpp (spring).
+// (force), fdem/load_pressure.cpp (pressure), fdem/load_spring.cpp (spring), fdem/load_foundation.cpp (foundation).
 //
 // Adding a kind: write fdem/load_NAME.cpp with a LoadKind (its key, its reading, its begin) and a Load (its forces
 // and state), add its line to fdem/load_registry.cpp, its rows to cases/REFERENCE.md, and a test.
@@ -40,6 +40,7 @@ struct LoadStart {
     const Model& model;       // positions x at the stage start, the reference X, groups, triangles, thickness
     const std::string& file;  // the case file (for errors: FILE:LINE)
     double time;              // s, the stage's start
+    double dt;                // s, the run's time step (the stage's local damping set)
 };
 
 // What a load sees at each step: t^n, the positions x^n (model.x), and where its forces go.
@@ -62,7 +63,7 @@ public:
     // The value a later block of the same kind on the same group ramps from, at time t (force N, pressure Pa);
     // kinds without a ramped value: zero.
     virtual std::array<double, 2> value_at(double /*t*/) const { return {0, 0}; }
-    // A load that holds the body as a support does: its resultant, as of the last
+    // A load that holds the body as a support does (an elastic foundation): its resultant, as of the last
     // add_forces (N), counts with the supports' reactions in the equilibrium check (Simulation::load_imbalance),
     // not with the applied loads. Others: false.
     virtual bool reacts(std::array<double, 2>& /*resultant*/) const { return false; }

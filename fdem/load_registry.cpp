@@ -10,9 +10,10 @@ namespace fdem {
 const LoadKind& force_load_kind();     // fdem/load_force.cpp
 const LoadKind& pressure_load_kind();  // fdem/load_pressure.cpp
 const LoadKind& spring_load_kind();    // fdem/load_spring.cpp
+const LoadKind& foundation_load_kind();  // fdem/load_foundation.cpp
 
 const std::vector<const LoadKind*>& load_kinds() {
-    static const std::vector<const LoadKind*> kinds{&force_load_kind(), &pressure_load_kind(), &spring_load_kind()};
+    static const std::vector<const LoadKind*> kinds{&force_load_kind(), &pressure_load_kind(), &spring_load_kind(), &foundation_load_kind()};
     return kinds;
 }
 

@@ -221,7 +221,7 @@ void Simulation::stage_loads(const StageSpec& st) {
                 previous = it;
                 break;
             }
-        std::unique_ptr<Load> l = kind->begin(ls, previous != loads_.end() ? previous->get() : nullptr, LoadStart{model_, spec_.file, time_});
+        std::unique_ptr<Load> l = kind->begin(ls, previous != loads_.end() ? previous->get() : nullptr, LoadStart{model_, spec_.file, time_, dt_});
         l->group = ls.group;
         if (previous != loads_.end()) loads_.erase(previous);
         stage_ramp_end_ = std::max(stage_ramp_end_, time_ + ls.ramp);
@@ -358,7 +358,7 @@ double Simulation::load_imbalance(double* applied, double* reactions) const {
             L[c] += f_ext_[d] + model_.grav_mass[k] * applied_gravity_[c];
             if (dof_kind_[d] != 0 && dof_owner_[d] >= 0 && supports_[dof_owner_[d]].mode != DofMode::rigid) R[c] += reaction_[d];
         }
-    // Loads that hold the body as a support does (Load::reacts): with the reactions.
+    // Loads that hold the body as a support does (an elastic foundation, Load::reacts): with the reactions.
     std::array<double, 2> r;
     for (const auto& l : loads_)
         if (l->reacts(r))
