@@ -325,7 +325,7 @@ void Simulation::check_ties() const {
                 const int d0 = 2 * k0 + c, d = 2 * k + c;
                 if (dof_kind_[d] == dof_kind_[d0] && dof_owner_[d] == dof_owner_[d0]) continue;
                 const int owner = dof_owner_[d] >= 0 ? dof_owner_[d] : dof_owner_[d0];
-                const std::string grp = owner >= 0 ? supports_[owner].group : std::string("?");
+                const std::string grp = owner >= 0 ? supports_[owner]->group : std::string("?");
                 throw InputError(spec_.file + ": stage " + std::to_string(stage_ + 1) + ": the support of group '" + grp +
                                  "' holds only some of the copies of the node at (" + sci(model_.X[2 * k], 6) + ", " +
                                  sci(model_.X[2 * k + 1], 6) + ") m, which move as one node until a crack is inserted "
@@ -423,40 +423,17 @@ void Simulation::step() {
     // [C79] local damping F_d = -alpha |F| sign(v) on the resultant. The node loop then treats those DOFs as
     // prescribed: their reactions redistribute the forces inside the group and sum to F_d, which the loop books as
     // work; rigid_damp_ moves that share from work to damping after the loop. Serial, in support and node order.
-    double rigid_damp = 0, rigid_damp_half = 0;  // J: dt F_d v_bar and dt/2 F_d v^{n+1/2}
-    double rigid_mass = 0, rigid_mass_half = 0;  // J: the same for the mass-proportional damping force -a M v_bar
     // Filtered local damping: each DOF's moving mean vref += wf (v - vref), the exact one-step weight of an
     // exponential mean over tau for a velocity held over the step.
     const double wf = tau_ld_ > 0 ? -std::expm1(-dt / tau_ld_) : 0.0;
     double* vref = tau_ld_ > 0 ? v_ref_.data() : nullptr;
     const double hm = 0.5 * dtv * beta_mass_;
-    for (std::size_t id = 0; id < supports_.size(); ++id) {
-        ActiveSupport& s = supports_[id];
-        if (s.mode != DofMode::rigid) continue;
-        const int c = s.comp;
-        double F = 0, M = 0;
-        for (int k : s.nodes) {
-            const int d = 2 * k + c;
-            if (dof_owner_[d] != static_cast<int>(id)) continue;
-            double f = f_mod_[d] + f_ext_[d] + model_.grav_mass[k] * applied_gravity_[c];
-            for (int j = model_.inc_ptr[k]; j < model_.inc_ptr[k + 1]; ++j) f += tf[2 * static_cast<std::size_t>(model_.inc_idx[j]) + c];
-            F += f, M += model_.mass[k];
-        }
-        if (!(M > 0)) continue;
-        const double vold = s.v_common;
-        const double vrel = tau_ld_ > 0 ? vold - s.v_ref : vold;
-        const double Fd = vrel > 0 ? -alpha_ * std::abs(F) : vrel < 0 ? alpha_ * std::abs(F) : 0.0;
-        const double vnew = ((1 - hm) * vold + dtv * (F + Fd) / M) / (1 + hm);
-        const double Fm = -beta_mass_ * M * 0.5 * (vold + vnew);
-        rigid_damp += dt * Fd * 0.5 * (vold + vnew);
-        rigid_damp_half += 0.5 * dt * Fd * vnew;
-        rigid_mass += dt * Fm * 0.5 * (vold + vnew);
-        rigid_mass_half += 0.5 * dt * Fm * vnew;
-        s.v_common = vnew;
-        if (tau_ld_ > 0) s.v_ref += wf * (vnew - s.v_ref);
-        for (int k : s.nodes)
-            if (dof_owner_[2 * k + c] == static_cast<int>(id)) dof_vel_[2 * k + c] = vnew;
-    }
+    // (fdem/support_rigid.cpp; the sums, J: dt F_d v_bar and dt/2 F_d v^{n+1/2}, the same for the mass-proportional
+    // damping force -a M v_bar)
+    RigidStep rs{model_, f_mod_.data(), f_ext_.data(), tf, applied_gravity_, alpha_, tau_ld_, wf, beta_mass_, hm, dt, dtv,
+                 dof_vel_.data(), dof_owner_.data()};
+    for (std::size_t id = 0; id < supports_.size(); ++id) supports_[id]->rigid_step(rs, static_cast<int>(id));
+    const double rigid_damp = rs.damp, rigid_damp_half = rs.damp_half, rigid_mass = rs.mass, rigid_mass_half = rs.mass_half;
 
     // 6. Node loop, one unit at a time: a node, or a group of tied copies (extrinsic insertion), which moves as one
     // node of the group's mass M: the resultant F of its members' forces gives every member the same velocity
@@ -521,7 +498,7 @@ void Simulation::step() {
     step_times_.interactions += w3 - w2;
     step_times_.integration += w4 - w3;
     step_times_.other += (w1 - w0) + (w2 - wi);  // with the insertion check and the loads of the step
-    update_servos();
+    supports_after_step();
     time_ += dt;
     tilt_deg_ += tilt_rate_ * dt;
     ++steps_;

@@ -1,6 +1,6 @@
-// fdem/stages.cpp: the stage logic of Simulation: initial conditions, what a stage sets when it begins (supports,
-// loads, protocols, damping, gravity), the time-dependent loads and velocities of every step, the servos and how a
-// stage ends (duration, until, equilibrium).
+// fdem/stages.cpp: the stage logic of Simulation: initial conditions, what a stage sets when it begins (supports:
+// fdem/support.hpp, loads: fdem/load.hpp, damping, gravity), the time-dependent loads and velocities of every step,
+// the supports' updates after it (servos) and how a stage ends (duration, until, equilibrium).
 #include "fdem/simulation.hpp"
 
 #include <omp.h>
@@ -38,38 +38,6 @@ bool until_holds(double value, double m) {
 }  // namespace
 
 using namespace sim_detail;
-
-double Simulation::protocol_displacement(const ActiveSupport& s, double tau) const {
-    if (tau <= s.pt.front()) return s.pu.front();
-    if (tau >= s.pt.back()) return s.pu.back();
-    const auto it = std::upper_bound(s.pt.begin(), s.pt.end(), tau);
-    const std::size_t i = static_cast<std::size_t>(it - s.pt.begin());
-    const double w = (tau - s.pt[i - 1]) / (s.pt[i] - s.pt[i - 1]);
-    return s.pu[i - 1] + w * (s.pu[i] - s.pu[i - 1]);
-}
-
-double Simulation::protocol_integral(const ActiveSupport& s, double tau) const {
-    // INT_{pt[0]}^{tau} u dt of the piecewise-linear protocol, u held at its end values outside [pt[0], pt[n-1]].
-    if (tau <= s.pt.front()) return (tau - s.pt.front()) * s.pu.front();
-    if (tau >= s.pt.back()) return s.pI.back() + (tau - s.pt.back()) * s.pu.back();
-    const auto it = std::upper_bound(s.pt.begin(), s.pt.end(), tau);
-    const std::size_t i = static_cast<std::size_t>(it - s.pt.begin());
-    const double w = (tau - s.pt[i - 1]) / (s.pt[i] - s.pt[i - 1]);
-    const double u = s.pu[i - 1] + w * (s.pu[i] - s.pu[i - 1]);  // protocol_displacement(s, tau), same segment
-    return s.pI[i - 1] + 0.5 * (tau - s.pt[i - 1]) * (s.pu[i - 1] + u);
-}
-
-double Simulation::protocol_position(const ActiveSupport& s, double tau) const {
-    // Corner smoothing: with ramp T > 0 the driven position is the protocol averaged over the trailing window
-    // [tau - T, tau], u_T(tau) = (I(tau) - I(tau - T)) / T. Its velocity (u(tau) - u(tau - T)) / T is continuous:
-    // it starts from 0 at the stage start and changes linearly over T at every corner (largest acceleration
-    // |dv| / T), instead of jumping in one step (a reversal of v then asks the driven nodes for a force
-    // m 2 v / dt, which the reaction monitor reports and which hits the specimen like an impact). The price: the
-    // motion lags the protocol by T / 2 and each corner is cut by |dv| T / 8 (an amplitude a reached at rate v
-    // and reversed: a - v T / 4).
-    if (!(s.ramp > 0)) return protocol_displacement(s, tau);
-    return (protocol_integral(s, tau) - protocol_integral(s, tau - s.ramp)) / s.ramp;
-}
 
 // [[initial]]: rigid rotation of the placement about the centre (x only: the triangles turn, stress-free by the
 // objectivity of the neo-Hookean law), then v = v0 + omega x (x - c). Blocks apply in order.
@@ -116,7 +84,7 @@ void Simulation::stage_damping_and_gravity(const StageSpec& st) {
         // The moving mean starts from the current velocities, so switching the filter on does not kick the motion.
         if (*st.local_damping_filter > 0 && !(tau_ld_ > 0)) {
             v_ref_ = model_.v;
-            for (auto& sp : supports_) sp.v_ref = sp.v_common;
+            for (auto& sp : supports_) sp->filter_started();
         }
         tau_ld_ = *st.local_damping_filter;
         if (!(tau_ld_ > 0)) v_ref_.clear();
@@ -144,60 +112,40 @@ void Simulation::stage_damping_and_gravity(const StageSpec& st) {
     }
 }
 
-// begin_stage, part 2: supports. A new block takes over the DOFs it names; the others keep their previous support.
+// begin_stage, part 2: supports (fdem/support.hpp). A new block takes over the DOFs it names; the others keep their
+// previous support.
 void Simulation::stage_supports(const StageSpec& st) {
     const int nn = model_.n_nodes();
     for (const SupportSpec& sp : st.supports) {
         const auto& grp = model_.group(sp.group);
         for (int c = 0; c < 2; ++c) {
             if (sp.mode[c] == DofMode::inherit) continue;
-            ActiveSupport a;
-            a.nodes = grp.nodes;
-            a.comp = c;
-            a.mode = sp.mode[c];
-            a.group = sp.group;
-            a.t0 = time_;
-            a.ramp = sp.ramp;
-            if (sp.mode[c] == DofMode::velocity) {
-                a.fn = sp.function;
-                a.servo_ratio = sp.servo_ratio, a.servo_time = sp.servo_time, a.servo_min = sp.servo_min;
-                a.servo_rbar = sp.servo_ratio;
-            }
-            if (a.mode == DofMode::velocity) {
-                // Smooth ramp from the group's current prescribed velocity (0 if it was fixed or free).
-                const int d0 = 2 * a.nodes.front() + c;
-                a.v_start = dof_kind_[d0] == 2 ? dof_vel_[d0] : 0.0;
-                a.v_target = sp.velocity[c];
-                stage_ramp_end_ = std::max(stage_ramp_end_, time_ + sp.ramp);
-            }
-            if (a.mode == DofMode::protocol) {
-                a.pt = sp.protocol_t, a.pu = sp.protocol_u;
-                a.pI.assign(a.pt.size(), 0.0);
-                for (std::size_t i = 1; i < a.pt.size(); ++i)
-                    a.pI[i] = a.pI[i - 1] + 0.5 * (a.pt[i] - a.pt[i - 1]) * (a.pu[i] + a.pu[i - 1]);
-            }
-            if (a.mode == DofMode::rigid) {
-                // Starts from the group's momentum: the mass-weighted mean velocity.
-                double p = 0, m = 0;
-                for (int k : a.nodes) p += model_.mass[k] * model_.v[2 * k + c], m += model_.mass[k];
-                a.v_common = m > 0 ? p / m : 0.0;
-                a.v_ref = a.v_common;  // the filtered local damping's mean starts there (no kick)
+            const SupportKind* kind = find_support_kind(sp.mode[c]);  // null: free
+            std::unique_ptr<Support> a;
+            if (kind) {
+                a = kind->begin(sp, c, SupportStart{model_, time_, dof_kind_.data(), dof_vel_.data()});
+                a->nodes = grp.nodes;
+                a->comp = c;
+                a->group = sp.group;
+                a->t0 = time_;
+                a->ramp = sp.ramp;
+                stage_ramp_end_ = std::max(stage_ramp_end_, a->ramp_end());
             }
             const int id = static_cast<int>(supports_.size());
-            for (int k : a.nodes) {
+            for (int k : grp.nodes) {
                 const int d = 2 * k + c;
-                dof_owner_[d] = a.mode == DofMode::free ? -1 : id;
-                dof_kind_[d] = a.mode == DofMode::free ? 0 : a.mode == DofMode::fixed ? 1 : 2;
-                dof_vel_[d] = a.mode == DofMode::rigid ? a.v_common : 0;
+                dof_owner_[d] = a ? id : -1;
+                dof_kind_[d] = a ? a->dof_kind() : 0;
+                dof_vel_[d] = a ? a->start_velocity() : 0;
                 reaction_[d] = 0;
             }
-            supports_.push_back(std::move(a));
+            if (a) supports_.push_back(std::move(a));
         }
     }
     // Drop supports that no longer own any DOF (keeps the per-step loop short).
     {
         std::vector<int> remap(supports_.size(), -1);
-        std::vector<ActiveSupport> kept;
+        std::vector<std::unique_ptr<Support>> kept;
         std::vector<char> owns(supports_.size(), 0);
         for (int d = 0; d < 2 * nn; ++d)
             if (dof_owner_[d] >= 0) owns[dof_owner_[d]] = 1;
@@ -306,22 +254,11 @@ void Simulation::apply_time_dependent(double t) {
     const LoadStep step{model_, t, f_ext_.data(), loaded_dofs_};
     for (const auto& l : loads_) l->add_forces(step);
     for (int d : loaded_dofs_) node_loaded_[d / 2] = 1;  // the node loop reads f_ext_ of these nodes only
-    // Prescribed velocities for the update to t + dt (evaluated at the half step).
-    const double th = t + 0.5 * dt_;
+    // Prescribed velocities for the update to t + dt (driven, protocol; fixed and rigid: none, rigid set in step()).
     for (std::size_t id = 0; id < supports_.size(); ++id) {
-        const ActiveSupport& s = supports_[id];
-        if (s.mode == DofMode::fixed || s.mode == DofMode::rigid) continue;  // rigid: set in step() from the forces
         double v = 0;
-        if (s.mode == DofMode::velocity) {
-            const double tau = th - s.t0;
-            v = s.ramp > 0 && tau < s.ramp ? s.v_start + (s.v_target - s.v_start) * 0.5 * (1 - std::cos(kPi * tau / s.ramp)) : s.v_target;
-            if (s.fn.present()) v *= s.fn(tau);
-            if (s.servo_ratio > 0) v *= s.servo_factor;
-        } else {
-            // Displacement protocol: the velocity that lands exactly on u(t + dt) from u(t) (corner-smoothed
-            // when the support has a ramp).
-            v = (protocol_position(s, t + dt_ - s.t0) - protocol_position(s, t - s.t0)) / dt_;
-        }
+        if (!supports_[id]->prescribe(t, dt_, v)) continue;
+        const Support& s = *supports_[id];
         for (int k : s.nodes) {
             const int d = 2 * k + s.comp;
             if (dof_owner_[d] == static_cast<int>(id)) dof_vel_[d] = v;
@@ -329,24 +266,9 @@ void Simulation::apply_time_dependent(double t) {
     }
 }
 
-// Servo-controlled loading rate (the Itasca codes' practice of driving a quasi-static test by its unbalanced-force
-// ratio, Itasca 3DEC manual; Lourenco, Oliveira, Roca, Orduna 2005 run their 3DEC walls so). R's mean over the
-// response time T follows rbar += w (R - rbar), w = dt / T; the factor follows
-// f <- clamp(f exp(w clamp(ln(R* / rbar), -2, 2)), f_min, 1): while the mean ratio is above the target the actuator
-// slows down (by up to e^-2 per T), below it speeds back up, never beyond the prescribed velocity.
-void Simulation::update_servos() {
-    for (ActiveSupport& s : supports_) {
-        if (s.servo_ratio <= 0 || s.mode != DofMode::velocity) continue;
-        const double w = std::min(1.0, dt_ / s.servo_time);
-        s.servo_rbar += w * (unbalanced_ratio_ - s.servo_rbar);
-        const double g = std::log(s.servo_ratio / std::max(s.servo_rbar, 1e-300));
-        s.servo_factor = std::clamp(s.servo_factor * std::exp(w * std::clamp(g, -2.0, 2.0)), s.servo_min, 1.0);
-        s.servo_t += dt_;
-        s.servo_r_int += dt_ * s.servo_rbar;
-        s.servo_f_int += dt_ * s.servo_factor;
-        s.servo_r_max = std::max(s.servo_r_max, s.servo_rbar);
-        s.servo_f_min = std::min(s.servo_f_min, s.servo_factor);
-    }
+// After each step: the supports' own updates (the servos' velocity factors, fdem/support_velocity.cpp).
+void Simulation::supports_after_step() {
+    for (auto& s : supports_) s->after_step(dt_, unbalanced_ratio_);
 }
 
 double Simulation::load_imbalance(double* applied, double* reactions) const {
@@ -356,7 +278,7 @@ double Simulation::load_imbalance(double* applied, double* reactions) const {
         for (int c = 0; c < 2; ++c) {
             const int d = 2 * k + c;
             L[c] += f_ext_[d] + model_.grav_mass[k] * applied_gravity_[c];
-            if (dof_kind_[d] != 0 && dof_owner_[d] >= 0 && supports_[dof_owner_[d]].mode != DofMode::rigid) R[c] += reaction_[d];
+            if (dof_kind_[d] != 0 && dof_owner_[d] >= 0 && supports_[dof_owner_[d]]->carries_reaction()) R[c] += reaction_[d];
         }
     // Loads that hold the body as a support does (an elastic foundation, Load::reacts): with the reactions.
     std::array<double, 2> r;
