@@ -120,10 +120,9 @@ void Simulation::stage_supports(const StageSpec& st) {
         const auto& grp = model_.group(sp.group);
         for (int c = 0; c < 2; ++c) {
             if (sp.mode[c] == DofMode::inherit) continue;
-            const SupportKind* kind = find_support_kind(sp.mode[c]);  // null: free
-            std::unique_ptr<Support> a;
-            if (kind) {
-                a = kind->begin(sp, c, SupportStart{model_, time_, dof_kind_.data(), dof_vel_.data()});
+            // (free: no active support)
+            std::unique_ptr<Support> a = find_support_kind(sp.mode[c])->begin(sp, c, SupportStart{model_, time_, dof_kind_.data(), dof_vel_.data()});
+            if (a) {
                 a->nodes = grp.nodes;
                 a->comp = c;
                 a->group = sp.group;

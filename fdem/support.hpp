@@ -1,11 +1,12 @@
-// fdem/support.hpp: the active supports of a run, one type per kind, each in its own file with its set-up, its part
-// of every step and its state (as fdem/load.hpp does for the loads):
+// fdem/support.hpp: the supports of a run, one type per kind, each in its own file with its reading, its set-up, its
+// part of every step and its state (as fdem/load.hpp does for the loads):
 //   fixed     fdem/support_fixed.cpp     the DOFs held (velocity 0)
 //   velocity  fdem/support_velocity.cpp  a prescribed velocity (smooth ramp-up, time function, servo)
 //   protocol  fdem/support_protocol.cpp  a displacement-versus-time history (protocol, cyclic), corner-smoothed
 //   rigid     fdem/support_rigid.cpp     one velocity per group and component from the resultant of its forces
-// A [[stages.supports]] block (SupportSpec, read in fdem/case_stages.cpp) sets a mode per component; free DOFs have
-// no active support. Each component of a block becomes one Support owning the group's DOFs in that component
+//   free      fdem/support_free.cpp      the DOFs released (no active support)
+// A [[stages.supports]] block (SupportSpec) sets a mode per component; each kind reads the keys that select it (a
+// block may give several). Each component of a block becomes one Support owning the group's DOFs in that component
 // (Simulation::dof_owner_) until a later block takes them over. The node loop (fdem/node_update.cpp) reads only the
 // DOF arrays the supports fill: dof_kind_ (0 free, 1 fixed, 2 prescribed velocity) and dof_vel_.
 #pragma once
@@ -23,6 +24,11 @@
 namespace fdem {
 
 class SupportKind;
+
+namespace case_detail {
+struct Ctx;
+class Reader;
+}  // namespace case_detail
 
 // What a support sees when its stage begins: the model, the time, and the DOF arrays before it takes its DOFs.
 struct SupportStart {
@@ -88,15 +94,19 @@ public:
     virtual ~SupportKind() = default;
     virtual const char* key() const = 0;  // its name in the checkpoint ("fixed")
     virtual DofMode mode() const = 0;     // the SupportSpec mode it takes
+    // Reads the keys of a [[stages.supports]] block that select it (and its own options) into s, setting the
+    // components' modes; the block's reader (fdem/case_stages.cpp) has read group and ramp, calls every kind in the
+    // registry's order and reports unknown keys after. Errors into ctx (fdem/case_reader.hpp).
+    virtual void read(case_detail::Ctx& ctx, case_detail::Reader& r, SupportSpec& s) const = 0;
     // The active support of component c of block s at the stage start (nodes, comp, group, t0, ramp are set by the
-    // caller after).
+    // caller after); null: none (free).
     virtual std::unique_ptr<Support> begin(const SupportSpec& s, int c, const SupportStart& st) const = 0;
     virtual std::unique_ptr<Support> restore() const = 0;
 };
 
 // The registered kinds (fdem/support_registry.cpp).
 const std::vector<const SupportKind*>& support_kinds();
-const SupportKind* find_support_kind(DofMode mode);       // null: free (no active support)
+const SupportKind* find_support_kind(DofMode mode);
 const SupportKind* find_support_kind(const std::string& key);
 
 template <class IO>

@@ -1,5 +1,6 @@
 // fdem/support_fixed.cpp: support kind `fixed` (fix = "x" | "y" | "xy" in a [[stages.supports]] block): the group's
 // DOFs in the component are held (velocity 0); the node loop books their reactions.
+#include "fdem/case_reader.hpp"
 #include "fdem/support.hpp"
 
 namespace fdem {
@@ -18,6 +19,9 @@ class FixedKind final : public SupportKind {
 public:
     const char* key() const override { return "fixed"; }
     DofMode mode() const override { return DofMode::fixed; }
+    void read(case_detail::Ctx& ctx, case_detail::Reader& r, SupportSpec& s) const override {
+        case_detail::read_dof_set(ctx, r, "fix", DofMode::fixed, s);
+    }
     std::unique_ptr<Support> begin(const SupportSpec&, int, const SupportStart&) const override {
         return std::make_unique<FixedSupport>(*this);
     }

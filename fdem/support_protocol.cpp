@@ -3,7 +3,9 @@
 // group's DOFs in the component follow a piecewise-linear displacement-versus-time history from the stage start,
 // corner-smoothed over `ramp`.
 #include <algorithm>
+#include <cmath>
 
+#include "fdem/case_reader.hpp"
 #include "fdem/support.hpp"
 
 namespace fdem {
@@ -65,6 +67,73 @@ class ProtocolKind final : public SupportKind {
 public:
     const char* key() const override { return "protocol"; }
     DofMode mode() const override { return DofMode::protocol; }
+    // protocol = { component, points = [[t, u], ...] } or cyclic = { component, amplitudes, cycles, rate }, which
+    // becomes the points of its cycles.
+    void read(case_detail::Ctx& ctx, case_detail::Reader& r, SupportSpec& s) const override {
+        using case_detail::component_index;
+        using case_detail::kComponents;
+        using case_detail::line_of;
+        using case_detail::Reader;
+        auto add_protocol = [&](int comp, std::vector<double> t_pts, std::vector<double> u_pts, const std::string& key, int line) {
+            if (s.mode[comp] != DofMode::inherit) {
+                ctx.error(r.key_path(key), line, "component " + kComponents[comp] + " already has a support in this block");
+                return;
+            }
+            s.mode[comp] = DofMode::protocol;
+            s.protocol_t = std::move(t_pts);
+            s.protocol_u = std::move(u_pts);
+        };
+        if (const toml::table* p = r.table("protocol", false, "a table { component = \"x\", points = [[t, u], ...] }")) {
+            Reader pr(ctx, *p, r.key_path("protocol"));
+            const int comp = component_index(pr.string("component", true, "\"x\" or \"y\"", kComponents).value_or("x"));
+            const toml::node* pts = pr.node("points", true, "an array of [time s, displacement m] pairs");
+            std::vector<double> tt, uu;
+            bool ok = pts && pts->is_array() && pts->as_array()->size() >= 2;
+            if (ok)
+                for (const auto& e : *pts->as_array()) {
+                    const toml::array* pair = e.as_array();
+                    if (!pair || pair->size() != 2 || !(*pair)[0].is_number() || !(*pair)[1].is_number()) {
+                        ok = false;
+                        break;
+                    }
+                    tt.push_back(*(*pair)[0].value<double>());
+                    uu.push_back(*(*pair)[1].value<double>());
+                }
+            for (std::size_t i = 1; ok && i < tt.size(); ++i)
+                if (!(tt[i] > tt[i - 1])) ok = false;
+            if (pts && !ok)
+                ctx.error(pr.key_path("points"), line_of(pts),
+                          "expected at least two [time s, displacement m] pairs with strictly increasing times");
+            pr.finish();
+            if (ok) add_protocol(comp, tt, uu, "protocol", pr.line());
+        }
+        if (const toml::table* p = r.table("cyclic", false, "a table { component, amplitudes, cycles, rate }")) {
+            Reader pr(ctx, *p, r.key_path("cyclic"));
+            const int comp = component_index(pr.string("component", true, "\"x\" or \"y\"", kComponents).value_or("x"));
+            auto amps = pr.numbers("amplitudes", true, "an array of displacement amplitudes > 0 in m");
+            const int cycles = pr.integer("cycles", false, "a whole number of cycles per amplitude >= 1",
+                                          [](long long v) { return v >= 1; }).value_or(1);
+            auto rate = pr.number("rate", true, "a loading rate > 0 in m/s", [](double v) { return v > 0; });
+            pr.finish();
+            if (amps && rate) {
+                bool ok = !amps->empty();
+                for (double a : *amps) ok = ok && a > 0;
+                if (!ok) {
+                    ctx.error(pr.key_path("amplitudes"), pr.line(), "expected a non-empty array of amplitudes > 0 in m");
+                } else {
+                    // Each cycle: 0 -> +a -> 0 -> -a -> 0 at the constant rate.
+                    std::vector<double> tt{0}, uu{0};
+                    for (double a : *amps)
+                        for (int c = 0; c < cycles; ++c)
+                            for (double target : {a, 0.0, -a, 0.0}) {
+                                tt.push_back(tt.back() + std::abs(target - uu.back()) / *rate);
+                                uu.push_back(target);
+                            }
+                    add_protocol(comp, tt, uu, "cyclic", pr.line());
+                }
+            }
+        }
+    }
     std::unique_ptr<Support> begin(const SupportSpec& s, int, const SupportStart&) const override {
         auto a = std::make_unique<ProtocolSupport>(*this);
         a->pt = s.protocol_t, a->pu = s.protocol_u;

@@ -8,6 +8,7 @@
 // moves that share from work to damping (RigidStep's sums). Its reactions are internal: not support reactions.
 #include <cmath>
 
+#include "fdem/case_reader.hpp"
 #include "fdem/support.hpp"
 
 namespace fdem {
@@ -62,6 +63,9 @@ class RigidKind final : public SupportKind {
 public:
     const char* key() const override { return "rigid"; }
     DofMode mode() const override { return DofMode::rigid; }
+    void read(case_detail::Ctx& ctx, case_detail::Reader& r, SupportSpec& s) const override {
+        case_detail::read_dof_set(ctx, r, "rigid", DofMode::rigid, s);
+    }
     std::unique_ptr<Support> begin(const SupportSpec& s, int c, const SupportStart& st) const override {
         auto a = std::make_unique<RigidSupport>(*this);
         // Starts from the group's momentum: the mass-weighted mean velocity.

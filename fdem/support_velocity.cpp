@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "fdem/case_reader.hpp"
 #include "fdem/sim_detail.hpp"
 #include "fdem/support.hpp"
 
@@ -76,6 +77,35 @@ class VelocityKind final : public SupportKind {
 public:
     const char* key() const override { return "velocity"; }
     DofMode mode() const override { return DofMode::velocity; }
+    // vx, vy (m/s), and what multiplies them: function (a time function) and servo.
+    void read(case_detail::Ctx& ctx, case_detail::Reader& r, SupportSpec& s) const override {
+        using case_detail::kComponents;
+        using case_detail::Reader;
+        for (int c = 0; c < 2; ++c) {
+            const std::string key = c == 0 ? "vx" : "vy";
+            if (auto v = r.number(key, false, "a velocity in m/s")) {
+                if (s.mode[c] != DofMode::inherit)
+                    ctx.error(r.key_path(key), r.line(), "component " + kComponents[c] + " is already fixed or freed in this support");
+                s.mode[c] = DofMode::velocity;
+                s.velocity[c] = *v;
+            }
+        }
+        s.function = case_detail::read_function(ctx, r, "function");
+        if (s.function.present() && s.mode[0] != DofMode::velocity && s.mode[1] != DofMode::velocity)
+            ctx.error(r.key_path("function"), r.line(), "a time function multiplies a prescribed velocity: give vx or vy");
+        if (const toml::table* p = r.table("servo", false, "a table { ratio = target unbalanced-force ratio, time = response time s, "
+                                                           "min_factor = smallest velocity factor }")) {
+            Reader sr(ctx, *p, r.key_path("servo"));
+            s.servo_ratio = sr.number("ratio", true, "a target unbalanced-force ratio in (0, 1)", [](double v) { return v > 0 && v < 1; })
+                                .value_or(0.0);
+            s.servo_time = sr.number("time", true, "a response time > 0 in s", [](double v) { return v > 0; }).value_or(0.0);
+            s.servo_min = sr.number("min_factor", false, "a smallest velocity factor in (0, 1]", [](double v) { return v > 0 && v <= 1; })
+                              .value_or(0.01);
+            sr.finish();
+            if (s.mode[0] != DofMode::velocity && s.mode[1] != DofMode::velocity)
+                ctx.error(r.key_path("servo"), r.line(), "a servo controls a prescribed velocity: give vx or vy");
+        }
+    }
     std::unique_ptr<Support> begin(const SupportSpec& s, int c, const SupportStart& st) const override {
         auto a = std::make_unique<VelocitySupport>(*this);
         a->fn = s.function;
