@@ -14,6 +14,7 @@
 #include <sstream>
 
 #include "fdem/case_json.hpp"
+#include "fdem/load.hpp"
 #include "fdem/case_reader.hpp"
 #include "fdem/common/errors.hpp"
 
@@ -626,12 +627,13 @@ void check_against_mesh(const CaseSpec& spec, const MeshNames& names) {
                 missing("stages." + std::to_string(si + 1) + ".supports." + std::to_string(i + 1) + ".group", s.supports[i].line,
                         s.supports[i].group);
         for (std::size_t i = 0; i < s.loads.size(); ++i) {
-            if (!s.loads[i].is_pressure) continue;
+            const LoadKind* kind = find_load_kind(s.loads[i].kind);
+            if (!kind || !kind->needs_edges()) continue;
             for (std::size_t g = 0; g < names.groups.size(); ++g)
                 if (names.groups[g] == s.loads[i].group && names.group_dims[g] != 1)
                     errors.push_back(spec.file + ":" + std::to_string(s.loads[i].line) + ": key 'stages." + std::to_string(si + 1) +
-                                     ".loads." + std::to_string(i + 1) + ".pressure': group '" + s.loads[i].group +
-                                     "' is not a curve (1D physical group); a pressure needs edges");
+                                     ".loads." + std::to_string(i + 1) + "." + kind->key() + "': group '" + s.loads[i].group +
+                                     "' is not a curve (1D physical group); a " + kind->key() + " needs edges");
         }
     }
     if (!errors.empty()) throw InputError(errors);

@@ -120,9 +120,13 @@ struct TimeFunction {
     double operator()(double tau) const;
 };
 
-// A force or pressure on a group, kept (and ramped from its previous value) in later stages until changed.
+// A [[stages.loads]] block: a load of one kind (fdem/load.hpp: force, pressure, spring, foundation) on a group, kept
+// (and ramped from its previous value) in later stages until a block of the same kind on the group replaces it.
 struct LoadSpec {
     std::string group;
+    std::string kind;  // the key of its kind (fdem/load.hpp), as given: "force", "pressure", "spring", "foundation"
+    // The fields of the force, pressure and spring kinds (their files read and use them; fdem/case_json.cpp and
+    // fdem/limit_export.cpp read them too).
     bool is_pressure = false;
     std::array<double, 2> force{0, 0};  // total force on the group, N (whole thickness), distributed by tributary length
     double pressure = 0;                // Pa, acting against the current outward normal of the group's edges
@@ -136,6 +140,9 @@ struct LoadSpec {
     double spring_stiffness = 0;         // N/m
     double spring_velocity = 0;          // m/s
     TimeFunction function;               // multiplies the force or pressure (after its ramp); not for springs
+    // The parameters of a kind that has no field above (SI units, named by their key in the block): a kind's file
+    // reads and uses them without changing this struct (foundation: "normal", "shear", Pa/m).
+    std::map<std::string, double> param;
     int line = 0;
 };
 

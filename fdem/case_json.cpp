@@ -129,13 +129,18 @@ Json support(const SupportSpec& s) {
 Json load(const LoadSpec& l) {
     Json o = Json::object();
     o["group"] = l.group;
-    o["kind"] = l.is_spring ? "spring" : l.is_pressure ? "pressure" : "force";
-    o["force_N"] = l.is_spring || l.is_pressure ? Json() : pair(l.force);
+    o["kind"] = l.kind;
+    o["force_N"] = l.kind == "force" ? pair(l.force) : Json();
     o["pressure_Pa"] = l.is_pressure ? Json(l.pressure) : Json();
     if (l.is_spring) {
         o["spring_component"] = component(l.spring_component);
         o["spring_stiffness_N_m"] = l.spring_stiffness;
         o["spring_velocity_m_s"] = l.spring_velocity;
+    }
+    if (!l.param.empty()) {  // a kind's own parameters (fdem/load.hpp), SI units
+        Json p = Json::object();
+        for (const auto& [k, v] : l.param) p[k] = v;
+        o["parameters"] = p;
     }
     o["ramp_s"] = l.ramp;
     o["function"] = time_function(l.function);

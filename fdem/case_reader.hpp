@@ -246,5 +246,9 @@ inline int component_index(const std::string& c) { return c == "y" ? 1 : 0; }
 // The sections read in their own files (each reports its problems into ctx, as load_case does).
 void read_geometry(Ctx& ctx, Reader& top, CaseSpec& spec);  // fdem/case_geometry.cpp
 void read_stages(Ctx& ctx, Reader& top, CaseSpec& spec);    // fdem/case_stages.cpp
+// key = { type = "sin", ... } or { type = "table", points }: a time function (none: type ""); fdem/case_stages.cpp.
+TimeFunction read_function(Ctx& ctx, Reader& r, const std::string& key);
+// key = "x" | "y" | "xy" (fix, free, rigid): those components of s get `mode` (an error if one has a mode already).
+void read_dof_set(Ctx& ctx, Reader& r, const std::string& key, DofMode mode, SupportSpec& s);
 
 }  // namespace fdem::case_detail

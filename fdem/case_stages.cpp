@@ -1,14 +1,15 @@
-// fdem/case_stages.cpp: the [[stages]] blocks of a case: duration and termination, gravity, damping, supports
-// (fixed, driven, protocols, servos, rigid), loads (force, pressure, spring) and their time functions. Part of the
-// case reader (fdem/case_reader.hpp).
+// fdem/case_stages.cpp: the [[stages]] blocks of a case: duration and termination, gravity, damping, supports and
+// loads (each block's group and common keys; each kind reads its own keys in its file: fdem/support.hpp,
+// fdem/load.hpp) and time functions. Part of the case reader (fdem/case_reader.hpp).
 
 #include "fdem/case_reader.hpp"
 #include "fdem/common/errors.hpp"
+#include "fdem/load.hpp"
+#include "fdem/support.hpp"
 
 namespace fdem::case_detail {
 
-namespace {
-
+// fix, free, rigid = "x" | "y" | "xy": the components given get `mode`.
 void read_dof_set(Ctx& ctx, Reader& r, const std::string& key, DofMode mode, SupportSpec& s) {
     const bool rigid = mode == DofMode::rigid;
     const std::vector<std::string> allowed = rigid ? std::vector<std::string>{"x", "y", "xy", "body"} : std::vector<std::string>{"x", "y", "xy"};
@@ -69,127 +70,52 @@ TimeFunction read_function(Ctx& ctx, Reader& r, const std::string& key) {
     return fn;
 }
 
+namespace {
+
+// A [[stages.supports]] block: its group and ramp, then each support kind reads its own keys (fdem/support.hpp:
+// fix, free, rigid, vx/vy with function and servo, protocol and cyclic), setting the components' modes.
 SupportSpec read_support(Ctx& ctx, const toml::table& t, const std::string& path) {
     Reader r(ctx, t, path);
     SupportSpec s;
     s.line = r.line();
     s.group = r.string("group", true, "the name of a group (Gmsh physical group)").value_or("");
-    read_dof_set(ctx, r, "fix", DofMode::fixed, s);
-    read_dof_set(ctx, r, "free", DofMode::free, s);
-    read_dof_set(ctx, r, "rigid", DofMode::rigid, s);
-    for (int c = 0; c < 2; ++c) {
-        const std::string key = c == 0 ? "vx" : "vy";
-        if (auto v = r.number(key, false, "a velocity in m/s")) {
-            if (s.mode[c] != DofMode::inherit)
-                ctx.error(r.key_path(key), r.line(), "component " + kComponents[c] + " is already fixed or freed in this support");
-            s.mode[c] = DofMode::velocity;
-            s.velocity[c] = *v;
-        }
-    }
     s.ramp = r.number("ramp", false, "a ramp-up time >= 0 in s", [](double v) { return v >= 0; }).value_or(0.0);
-    s.function = read_function(ctx, r, "function");
-    if (s.function.present() && s.mode[0] != DofMode::velocity && s.mode[1] != DofMode::velocity)
-        ctx.error(r.key_path("function"), r.line(), "a time function multiplies a prescribed velocity: give vx or vy");
-    if (const toml::table* p = r.table("servo", false, "a table { ratio = target unbalanced-force ratio, time = response time s, "
-                                                       "min_factor = smallest velocity factor }")) {
-        Reader sr(ctx, *p, r.key_path("servo"));
-        s.servo_ratio = sr.number("ratio", true, "a target unbalanced-force ratio in (0, 1)", [](double v) { return v > 0 && v < 1; })
-                            .value_or(0.0);
-        s.servo_time = sr.number("time", true, "a response time > 0 in s", [](double v) { return v > 0; }).value_or(0.0);
-        s.servo_min = sr.number("min_factor", false, "a smallest velocity factor in (0, 1]", [](double v) { return v > 0 && v <= 1; })
-                          .value_or(0.01);
-        sr.finish();
-        if (s.mode[0] != DofMode::velocity && s.mode[1] != DofMode::velocity)
-            ctx.error(r.key_path("servo"), r.line(), "a servo controls a prescribed velocity: give vx or vy");
-    }
-    auto add_protocol = [&](int comp, std::vector<double> t_pts, std::vector<double> u_pts, const std::string& key, int line) {
-        if (s.mode[comp] != DofMode::inherit) {
-            ctx.error(r.key_path(key), line, "component " + kComponents[comp] + " already has a support in this block");
-            return;
-        }
-        s.mode[comp] = DofMode::protocol;
-        s.protocol_t = std::move(t_pts);
-        s.protocol_u = std::move(u_pts);
-    };
-    if (const toml::table* p = r.table("protocol", false, "a table { component = \"x\", points = [[t, u], ...] }")) {
-        Reader pr(ctx, *p, r.key_path("protocol"));
-        const int comp = component_index(pr.string("component", true, "\"x\" or \"y\"", kComponents).value_or("x"));
-        const toml::node* pts = pr.node("points", true, "an array of [time s, displacement m] pairs");
-        std::vector<double> tt, uu;
-        bool ok = pts && pts->is_array() && pts->as_array()->size() >= 2;
-        if (ok)
-            for (const auto& e : *pts->as_array()) {
-                const toml::array* pair = e.as_array();
-                if (!pair || pair->size() != 2 || !(*pair)[0].is_number() || !(*pair)[1].is_number()) { ok = false; break; }
-                tt.push_back(*(*pair)[0].value<double>());
-                uu.push_back(*(*pair)[1].value<double>());
-            }
-        for (std::size_t i = 1; ok && i < tt.size(); ++i)
-            if (!(tt[i] > tt[i - 1])) ok = false;
-        if (pts && !ok)
-            ctx.error(pr.key_path("points"), line_of(pts),
-                      "expected at least two [time s, displacement m] pairs with strictly increasing times");
-        pr.finish();
-        if (ok) add_protocol(comp, tt, uu, "protocol", pr.line());
-    }
-    if (const toml::table* p = r.table("cyclic", false, "a table { component, amplitudes, cycles, rate }")) {
-        Reader pr(ctx, *p, r.key_path("cyclic"));
-        const int comp = component_index(pr.string("component", true, "\"x\" or \"y\"", kComponents).value_or("x"));
-        auto amps = pr.numbers("amplitudes", true, "an array of displacement amplitudes > 0 in m");
-        const int cycles = pr.integer("cycles", false, "a whole number of cycles per amplitude >= 1",
-                                      [](long long v) { return v >= 1; }).value_or(1);
-        auto rate = pr.number("rate", true, "a loading rate > 0 in m/s", [](double v) { return v > 0; });
-        pr.finish();
-        if (amps && rate) {
-            bool ok = !amps->empty();
-            for (double a : *amps) ok = ok && a > 0;
-            if (!ok) {
-                ctx.error(pr.key_path("amplitudes"), pr.line(), "expected a non-empty array of amplitudes > 0 in m");
-            } else {
-                // Each cycle: 0 -> +a -> 0 -> -a -> 0 at the constant rate.
-                std::vector<double> tt{0}, uu{0};
-                for (double a : *amps)
-                    for (int c = 0; c < cycles; ++c)
-                        for (double target : {a, 0.0, -a, 0.0}) {
-                            tt.push_back(tt.back() + std::abs(target - uu.back()) / *rate);
-                            uu.push_back(target);
-                        }
-                add_protocol(comp, tt, uu, "cyclic", pr.line());
-            }
-        }
-    }
+    for (const SupportKind* k : support_kinds()) k->read(ctx, r, s);
     if (s.mode[0] == DofMode::inherit && s.mode[1] == DofMode::inherit)
         ctx.error(path, s.line, "a support needs fix, free, rigid, vx, vy, protocol or cyclic");
     r.finish();
     return s;
 }
 
+// A [[stages.loads]] block: its group, then the one kind it gives (fdem/load.hpp), which reads its own keys.
 LoadSpec read_load(Ctx& ctx, const toml::table& t, const std::string& path) {
     Reader r(ctx, t, path);
     LoadSpec l;
     l.line = r.line();
     l.group = r.string("group", true, "the name of a group (Gmsh physical group)").value_or("");
-    auto force = r.vec2("force", false, "[Fx, Fy], the total force on the group in N");
-    auto pressure = r.number("pressure", false, "a pressure in Pa");
-    const bool spring = r.has("spring");
-    if (int(bool(force)) + int(bool(pressure)) + int(spring) > 1)
-        ctx.error(path, l.line, "give one of force, pressure or spring");
-    if (!r.has("force") && !r.has("pressure") && !spring)
-        ctx.error(path, l.line, "missing; expected force = [Fx, Fy] (N), pressure (Pa) or spring = { component, stiffness, velocity }");
-    if (const toml::table* p = r.table("spring", false, "a table { component = \"x\", stiffness = k (N/m), velocity = v (m/s) }")) {
-        Reader sr(ctx, *p, r.key_path("spring"));
-        l.is_spring = true;
-        l.spring_component = component_index(sr.string("component", true, "\"x\" or \"y\"", kComponents).value_or("x"));
-        l.spring_stiffness = sr.number("stiffness", true, "a spring stiffness > 0 in N/m", [](double v) { return v > 0; }).value_or(1.0);
-        l.spring_velocity = sr.number("velocity", true, "the anchor's velocity in m/s").value_or(0.0);
-        sr.finish();
+    const LoadKind* kind = nullptr;
+    int given = 0;
+    std::vector<std::string> keys, expects;
+    for (const LoadKind* k : load_kinds()) {
+        const std::string key = k->key();
+        if (r.has(key)) kind = k, ++given;
+        keys.push_back(key);
+        expects.push_back(k->expect());
     }
-    if (force) l.force = *force;
-    if (pressure) l.is_pressure = true, l.pressure = *pressure;
-    l.ramp = r.number("ramp", false, "a ramp time >= 0 in s", [](double v) { return v >= 0; }).value_or(0.0);
-    l.function = read_function(ctx, r, "function");
-    if (l.function.present() && l.is_spring)
-        ctx.error(r.key_path("function"), r.line(), "a time function multiplies a force or pressure, not a spring");
+    auto one_of = [](const std::vector<std::string>& v) {
+        std::string s;
+        for (std::size_t i = 0; i < v.size(); ++i) s += (i == 0 ? "" : i + 1 == v.size() ? " or " : ", ") + v[i];
+        return s;
+    };
+    if (given > 1) ctx.error(path, l.line, "give one of " + one_of(keys));
+    if (given == 0) ctx.error(path, l.line, "missing; expected " + one_of(expects));
+    if (given == 1) {
+        l.kind = kind->key();
+        kind->read(ctx, r, l);
+    } else {
+        // (the common keys, not read: no kind to read them for)
+        r.has("ramp"), r.has("function");
+    }
     r.finish();
     return l;
 }

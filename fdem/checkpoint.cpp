@@ -35,7 +35,7 @@ namespace fdem {
 namespace {
 
 constexpr char kMagic[8] = {'F', 'D', 'E', 'M', 'C', 'K', 'P', 'T'};
-constexpr std::uint32_t kFormat = 5;  // 4: a seventh double per contact slot (restitution); 5: rigid bodies
+constexpr std::uint32_t kFormat = 6;  // 4: a seventh double per contact slot (restitution); 5: each load saved by its kind; 6: each support saved by its kind
 
 std::uint64_t fnv1a(const char* p, std::size_t n, std::uint64_t h = 1469598103934665603ull) {
     for (std::size_t i = 0; i < n; ++i) h = (h ^ static_cast<unsigned char>(p[i])) * 1099511628211ull;
@@ -111,13 +111,6 @@ void write_durable(const std::string& path, const std::string& content) {
     }
 }
 
-template <class IO>
-void fn_io(IO& io, TimeFunction& f) {
-    io.str(f.type);
-    io.pod(f.amplitude), io.pod(f.omega), io.pod(f.phase), io.pod(f.offset);
-    io.vec(f.t), io.vec(f.f);
-}
-
 void check_index(int i, int n, const char* what) {
     if (i < -1 || i >= n) throw StateError(std::string(what) + " out of range");
 }
@@ -132,8 +125,6 @@ void Simulation::save_state(StateWriter& w) const {
     // (not saved: the energy audit's sums, a diagnostic of one process; after a restart it starts over; the node
     // loop's sums node_sums_ and v2max_, which load_state marks unknown)
     static_assert(sizeof(Simulation) == 4976, "Simulation changed: update state_io (fdem/checkpoint.cpp) and this size");
-    static_assert(sizeof(ActiveSupport) == 400, "ActiveSupport changed: update state_io and this size");
-    static_assert(sizeof(ActiveLoad) == 296, "ActiveLoad changed: update state_io and this size");
 #endif
     const_cast<Simulation*>(this)->state_io(w);  // (the writer only reads the fields)
 }
@@ -175,35 +166,53 @@ void Simulation::state_io(IO& io) {
     io.vec_sized(dof_owner_, nd, "DOF owners");
     io.vec_sized(dof_vel_, nd, "prescribed velocities");
     io.vec_sized(reaction_, nd, "reactions");
-    io_count(io, supports_);
-    for (ActiveSupport& a : supports_) {
-        io.vec(a.nodes);
-        if constexpr (load)
-            for (int k : a.nodes) check_index(k, nn, "support node");
-        io.pod(a.comp), io.pod(a.mode);
-        io.pod(a.v_start), io.pod(a.v_target), io.pod(a.ramp), io.pod(a.t0), io.pod(a.v_common), io.pod(a.v_ref);
-        io.pod(a.omega), io.pod(a.omega_ref), io.pod(a.body_y);
-        io.vec(a.pt), io.vec(a.pu), io.vec(a.pI);
-        fn_io(io, a.fn);
-        io.pod(a.servo_ratio), io.pod(a.servo_time), io.pod(a.servo_min), io.pod(a.servo_factor), io.pod(a.servo_rbar);
-        io.pod(a.servo_t), io.pod(a.servo_r_int), io.pod(a.servo_f_int), io.pod(a.servo_r_max), io.pod(a.servo_f_min);
-        io.str(a.group);
+    std::uint64_t n_supports = supports_.size();  // per support: its kind's key, then what it saves (fdem/support.hpp)
+    io.pod(n_supports);
+    if constexpr (load) {
+        if (n_supports > io.remaining()) throw StateError("support count out of range");
+        supports_.clear();
+        supports_.resize(static_cast<std::size_t>(n_supports));
+    }
+    for (auto& a : supports_) {
+        if constexpr (load) {
+            std::string key;
+            io.str(key);
+            const SupportKind* kind = find_support_kind(key);
+            if (!kind) throw StateError("a support of an unknown kind '" + key.substr(0, 64) + "'");
+            a = kind->restore();
+            a->load(io, nn);
+        } else {
+            std::string key = a->kind->key();
+            io.str(key);
+            a->save(io);
+        }
     }
     if constexpr (load)
         for (int o : dof_owner_) check_index(o, static_cast<int>(supports_.size()), "DOF owner");
 
-    io.section("loads");
-    io_count(io, loads_);
-    for (ActiveLoad& l : loads_) {
-        io.vec(l.nodes), io.vec(l.weight), io.vec(l.edges);
+    io.section("loads");  // per load: its kind's key, its group, then what its kind saves (fdem/load.hpp)
+    std::uint64_t n_loads = loads_.size();
+    io.pod(n_loads);
+    if constexpr (load) {
+        if (n_loads > io.remaining()) throw StateError("load count out of range");
+        loads_.clear();
+        loads_.resize(static_cast<std::size_t>(n_loads));
+    }
+    for (auto& l : loads_) {
         if constexpr (load) {
-            for (int k : l.nodes) check_index(k, nn, "load node");
-            for (const auto& e : l.edges) check_index(e[0], nn, "load edge node"), check_index(e[1], nn, "load edge node");
+            std::string key;
+            io.str(key);
+            const LoadKind* kind = find_load_kind(key);
+            if (!kind) throw StateError("a load of an unknown kind '" + key.substr(0, 64) + "'");
+            l = kind->restore();
+            io.str(l->group);
+            l->load(io, nn);
+        } else {
+            std::string key = l->kind->key();
+            io.str(key);
+            io.str(l->group);
+            l->save(io);
         }
-        io.pod(l.is_pressure), io.pod(l.is_spring), io.pod(l.comp);
-        io.pod(l.k), io.pod(l.v), io.pod(l.anchor0), io.pod(l.start), io.pod(l.target), io.pod(l.ramp), io.pod(l.t0);
-        fn_io(io, l.fn);
-        io.str(l.group);
     }
     io.vec_sized(f_ext_, nd, "applied loads");
     io.vec(loaded_dofs_);
@@ -216,7 +225,7 @@ void Simulation::state_io(IO& io) {
     io.section("gravity");
     io.pod(gravity_), io.pod(gravity_start_), io.pod(gravity_target_), io.pod(applied_gravity_);
     io.pod(gravity_ramp_), io.pod(tilt_rate_), io.pod(tilt_deg_);
-    fn_io(io, gravity_fn_);
+    io_time_function(io, gravity_fn_);
     io.pod(gravity_fn_t0_);
 
     io.section("damping");

@@ -325,7 +325,7 @@ void Simulation::check_ties() const {
                 const int d0 = 2 * k0 + c, d = 2 * k + c;
                 if (dof_kind_[d] == dof_kind_[d0] && dof_owner_[d] == dof_owner_[d0]) continue;
                 const int owner = dof_owner_[d] >= 0 ? dof_owner_[d] : dof_owner_[d0];
-                const std::string grp = owner >= 0 ? supports_[owner].group : std::string("?");
+                const std::string grp = owner >= 0 ? supports_[owner]->group : std::string("?");
                 throw InputError(spec_.file + ": stage " + std::to_string(stage_ + 1) + ": the support of group '" + grp +
                                  "' holds only some of the copies of the node at (" + sci(model_.X[2 * k], 6) + ", " +
                                  sci(model_.X[2 * k + 1], 6) + ") m, which move as one node until a crack is inserted "
@@ -423,43 +423,17 @@ void Simulation::step() {
     // [C79] local damping F_d = -alpha |F| sign(v) on the resultant. The node loop then treats those DOFs as
     // prescribed: their reactions redistribute the forces inside the group and sum to F_d, which the loop books as
     // work; rigid_damp_ moves that share from work to damping after the loop. Serial, in support and node order.
-    double rigid_damp = 0, rigid_damp_half = 0;  // J: dt F_d v_bar and dt/2 F_d v^{n+1/2}
-    double rigid_mass = 0, rigid_mass_half = 0;  // J: the same for the mass-proportional damping force -a M v_bar
     // Filtered local damping: each DOF's moving mean vref += wf (v - vref), the exact one-step weight of an
     // exponential mean over tau for a velocity held over the step.
     const double wf = tau_ld_ > 0 ? -std::expm1(-dt / tau_ld_) : 0.0;
     double* vref = tau_ld_ > 0 ? v_ref_.data() : nullptr;
     const double hm = 0.5 * dtv * beta_mass_;
-    for (std::size_t id = 0; id < supports_.size(); ++id) {
-        ActiveSupport& s = supports_[id];
-        if (s.mode != DofMode::rigid) continue;
-        const int c = s.comp;
-        double F = 0, M = 0;
-        for (int k : s.nodes) {
-            const int d = 2 * k + c;
-            if (dof_owner_[d] != static_cast<int>(id)) continue;
-            double f = f_mod_[d] + f_ext_[d] + model_.grav_mass[k] * applied_gravity_[c];
-            for (int j = model_.inc_ptr[k]; j < model_.inc_ptr[k + 1]; ++j) f += tf[2 * static_cast<std::size_t>(model_.inc_idx[j]) + c];
-            F += f, M += model_.mass[k];
-        }
-        if (!(M > 0)) continue;
-        const double vold = s.v_common;
-        const double vrel = tau_ld_ > 0 ? vold - s.v_ref : vold;
-        const double Fd = vrel > 0 ? -alpha_ * std::abs(F) : vrel < 0 ? alpha_ * std::abs(F) : 0.0;
-        const double vnew = ((1 - hm) * vold + dtv * (F + Fd) / M) / (1 + hm);
-        const double Fm = -beta_mass_ * M * 0.5 * (vold + vnew);
-        rigid_damp += dt * Fd * 0.5 * (vold + vnew);
-        rigid_damp_half += 0.5 * dt * Fd * vnew;
-        rigid_mass += dt * Fm * 0.5 * (vold + vnew);
-        rigid_mass_half += 0.5 * dt * Fm * vnew;
-        s.v_common = vnew;
-        if (tau_ld_ > 0) s.v_ref += wf * (vnew - s.v_ref);
-        for (int k : s.nodes)
-            if (dof_owner_[2 * k + c] == static_cast<int>(id)) dof_vel_[2 * k + c] = vnew;
-    }
-    for (std::size_t id = 0; id < supports_.size(); ++id)
-        if (supports_[id].mode == DofMode::body && supports_[id].comp == 0)
-            body_step(static_cast<int>(id), tf, dt, dtv, wf, hm, rigid_damp, rigid_damp_half, rigid_mass, rigid_mass_half);
+    // (fdem/support_rigid.cpp; the sums, J: dt F_d v_bar and dt/2 F_d v^{n+1/2}, the same for the mass-proportional
+    // damping force -a M v_bar)
+    RigidStep rs{model_, f_mod_.data(), f_ext_.data(), tf, applied_gravity_, alpha_, tau_ld_, wf, beta_mass_, hm, dt, dtv,
+                 dof_vel_.data(), dof_owner_.data(), supports_.data(), static_cast<int>(supports_.size())};
+    for (std::size_t id = 0; id < supports_.size(); ++id) supports_[id]->rigid_step(rs, static_cast<int>(id));
+    const double rigid_damp = rs.damp, rigid_damp_half = rs.damp_half, rigid_mass = rs.mass, rigid_mass_half = rs.mass_half;
 
     // 6. Node loop, one unit at a time: a node, or a group of tied copies (extrinsic insertion), which moves as one
     // node of the group's mass M: the resultant F of its members' forces gives every member the same velocity
@@ -524,7 +498,7 @@ void Simulation::step() {
     step_times_.interactions += w3 - w2;
     step_times_.integration += w4 - w3;
     step_times_.other += (w1 - w0) + (w2 - wi);  // with the insertion check and the loads of the step
-    update_servos();
+    supports_after_step();
     time_ += dt;
     tilt_deg_ += tilt_rate_ * dt;
     ++steps_;
@@ -565,65 +539,6 @@ void Simulation::observe(double dt) {
         const Energies e = energies();
         if (spec_.energy_audit) log(audit_text(e));
         check_energy(e);
-    }
-}
-
-// A rigid body (rigid = "body"): the nodes whose x and y the body's two supports still own move as one rigid body.
-// With M, the centre of mass c, I = sum m_k |r_k|^2 (r_k = x_k - c at t^n, lumped masses), the resultant F and
-// moment T about c of the nodes' forces at t^n:
-//   V^{n+1/2} = V^{n-1/2} + dt (F + F_d) / M,   omega^{n+1/2} = omega^{n-1/2} + dt (T + T_d) / I
-// (local damping F_d = -alpha |F| sign(V) per component and T_d = -alpha |T| sign(omega); mass damping as for the
-// nodes: the semi-implicit factor on V and omega). The nodes then move rigidly to
-//   x_k^{n+1} = c + dt V^{n+1/2} + R(dtheta) r_k,   sin(dtheta) = dt omega^{n+1/2},
-// given to the node loop as their prescribed velocities (x_k^{n+1} - x_k^n) / dt: the distances between the nodes
-// stay as they were (to round-off), and the chord velocities carry exactly the momentum M V and the angular
-// momentum I omega (sum m r x (R - 1) r / dt = I sin(dtheta) / dt), so the reactions the node loop books inside the
-// body add up to the damping force and moment alone.
-void Simulation::body_step(int id, const double* tf, double dt, double dtv, double wf, double hm, double& damp,
-                           double& damp_half, double& mass_w, double& mass_half) {
-    ActiveSupport& sx = supports_[id];
-    ActiveSupport& sy = supports_[sx.body_y];
-    double M = 0, mx = 0, my = 0;
-    auto owned = [&](int k) { return dof_owner_[2 * k] == id && dof_owner_[2 * k + 1] == sx.body_y; };
-    for (int k : sx.nodes)
-        if (owned(k)) M += model_.mass[k], mx += model_.mass[k] * model_.x[2 * k], my += model_.mass[k] * model_.x[2 * k + 1];
-    if (!(M > 0)) return;
-    const double cx = mx / M, cy = my / M;
-    double F[2] = {0, 0}, T = 0, I = 0;
-    for (int k : sx.nodes) {
-        if (!owned(k)) continue;
-        double f[2];
-        for (int c = 0; c < 2; ++c) {
-            const int d = 2 * k + c;
-            f[c] = f_mod_[d] + f_ext_[d] + model_.grav_mass[k] * applied_gravity_[c];
-            for (int j = model_.inc_ptr[k]; j < model_.inc_ptr[k + 1]; ++j) f[c] += tf[2 * static_cast<std::size_t>(model_.inc_idx[j]) + c];
-            F[c] += f[c];
-        }
-        const double rx = model_.x[2 * k] - cx, ry = model_.x[2 * k + 1] - cy;
-        T += rx * f[1] - ry * f[0];
-        I += model_.mass[k] * (rx * rx + ry * ry);
-    }
-    auto advance = [&](double vold, double ref, double force, double inertia, double& vnew) {
-        const double vrel = tau_ld_ > 0 ? vold - ref : vold;
-        const double fd = vrel > 0 ? -alpha_ * std::abs(force) : vrel < 0 ? alpha_ * std::abs(force) : 0.0;
-        vnew = ((1 - hm) * vold + dtv * (force + fd) / inertia) / (1 + hm);
-        const double fm = -beta_mass_ * inertia * 0.5 * (vold + vnew);
-        damp += dt * fd * 0.5 * (vold + vnew), damp_half += 0.5 * dt * fd * vnew;
-        mass_w += dt * fm * 0.5 * (vold + vnew), mass_half += 0.5 * dt * fm * vnew;
-    };
-    double V[2], w = 0;
-    advance(sx.v_common, sx.v_ref, F[0], M, V[0]);
-    advance(sy.v_common, sy.v_ref, F[1], M, V[1]);
-    if (I > 0) advance(sx.omega, sx.omega_ref, T, I, w);
-    sx.v_common = V[0], sy.v_common = V[1], sx.omega = w;
-    if (tau_ld_ > 0) sx.v_ref += wf * (V[0] - sx.v_ref), sy.v_ref += wf * (V[1] - sy.v_ref), sx.omega_ref += wf * (w - sx.omega_ref);
-    const double sn = std::max(-1.0, std::min(1.0, dt * w)), cs = std::sqrt(1.0 - sn * sn);  // sin, cos of dtheta
-    for (int k : sx.nodes) {
-        if (!owned(k)) continue;
-        const double rx = model_.x[2 * k] - cx, ry = model_.x[2 * k + 1] - cy;
-        // (x^{n+1} - x^n) / dt = V + (R(dtheta) - 1) r / dt
-        dof_vel_[2 * k] = V[0] + ((cs - 1.0) * rx - sn * ry) / dt;
-        dof_vel_[2 * k + 1] = V[1] + (sn * rx + (cs - 1.0) * ry) / dt;
     }
 }
 

@@ -209,14 +209,10 @@ void Simulation::run() {
         if (r.ended_by == "max_duration") how = "max_duration reached before its until/equilibrium criterion (warning)";
         log("stage " + std::to_string(s + 1) + " '" + r.name + "' ended by " + how + " at t = " + sci(r.time) + " s after " +
             std::to_string(r.steps) + " steps");
-        for (ActiveSupport& a : supports_)
-            if (a.servo_ratio > 0 && a.mode == DofMode::velocity && a.servo_t > 0) {
-                log("servo on '" + a.group + "' (" + (a.comp == 0 ? "vx" : "vy") + "): unbalanced-force ratio held at " +
-                    sci(a.servo_r_int / a.servo_t, 3) + " on average (largest " + sci(a.servo_r_max, 3) + ", target " +
-                    sci(a.servo_ratio, 3) + "); velocity factor " + sci(a.servo_f_int / a.servo_t, 3) + " on average, " +
-                    sci(a.servo_f_min, 3) + " at least");
-                a.servo_t = a.servo_r_int = a.servo_f_int = a.servo_r_max = 0, a.servo_f_min = 1;
-            }
+        for (auto& a : supports_) {
+            const std::string line = a->stage_summary();  // (a servo's statistics of the stage)
+            if (!line.empty()) log(line);
+        }
         if (!opt_.out_dir.empty()) {
             record_dry_joints();
             write_history_row();

@@ -6,11 +6,14 @@
 #include <cstdint>
 #include <fstream>
 #include <limits>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "fdem/case.hpp"
 #include "fdem/interactions.hpp"
+#include "fdem/load.hpp"
+#include "fdem/support.hpp"
 #include "fdem/node_update.hpp"
 #include "fdem/model.hpp"
 #include "fdem/output.hpp"
@@ -145,44 +148,7 @@ public:
     std::string checkpoint_path() const;
 
 private:
-    struct ActiveLoad {
-        std::vector<int> nodes;
-        std::vector<double> weight;                  // force share per node (sums to 1)
-        std::vector<std::array<int, 2>> edges;       // pressure: edges oriented counter-clockwise around the body
-        bool is_pressure = false;
-        bool is_spring = false;                      // spring: k, v and the anchor's start position (m)
-        int comp = 0;
-        double k = 0, v = 0, anchor0 = 0;
-        std::array<double, 2> start{0, 0}, target{0, 0};  // force N or pressure Pa (component 0)
-        double ramp = 0, t0 = 0;
-        TimeFunction fn;                             // factor on the force / pressure, of t - t0
-        std::string group;
-    };
-    struct ActiveSupport {
-        std::vector<int> nodes;
-        int comp = 0;
-        DofMode mode = DofMode::fixed;
-        double v_start = 0, v_target = 0, ramp = 0, t0 = 0;
-        double v_common = 0;         // rigid: the group's common velocity (m/s) at the last half step
-        double v_ref = 0;            // rigid: its moving mean for the filtered local damping (m/s)
-        // body (on its x entry): the angular velocity (rad/s) at the last half step, its moving mean, and the index
-        // in supports_ of its y entry (-1: none left, the x entry then moves as rigid in x alone)
-        double omega = 0, omega_ref = 0;
-        int body_y = -1;
-        std::vector<double> pt, pu;  // protocol: times (s, from t0) and displacements (m)
-        std::vector<double> pI;      // protocol: INT_pt[0]^pt[i] u dt at each knot (m s), for the corner smoothing
-        TimeFunction fn;             // velocity: factor on the prescribed velocity, of t - t0
-        double servo_ratio = 0, servo_time = 0, servo_min = 0;  // see SupportSpec (0: no servo)
-        double servo_factor = 1;     // -, the velocity factor the servo holds
-        double servo_rbar = 0;       // -, the unbalanced-force ratio averaged over servo_time
-        double servo_t = 0, servo_r_int = 0, servo_f_int = 0, servo_r_max = 0, servo_f_min = 1;  // stage statistics
-        std::string group;
-    };
-    // step(), rigid bodies (rigid = "body"): the body whose x entry is supports_[id] (integrator.cpp); adds its
-    // damping and mass damping work to the four sums as the rigid groups do.
-    void body_step(int id, const double* tf, double dt, double dtv, double wf, double hm, double& damp, double& damp_half,
-                   double& mass_w, double& mass_half);
-    void update_servos();  // after each step: the servo supports' velocity factors from the unbalanced-force ratio
+    void supports_after_step();  // after each step: Support::after_step (the servos' velocity factors from the unbalanced-force ratio)
     void apply_initial_conditions();
     // begin_stage's parts, in its order (fdem/stages.cpp)
     void stage_damping_and_gravity(const StageSpec& st);
@@ -205,9 +171,6 @@ private:
     double contact_xi_max() const;
     void check_ties() const;
     void apply_time_dependent(double t);
-    double protocol_displacement(const ActiveSupport& s, double tau) const;
-    double protocol_integral(const ActiveSupport& s, double tau) const;
-    double protocol_position(const ActiveSupport& s, double tau) const;
     void fail(const std::string& what);
     void interrupt(int sig, const std::string& why = "");
     void checkpoint_if_due();
@@ -270,8 +233,8 @@ private:
     std::vector<int> dof_owner_;     // index into supports_, -1 none
     std::vector<double> dof_vel_;    // m/s
     std::vector<double> reaction_;   // N, force the supports exert on each constrained DOF (last step)
-    std::vector<ActiveSupport> supports_;
-    std::vector<ActiveLoad> loads_;
+    std::vector<std::unique_ptr<Support>> supports_;  // indexed by dof_owner_ (fdem/support.hpp)
+    std::vector<std::unique_ptr<Load>> loads_;  // in the order they began (fdem/load.hpp)
     std::vector<double> f_ext_;      // N, applied loads (no gravity), 2 per node
     std::vector<int> loaded_dofs_;   // DOFs with a nonzero f_ext_ entry
     std::vector<unsigned char> node_loaded_;  // per node: 1 when a DOF of it is in loaded_dofs_ (derived, not saved)

@@ -1,6 +1,6 @@
-// fdem/stages.cpp: the stage logic of Simulation: initial conditions, what a stage sets when it begins (supports,
-// loads, protocols, damping, gravity), the time-dependent loads and velocities of every step, the servos and how a
-// stage ends (duration, until, equilibrium).
+// fdem/stages.cpp: the stage logic of Simulation: initial conditions, what a stage sets when it begins (supports:
+// fdem/support.hpp, loads: fdem/load.hpp, damping, gravity), the time-dependent loads and velocities of every step,
+// the supports' updates after it (servos) and how a stage ends (duration, until, equilibrium).
 #include "fdem/simulation.hpp"
 
 #include <omp.h>
@@ -38,38 +38,6 @@ bool until_holds(double value, double m) {
 }  // namespace
 
 using namespace sim_detail;
-
-double Simulation::protocol_displacement(const ActiveSupport& s, double tau) const {
-    if (tau <= s.pt.front()) return s.pu.front();
-    if (tau >= s.pt.back()) return s.pu.back();
-    const auto it = std::upper_bound(s.pt.begin(), s.pt.end(), tau);
-    const std::size_t i = static_cast<std::size_t>(it - s.pt.begin());
-    const double w = (tau - s.pt[i - 1]) / (s.pt[i] - s.pt[i - 1]);
-    return s.pu[i - 1] + w * (s.pu[i] - s.pu[i - 1]);
-}
-
-double Simulation::protocol_integral(const ActiveSupport& s, double tau) const {
-    // INT_{pt[0]}^{tau} u dt of the piecewise-linear protocol, u held at its end values outside [pt[0], pt[n-1]].
-    if (tau <= s.pt.front()) return (tau - s.pt.front()) * s.pu.front();
-    if (tau >= s.pt.back()) return s.pI.back() + (tau - s.pt.back()) * s.pu.back();
-    const auto it = std::upper_bound(s.pt.begin(), s.pt.end(), tau);
-    const std::size_t i = static_cast<std::size_t>(it - s.pt.begin());
-    const double w = (tau - s.pt[i - 1]) / (s.pt[i] - s.pt[i - 1]);
-    const double u = s.pu[i - 1] + w * (s.pu[i] - s.pu[i - 1]);  // protocol_displacement(s, tau), same segment
-    return s.pI[i - 1] + 0.5 * (tau - s.pt[i - 1]) * (s.pu[i - 1] + u);
-}
-
-double Simulation::protocol_position(const ActiveSupport& s, double tau) const {
-    // Corner smoothing: with ramp T > 0 the driven position is the protocol averaged over the trailing window
-    // [tau - T, tau], u_T(tau) = (I(tau) - I(tau - T)) / T. Its velocity (u(tau) - u(tau - T)) / T is continuous:
-    // it starts from 0 at the stage start and changes linearly over T at every corner (largest acceleration
-    // |dv| / T), instead of jumping in one step (a reversal of v then asks the driven nodes for a force
-    // m 2 v / dt, which the reaction monitor reports and which hits the specimen like an impact). The price: the
-    // motion lags the protocol by T / 2 and each corner is cut by |dv| T / 8 (an amplitude a reached at rate v
-    // and reversed: a - v T / 4).
-    if (!(s.ramp > 0)) return protocol_displacement(s, tau);
-    return (protocol_integral(s, tau) - protocol_integral(s, tau - s.ramp)) / s.ramp;
-}
 
 // [[initial]]: rigid rotation of the placement about the centre (x only: the triangles turn, stress-free by the
 // objectivity of the neo-Hookean law), then v = v0 + omega x (x - c). Blocks apply in order.
@@ -116,7 +84,7 @@ void Simulation::stage_damping_and_gravity(const StageSpec& st) {
         // The moving mean starts from the current velocities, so switching the filter on does not kick the motion.
         if (*st.local_damping_filter > 0 && !(tau_ld_ > 0)) {
             v_ref_ = model_.v;
-            for (auto& sp : supports_) sp.v_ref = sp.v_common;
+            for (auto& sp : supports_) sp->filter_started();
         }
         tau_ld_ = *st.local_damping_filter;
         if (!(tau_ld_ > 0)) v_ref_.clear();
@@ -144,83 +112,39 @@ void Simulation::stage_damping_and_gravity(const StageSpec& st) {
     }
 }
 
-// begin_stage, part 2: supports. A new block takes over the DOFs it names; the others keep their previous support.
+// begin_stage, part 2: supports (fdem/support.hpp). A new block takes over the DOFs it names; the others keep their
+// previous support.
 void Simulation::stage_supports(const StageSpec& st) {
     const int nn = model_.n_nodes();
     for (const SupportSpec& sp : st.supports) {
         const auto& grp = model_.group(sp.group);
         for (int c = 0; c < 2; ++c) {
             if (sp.mode[c] == DofMode::inherit) continue;
-            ActiveSupport a;
-            a.nodes = grp.nodes;
-            a.comp = c;
-            a.mode = sp.mode[c];
-            a.group = sp.group;
-            a.t0 = time_;
-            a.ramp = sp.ramp;
-            if (sp.mode[c] == DofMode::velocity) {
-                a.fn = sp.function;
-                a.servo_ratio = sp.servo_ratio, a.servo_time = sp.servo_time, a.servo_min = sp.servo_min;
-                a.servo_rbar = sp.servo_ratio;
-            }
-            if (a.mode == DofMode::velocity) {
-                // Smooth ramp from the group's current prescribed velocity (0 if it was fixed or free).
-                const int d0 = 2 * a.nodes.front() + c;
-                a.v_start = dof_kind_[d0] == 2 ? dof_vel_[d0] : 0.0;
-                a.v_target = sp.velocity[c];
-                stage_ramp_end_ = std::max(stage_ramp_end_, time_ + sp.ramp);
-            }
-            if (a.mode == DofMode::protocol) {
-                a.pt = sp.protocol_t, a.pu = sp.protocol_u;
-                a.pI.assign(a.pt.size(), 0.0);
-                for (std::size_t i = 1; i < a.pt.size(); ++i)
-                    a.pI[i] = a.pI[i - 1] + 0.5 * (a.pt[i] - a.pt[i - 1]) * (a.pu[i] + a.pu[i - 1]);
-            }
-            if (a.mode == DofMode::rigid) {
-                // Starts from the group's momentum: the mass-weighted mean velocity.
-                double p = 0, m = 0;
-                for (int k : a.nodes) p += model_.mass[k] * model_.v[2 * k + c], m += model_.mass[k];
-                a.v_common = m > 0 ? p / m : 0.0;
-                a.v_ref = a.v_common;  // the filtered local damping's mean starts there (no kick)
-            }
-            if (a.mode == DofMode::body) {
-                // Starts from the group's momentum and angular momentum about its centre of mass: V = P / M,
-                // omega = L / I (lumped masses); the y entry follows the x entry made just before it.
-                double m = 0, mx = 0, my = 0, px = 0, py = 0;
-                for (int k : a.nodes) {
-                    const double mk = model_.mass[k];
-                    m += mk, mx += mk * model_.x[2 * k], my += mk * model_.x[2 * k + 1];
-                    px += mk * model_.v[2 * k], py += mk * model_.v[2 * k + 1];
-                }
-                a.v_common = m > 0 ? (c == 0 ? px : py) / m : 0.0;
-                a.v_ref = a.v_common;
-                if (c == 0 && m > 0) {
-                    const double cx = mx / m, cy = my / m;
-                    double L = 0, I = 0;
-                    for (int k : a.nodes) {
-                        const double mk = model_.mass[k], rx = model_.x[2 * k] - cx, ry = model_.x[2 * k + 1] - cy;
-                        L += mk * (rx * (model_.v[2 * k + 1] - py / m) - ry * (model_.v[2 * k] - px / m));
-                        I += mk * (rx * rx + ry * ry);
-                    }
-                    a.omega = a.omega_ref = I > 0 ? L / I : 0.0;
-                }
-                if (c == 1) supports_.back().body_y = static_cast<int>(supports_.size());
+            // (free: no active support)
+            std::unique_ptr<Support> a = find_support_kind(sp.mode[c])->begin(sp, c, SupportStart{model_, time_, dof_kind_.data(), dof_vel_.data()});
+            if (a) {
+                a->nodes = grp.nodes;
+                a->comp = c;
+                a->group = sp.group;
+                a->t0 = time_;
+                a->ramp = sp.ramp;
+                stage_ramp_end_ = std::max(stage_ramp_end_, a->ramp_end());
             }
             const int id = static_cast<int>(supports_.size());
-            for (int k : a.nodes) {
+            for (int k : grp.nodes) {
                 const int d = 2 * k + c;
-                dof_owner_[d] = a.mode == DofMode::free ? -1 : id;
-                dof_kind_[d] = a.mode == DofMode::free ? 0 : a.mode == DofMode::fixed ? 1 : 2;
-                dof_vel_[d] = a.mode == DofMode::rigid || a.mode == DofMode::body ? a.v_common : 0;
+                dof_owner_[d] = a ? id : -1;
+                dof_kind_[d] = a ? a->dof_kind() : 0;
+                dof_vel_[d] = a ? a->start_velocity() : 0;
                 reaction_[d] = 0;
             }
-            supports_.push_back(std::move(a));
+            if (a) supports_.push_back(std::move(a));
         }
     }
     // Drop supports that no longer own any DOF (keeps the per-step loop short).
     {
         std::vector<int> remap(supports_.size(), -1);
-        std::vector<ActiveSupport> kept;
+        std::vector<std::unique_ptr<Support>> kept;
         std::vector<char> owns(supports_.size(), 0);
         for (int d = 0; d < 2 * nn; ++d)
             if (dof_owner_[d] >= 0) owns[dof_owner_[d]] = 1;
@@ -229,62 +153,25 @@ void Simulation::stage_supports(const StageSpec& st) {
         for (int d = 0; d < 2 * nn; ++d)
             if (dof_owner_[d] >= 0) dof_owner_[d] = remap[dof_owner_[d]];
         supports_ = std::move(kept);
-        for (auto& s : supports_)
-            if (s.mode == DofMode::body && s.comp == 0) {
-                s.body_y = s.body_y >= 0 ? remap[s.body_y] : -1;
-                if (s.body_y < 0) s.mode = DofMode::rigid;  // its y was taken over: rigid in x alone
-            }
-        for (auto& s : supports_)  // a y entry whose x entry was taken over: rigid in y alone
-            if (s.mode == DofMode::body && s.comp == 1 &&
-                std::none_of(supports_.begin(), supports_.end(), [&](const ActiveSupport& o) {
-                    return o.mode == DofMode::body && o.comp == 0 && o.body_y == static_cast<int>(&s - supports_.data());
-                }))
-                s.mode = DofMode::rigid;
     }
 }
 
-// begin_stage, part 3: loads. A block on a group replaces that group's previous load of the same kind, ramping
-// from its value.
+// begin_stage, part 3: loads (fdem/load.hpp). A block on a group replaces that group's previous load of the same
+// kind, ramping from its value.
 void Simulation::stage_loads(const StageSpec& st) {
     for (const LoadSpec& ls : st.loads) {
-        const auto& grp = model_.group(ls.group);
-        ActiveLoad l;
-        l.group = ls.group;
-        l.is_pressure = ls.is_pressure;
-        l.t0 = time_;
-        l.ramp = ls.ramp;
-        l.fn = ls.function;
-        l.target = ls.is_pressure ? std::array<double, 2>{ls.pressure, 0} : ls.force;
-        l.is_spring = ls.is_spring;
+        const LoadKind* kind = find_load_kind(ls.kind);
+        if (!kind) throw InputError(spec_.file + ":" + std::to_string(ls.line) + ": no load kind '" + ls.kind + "'");
+        auto previous = loads_.end();
         for (auto it = loads_.begin(); it != loads_.end(); ++it)
-            if (it->group == ls.group && it->is_pressure == ls.is_pressure && it->is_spring == ls.is_spring) {
-                const double w = it->ramp > 0 ? std::min(1.0, (time_ - it->t0) / it->ramp) : 1.0;
-                for (int c = 0; c < 2; ++c) l.start[c] = it->start[c] + w * (it->target[c] - it->start[c]);
-                loads_.erase(it);
+            if ((*it)->group == ls.group && (*it)->kind == kind) {
+                previous = it;
                 break;
             }
+        std::unique_ptr<Load> l = kind->begin(ls, previous != loads_.end() ? previous->get() : nullptr, LoadStart{model_, spec_.file, time_, dt_});
+        l->group = ls.group;
+        if (previous != loads_.end()) loads_.erase(previous);
         stage_ramp_end_ = std::max(stage_ramp_end_, time_ + ls.ramp);
-        if (ls.is_pressure) {
-            // Orient each edge as it runs counter-clockwise around its triangle, so the outward normal is on its right.
-            std::map<std::pair<int, int>, int> directed;
-            for (int e = 0; e < model_.n_triangles(); ++e)
-                for (int k = 0; k < 3; ++k) directed[{model_.tris[e].n[k], model_.tris[e].n[(k + 1) % 3]}] = e;
-            for (auto ed : grp.edges) {
-                if (directed.count({ed[0], ed[1]})) l.edges.push_back(ed);
-                else if (directed.count({ed[1], ed[0]})) l.edges.push_back({ed[1], ed[0]});
-                else throw InputError(spec_.file + ":" + std::to_string(ls.line) + ": group '" + ls.group +
-                                      "' has an edge that lies on no triangle");
-            }
-        } else {
-            // Total force shared by tributary length along the group's edges, or equally among its nodes.
-            for (const auto& [k, w] : mesh::load_shares(grp, model_.X)) l.nodes.push_back(k), l.weight.push_back(w);
-        }
-        if (ls.is_spring) {
-            // The anchor starts at the group's weighted mean position: no force at the start of the stage.
-            l.comp = ls.spring_component, l.k = ls.spring_stiffness, l.v = ls.spring_velocity;
-            l.anchor0 = 0;
-            for (std::size_t i = 0; i < l.nodes.size(); ++i) l.anchor0 += l.weight[i] * model_.x[2 * l.nodes[i] + l.comp];
-        }
         loads_.push_back(std::move(l));
     }
 }
@@ -363,61 +250,14 @@ void Simulation::apply_time_dependent(double t) {
     // Loads.
     for (int d : loaded_dofs_) f_ext_[d] = 0, node_loaded_[d / 2] = 0;
     loaded_dofs_.clear();
-    for (const ActiveLoad& l : loads_) {
-        if (l.is_spring) {
-            // Anchor displacement: the integral of a velocity ramped up like a prescribed one, (1 - cos) over ramp.
-            const double tau = t - l.t0, R = l.ramp;
-            const double s = R > 0 && tau < R ? l.v * 0.5 * (tau - R / kPi * std::sin(kPi * tau / R))
-                                              : l.v * (tau - (R > 0 ? 0.5 * R : 0.0));
-            double xm = 0;
-            for (std::size_t i = 0; i < l.nodes.size(); ++i) xm += l.weight[i] * model_.x[2 * l.nodes[i] + l.comp];
-            const double F = l.k * (l.anchor0 + s - xm);
-            for (std::size_t i = 0; i < l.nodes.size(); ++i) {
-                const int d = 2 * l.nodes[i] + l.comp;
-                f_ext_[d] += l.weight[i] * F;
-                loaded_dofs_.push_back(d);
-            }
-            continue;
-        }
-        const double w = l.ramp > 0 ? std::min(1.0, (t - l.t0) / l.ramp) : 1.0;
-        const double fac = l.fn.present() ? l.fn(t - l.t0) : 1.0;
-        const double v0 = fac * (l.start[0] + w * (l.target[0] - l.start[0]));
-        const double v1 = fac * (l.start[1] + w * (l.target[1] - l.start[1]));
-        if (l.is_pressure) {
-            // Pressure p on edge a->b (body on its left): force -p t L n_out = -p t (dy, -dx), half to each node.
-            for (auto ed : l.edges) {
-                const double dx = model_.x[2 * ed[1]] - model_.x[2 * ed[0]], dy = model_.x[2 * ed[1] + 1] - model_.x[2 * ed[0] + 1];
-                const double fx = -0.5 * v0 * model_.thickness * dy, fy = 0.5 * v0 * model_.thickness * dx;
-                for (int k : {ed[0], ed[1]}) {
-                    f_ext_[2 * k] += fx, f_ext_[2 * k + 1] += fy;
-                    loaded_dofs_.push_back(2 * k), loaded_dofs_.push_back(2 * k + 1);
-                }
-            }
-        } else {
-            for (std::size_t i = 0; i < l.nodes.size(); ++i) {
-                const int k = l.nodes[i];
-                f_ext_[2 * k] += l.weight[i] * v0, f_ext_[2 * k + 1] += l.weight[i] * v1;
-                loaded_dofs_.push_back(2 * k), loaded_dofs_.push_back(2 * k + 1);
-            }
-        }
-    }
+    const LoadStep step{model_, t, f_ext_.data(), loaded_dofs_};
+    for (const auto& l : loads_) l->add_forces(step);
     for (int d : loaded_dofs_) node_loaded_[d / 2] = 1;  // the node loop reads f_ext_ of these nodes only
-    // Prescribed velocities for the update to t + dt (evaluated at the half step).
-    const double th = t + 0.5 * dt_;
+    // Prescribed velocities for the update to t + dt (driven, protocol; fixed and rigid: none, rigid set in step()).
     for (std::size_t id = 0; id < supports_.size(); ++id) {
-        const ActiveSupport& s = supports_[id];
-        if (s.mode == DofMode::fixed || s.mode == DofMode::rigid || s.mode == DofMode::body) continue;  // set in step() from the forces
         double v = 0;
-        if (s.mode == DofMode::velocity) {
-            const double tau = th - s.t0;
-            v = s.ramp > 0 && tau < s.ramp ? s.v_start + (s.v_target - s.v_start) * 0.5 * (1 - std::cos(kPi * tau / s.ramp)) : s.v_target;
-            if (s.fn.present()) v *= s.fn(tau);
-            if (s.servo_ratio > 0) v *= s.servo_factor;
-        } else {
-            // Displacement protocol: the velocity that lands exactly on u(t + dt) from u(t) (corner-smoothed
-            // when the support has a ramp).
-            v = (protocol_position(s, t + dt_ - s.t0) - protocol_position(s, t - s.t0)) / dt_;
-        }
+        if (!supports_[id]->prescribe(t, dt_, v)) continue;
+        const Support& s = *supports_[id];
         for (int k : s.nodes) {
             const int d = 2 * k + s.comp;
             if (dof_owner_[d] == static_cast<int>(id)) dof_vel_[d] = v;
@@ -425,24 +265,9 @@ void Simulation::apply_time_dependent(double t) {
     }
 }
 
-// Servo-controlled loading rate (the Itasca codes' practice of driving a quasi-static test by its unbalanced-force
-// ratio, Itasca 3DEC manual; Lourenco, Oliveira, Roca, Orduna 2005 run their 3DEC walls so). R's mean over the
-// response time T follows rbar += w (R - rbar), w = dt / T; the factor follows
-// f <- clamp(f exp(w clamp(ln(R* / rbar), -2, 2)), f_min, 1): while the mean ratio is above the target the actuator
-// slows down (by up to e^-2 per T), below it speeds back up, never beyond the prescribed velocity.
-void Simulation::update_servos() {
-    for (ActiveSupport& s : supports_) {
-        if (s.servo_ratio <= 0 || s.mode != DofMode::velocity) continue;
-        const double w = std::min(1.0, dt_ / s.servo_time);
-        s.servo_rbar += w * (unbalanced_ratio_ - s.servo_rbar);
-        const double g = std::log(s.servo_ratio / std::max(s.servo_rbar, 1e-300));
-        s.servo_factor = std::clamp(s.servo_factor * std::exp(w * std::clamp(g, -2.0, 2.0)), s.servo_min, 1.0);
-        s.servo_t += dt_;
-        s.servo_r_int += dt_ * s.servo_rbar;
-        s.servo_f_int += dt_ * s.servo_factor;
-        s.servo_r_max = std::max(s.servo_r_max, s.servo_rbar);
-        s.servo_f_min = std::min(s.servo_f_min, s.servo_factor);
-    }
+// After each step: the supports' own updates (the servos' velocity factors, fdem/support_velocity.cpp).
+void Simulation::supports_after_step() {
+    for (auto& s : supports_) s->after_step(dt_, unbalanced_ratio_);
 }
 
 double Simulation::load_imbalance(double* applied, double* reactions) const {
@@ -452,10 +277,13 @@ double Simulation::load_imbalance(double* applied, double* reactions) const {
         for (int c = 0; c < 2; ++c) {
             const int d = 2 * k + c;
             L[c] += f_ext_[d] + model_.grav_mass[k] * applied_gravity_[c];
-            if (dof_kind_[d] != 0 && dof_owner_[d] >= 0 && supports_[dof_owner_[d]].mode != DofMode::rigid &&
-                supports_[dof_owner_[d]].mode != DofMode::body)
-                R[c] += reaction_[d];
+            if (dof_kind_[d] != 0 && dof_owner_[d] >= 0 && supports_[dof_owner_[d]]->carries_reaction()) R[c] += reaction_[d];
         }
+    // Loads that hold the body as a support does (an elastic foundation, Load::reacts): with the reactions.
+    std::array<double, 2> r;
+    for (const auto& l : loads_)
+        if (l->reacts(r))
+            for (int c = 0; c < 2; ++c) L[c] -= r[c], R[c] += r[c];
     if (applied) applied[0] = L[0], applied[1] = L[1];
     if (reactions) reactions[0] = R[0], reactions[1] = R[1];
     const double l = std::hypot(L[0], L[1]);

@@ -71,7 +71,7 @@ TEST_CASE("spring load: bad input names the key", "[unit][spring]") {
                       Catch::Contains("stiffness") && Catch::Contains("> 0"));
     CHECK_THROWS_WITH(testing::make_simulation(spring_case("  force = [1.0, 0.0]\n  spring = { component = \"x\", stiffness = 1.0, velocity = 0.01 }\n"),
                                                "spring_two_kinds"),
-                      Catch::Contains("give one of force, pressure or spring"));
+                      Catch::Contains("give one of force, pressure, spring or foundation"));
     CHECK_THROWS_WITH(testing::make_simulation(spring_case("  spring = { component = \"z\", stiffness = 1.0, velocity = 0.01 }\n"),
                                                "spring_bad_component"),
                       Catch::Contains("component"));

@@ -1,12 +1,18 @@
 """The case file reference (cases/REFERENCE.md) and the case reader's sources stay in step: every key name the reader
-asks for (a string literal passed to a Reader method in fdem/case.cpp, fdem/case_geometry.cpp, fdem/case_stages.cpp)
-has an entry in the reference, and every entry names a key the sources ask for (no stale entries). Key names only:
-the tables they belong to are checked, for the keys the shipped cases use, by tests/core/test_case_reference.cpp."""
+asks for (a string literal passed to a Reader method in fdem/case.cpp, fdem/case_geometry.cpp, fdem/case_stages.cpp
+and the kinds' files fdem/load_*.cpp and fdem/support_*.cpp, which read their own keys: fdem/load.hpp,
+fdem/support.hpp) has an entry in the reference, and every entry names a key the sources ask for (no stale entries).
+Key names only: the tables they belong to are checked, for the keys the shipped cases use, by
+tests/core/test_case_reference.cpp."""
+import glob
 import os
 import re
 
 REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-READERS = ["fdem/case.cpp", "fdem/case_geometry.cpp", "fdem/case_stages.cpp"]
+READERS = ["fdem/case.cpp", "fdem/case_geometry.cpp", "fdem/case_stages.cpp"] + sorted(
+    os.path.relpath(p, REPO)
+    for pattern in ("load_*.cpp", "support_*.cpp")
+    for p in glob.glob(os.path.join(REPO, "fdem", pattern)))
 REFERENCE = os.path.join(REPO, "cases", "REFERENCE.md")
 
 METHODS = r"(?:number|integer|boolean|string|numbers|vec2|table|tables|has|node)"
