@@ -302,7 +302,7 @@ std::vector<Active> last_loads(const CaseSpec& spec) {
             const LoadSpec& ls = spec.stages[s].loads[i];
             for (auto it = loads.begin(); it != loads.end(); ++it) {
                 const LoadSpec& o = spec.stages[it->stage].loads[it->block];
-                if (o.group == ls.group && o.is_pressure == ls.is_pressure && o.is_spring == ls.is_spring) {
+                if (o.group == ls.group && o.kind == ls.kind) {
                     loads.erase(it);
                     break;
                 }
@@ -402,8 +402,8 @@ void write_loads(std::ostream& o, const CaseSpec& spec, const mesh::Mesh& m, con
         const LoadSpec& ls = spec.stages[loads[i].stage].loads[loads[i].block];
         const mesh::PhysicalGroup& g = group_of(ls.group);
         std::map<int, std::array<double, 2>> f;
-        std::string kind = ls.is_spring ? "spring" : ls.is_pressure ? "pressure" : "force";
-        if (ls.is_pressure) {
+        const std::string& kind = ls.kind;  // (a spring's or a foundation's force depends on the motion: none listed)
+        if (kind == "pressure") {
             // Each group edge as it runs counter-clockwise around a triangle: the outward normal is on its right.
             std::map<std::pair<int, int>, int> directed;
             for (int e = 0; e < nt; ++e)
@@ -414,7 +414,7 @@ void write_loads(std::ostream& o, const CaseSpec& spec, const mesh::Mesh& m, con
                 const double dx = m.xy[2 * ed[1]] - m.xy[2 * ed[0]], dy = m.xy[2 * ed[1] + 1] - m.xy[2 * ed[0] + 1];
                 for (int k : {ed[0], ed[1]}) f[k][0] += -0.5 * ls.pressure * t * dy, f[k][1] += 0.5 * ls.pressure * t * dx;
             }
-        } else if (!ls.is_spring) {
+        } else if (kind == "force") {
             for (const auto& [k, w] : mesh::load_shares(g, m.xy)) f[k] = {w * ls.force[0], w * ls.force[1]};
         }
         o << (i ? ",\n" : "") << "  {\"group\": " << str(ls.group) << ", \"stage\": " << loads[i].stage + 1

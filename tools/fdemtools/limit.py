@@ -245,6 +245,9 @@ class Problem:
                     nodes = self.groups[ld["group"]]["nodes"]
                     self.drivers.append((ld["group"], d, nodes))
                 continue
+            if ld["kind"] == "foundation":
+                self.notes.append(f"load on '{ld['group']}' is an elastic foundation: left out of the rigid-block model")
+                continue
             if ld["has_function"]:
                 self.notes.append(f"load on '{ld['group']}' has a time function: taken at its set value")
             for n, fx, fy in ld["node_forces"]:
