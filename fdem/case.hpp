@@ -147,6 +147,18 @@ struct LoadSpec {
 };
 
 enum class DofMode { inherit, free, fixed, velocity, protocol, rigid, body };
+// The mode's name in fdem check --json and limit_model.json ("rigid_body" for body).
+inline const char* to_string(DofMode m) {
+    switch (m) {
+        case DofMode::free: return "free";
+        case DofMode::fixed: return "fixed";
+        case DofMode::velocity: return "velocity";
+        case DofMode::protocol: return "protocol";
+        case DofMode::rigid: return "rigid";
+        case DofMode::body: return "rigid_body";
+        default: return "inherit";
+    }
+}
 
 // A support on a group: per component free, fixed, a prescribed velocity (smooth ramp-up), a
 // piecewise-linear displacement-versus-time protocol, or rigid: the group's nodes share one velocity in that

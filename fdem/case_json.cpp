@@ -21,18 +21,6 @@ Json pair(const std::array<double, 2>& v) {
 }
 Json component(int c) { return Json(c == 0 ? "x" : "y"); }
 
-const char* dof_mode(DofMode m) {
-    switch (m) {
-        case DofMode::inherit: return "inherit";
-        case DofMode::free: return "free";
-        case DofMode::fixed: return "fixed";
-        case DofMode::velocity: return "velocity";
-        case DofMode::protocol: return "protocol";
-        case DofMode::rigid: return "rigid";
-        case DofMode::body: return "rigid_body";
-    }
-    return "inherit";
-}
 
 Json time_function(const TimeFunction& f) {
     if (!f.present()) return Json();
@@ -109,8 +97,8 @@ Json geometry(const GeometrySpec& g) {
 Json support(const SupportSpec& s) {
     Json o = Json::object();
     o["group"] = s.group;
-    o["x"] = dof_mode(s.mode[0]);
-    o["y"] = dof_mode(s.mode[1]);
+    o["x"] = to_string(s.mode[0]);
+    o["y"] = to_string(s.mode[1]);
     o["vx_m_s"] = s.mode[0] == DofMode::velocity ? Json(s.velocity[0]) : Json();
     o["vy_m_s"] = s.mode[1] == DofMode::velocity ? Json(s.velocity[1]) : Json();
     o["ramp_s"] = s.ramp;
@@ -156,7 +144,6 @@ Json numerics_json(const CaseSpec& spec) {
     num["mass_scaling"] = spec.per_node_mass ? "per_node" : "uniform";
     num["energy_audit"] = spec.energy_audit;
     return num;
-
 }
 
 // The materials, and the regions' materials.

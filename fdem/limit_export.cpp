@@ -63,19 +63,6 @@ const InterfaceSpec* find_interface(const CaseSpec& spec, const std::string& a, 
     return nullptr;
 }
 
-const char* mode_name(DofMode m) {
-    switch (m) {
-        case DofMode::free: return "free";
-        case DofMode::fixed: return "fixed";
-        case DofMode::velocity: return "velocity";
-        case DofMode::protocol: return "protocol";
-        case DofMode::rigid: return "rigid";
-        case DofMode::body: return "rigid_body";
-        default: return "inherit";
-    }
-}
-
-
 // A rigid body of the limit model: triangles joined through shared node copies and across crackable edges.
 struct Body {
     double area = 0, mass = 0, mx = 0, my = 0, ax = 0, ay = 0;
@@ -382,7 +369,7 @@ void write_supports(std::ostream& o, const CaseSpec& spec, const std::map<std::a
                 }
             o << (first ? "" : ",\n") << "  {\"group\": " << str(sp.group) << ", \"stage\": " << key[0] + 1
               << ", \"block\": " << key[1] + 1 << ", \"component\": " << str(c ? "y" : "x")
-              << ", \"mode\": " << str(mode_name(sp.mode[c])) << ", \"velocity\": " << num(sp.velocity[c])
+              << ", \"mode\": " << str(to_string(sp.mode[c])) << ", \"velocity\": " << num(sp.velocity[c])
               << ", \"protocol_first_displacement\": " << num(protocol_last)
               << ", \"has_function\": " << (sp.function.present() ? "true" : "false")
               << ", \"nodes\": " << list(nodes, [](int n) { return std::to_string(n); }) << "}";

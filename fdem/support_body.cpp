@@ -119,7 +119,7 @@ public:
     DofMode mode() const override { return DofMode::body; }
     // (read by the rigid kind: rigid = "body" is a value of its key, case_detail::read_dof_set)
     void read(case_detail::Ctx&, case_detail::Reader&, SupportSpec&) const override {}
-    std::unique_ptr<Support> begin(const SupportSpec& sp, int c, const SupportStart& st) const override {
+    std::unique_ptr<Support> begin(const SupportSpec& sp, int, const SupportStart& st) const override {
         // Starts from the group's momentum and its angular momentum about its centre of mass: V = P / M,
         // omega = L / I (lumped masses).
         auto a = std::make_unique<BodySupport>(*this);
@@ -142,7 +142,6 @@ public:
             a->omega = I > 0 ? L / I : 0.0;
         }
         a->V_ref[0] = a->V[0], a->V_ref[1] = a->V[1], a->omega_ref = a->omega;
-        (void)c;
         return a;
     }
     std::unique_ptr<Support> restore() const override { return std::make_unique<BodySupport>(*this); }

@@ -31,18 +31,6 @@ namespace {
 constexpr double kG = 9.81;  // m/s^2
 constexpr double kMu = 0.8;
 
-// Mass-weighted mean of a group's nodes, component c (m or m/s).
-double body_mean(const fdem::Simulation& sim, const std::string& group, const std::vector<double>& field, int c) {
-    const auto& nodes = sim.model().group(group).nodes;
-    double sm = 0, s = 0;
-    for (int k : nodes) {
-        const double m = sim.model().mass[k];
-        sm += m;
-        s += m * field[2 * k + c];
-    }
-    return s / sm;
-}
-
 }  // namespace
 
 TEST_CASE("engine stick-slip: a 1 kg block under F0 sin(omega t) stops within 1 % of the slip amplitude of the exact "
@@ -79,17 +67,17 @@ TEST_CASE("engine stick-slip: a 1 kg block under F0 sin(omega t) stops within 1 
     const std::vector<contact_test::Stop> exact = contact_test::exact_stops(f0 / m, omega, 1.1, kMu, kG);
     REQUIRE(exact.size() == 4);
     const double amplitude = std::fabs(exact[0].x);  // m, one slip
-    const double x_start = body_mean(sim, "block", sim.model().x, 0);
+    const double x_start = contact_test::group_mean(sim, "block", sim.model().x, 0);
     std::vector<contact_test::Stop> stops;
     double s = 0;  // sign of the current slide, 0 while sticking
     const double v_slide = 1e-3;  // m/s, a slide starts when the mean velocity exceeds this
     sim.begin_stage(0);
     while (!sim.stage_finished()) {
         sim.step();
-        const double v = body_mean(sim, "block", sim.model().v, 0);
+        const double v = contact_test::group_mean(sim, "block", sim.model().v, 0);
         if (s == 0 && std::fabs(v) > v_slide) s = v > 0 ? 1 : -1;
         if (s != 0 && v * s <= 0) {
-            stops.push_back({sim.time(), body_mean(sim, "block", sim.model().x, 0) - x_start});
+            stops.push_back({sim.time(), contact_test::group_mean(sim, "block", sim.model().x, 0) - x_start});
             s = 0;
         }
     }

@@ -315,6 +315,30 @@ gravity = [0.0, -9.81]
     CHECK(testing::read_text(dir / "run" / "summary.json").find("\"failed\"") != std::string::npos);
 }
 
+namespace {
+
+// Triangle (p: x0 y0 x1 y1 x2 y2, counter-clockwise) of thickness t at its reference placement, nodes 0, 1, 2.
+TriangleRef reference_triangle(const double* p, double t) {
+    const double det = (p[2] - p[0]) * (p[5] - p[1]) - (p[4] - p[0]) * (p[3] - p[1]);
+    const double d00 = p[2] - p[0], d10 = p[3] - p[1], d01 = p[4] - p[0], d11 = p[5] - p[1];
+    TriangleRef tr{};
+    tr.n[0] = 0, tr.n[1] = 1, tr.n[2] = 2;
+    tr.Dinv[0] = d11 / det, tr.Dinv[1] = -d01 / det, tr.Dinv[2] = -d10 / det, tr.Dinv[3] = d00 / det;
+    tr.A0t = 0.5 * det * t;
+    return tr;
+}
+
+// The plane Lame constants of a material.
+MaterialConst plane_constants(const Material& mat, Plane plane) {
+    MaterialConst mc;
+    mc.mu = mat.E / (2 * (1 + mat.nu));
+    mc.lambda = plane == Plane::stress ? mat.E * mat.nu / (1 - mat.nu * mat.nu)
+                                       : mat.E * mat.nu / ((1 + mat.nu) * (1 - 2 * mat.nu));
+    return mc;
+}
+
+}  // namespace
+
 // The automatic time step of the triangles: triangle_omega2 must be the highest frequency of K w = omega^2 M w for the
 // engine's own triangle (stiffness by central differences of triangle_forces at the reference state, lumped mass
 // rho A t / 3 per node), for shapes from equilateral to skew and slender, plane stress and strain, with mass scaling.
@@ -326,16 +350,8 @@ TEST_CASE("triangle time step: omega_e is the lumped-mass CST's exact highest fr
             Material mat;
             mat.E = 3.0e10, mat.nu = 0.2, mat.density = 2500.0;
             const double t = 0.2, scale = 10.0;
-            const double det = (p[2] - p[0]) * (p[5] - p[1]) - (p[4] - p[0]) * (p[3] - p[1]);
-            const double d00 = p[2] - p[0], d10 = p[3] - p[1], d01 = p[4] - p[0], d11 = p[5] - p[1];
-            TriangleRef tr{};
-            tr.n[0] = 0, tr.n[1] = 1, tr.n[2] = 2;
-            tr.Dinv[0] = d11 / det, tr.Dinv[1] = -d01 / det, tr.Dinv[2] = -d10 / det, tr.Dinv[3] = d00 / det;
-            tr.A0t = 0.5 * det * t;
-            MaterialConst mc;
-            mc.mu = mat.E / (2 * (1 + mat.nu));
-            mc.lambda = plane == Plane::stress ? mat.E * mat.nu / (1 - mat.nu * mat.nu)
-                                               : mat.E * mat.nu / ((1 + mat.nu) * (1 - 2 * mat.nu));
+            TriangleRef tr = reference_triangle(p, t);
+            const MaterialConst mc = plane_constants(mat, plane);
             Eigen::Matrix<double, 6, 6> K;
             const double h = 1e-7, v[6] = {0, 0, 0, 0, 0, 0};
             for (int j = 0; j < 6; ++j) {
@@ -370,18 +386,11 @@ TEST_CASE("triangle time step: the viscous triangle's damped limit is the thresh
                 Material mat;
                 mat.E = 3.0e10, mat.nu = 0.2, mat.density = 2500.0;
                 const double t = 0.2, scale = 1.0;
-                const double det = (p[2] - p[0]) * (p[5] - p[1]) - (p[4] - p[0]) * (p[3] - p[1]);
+                TriangleRef tr = reference_triangle(p, t);
                 const double d00 = p[2] - p[0], d10 = p[3] - p[1], d01 = p[4] - p[0], d11 = p[5] - p[1];
-                TriangleRef tr{};
-                tr.n[0] = 0, tr.n[1] = 1, tr.n[2] = 2;
-                tr.Dinv[0] = d11 / det, tr.Dinv[1] = -d01 / det, tr.Dinv[2] = -d10 / det, tr.Dinv[3] = d00 / det;
-                tr.A0t = 0.5 * det * t;
                 const double l0 = std::hypot(d00, d10), l1 = std::hypot(d01, d11), l2 = std::hypot(d01 - d00, d11 - d10);
-                tr.eta = xi * 2 * (det / std::max({l0, l1, l2})) * std::sqrt(mat.E * mat.density * scale);
-                MaterialConst mc;
-                mc.mu = mat.E / (2 * (1 + mat.nu));
-                mc.lambda = plane == Plane::stress ? mat.E * mat.nu / (1 - mat.nu * mat.nu)
-                                                   : mat.E * mat.nu / ((1 + mat.nu) * (1 - 2 * mat.nu));
+                tr.eta = xi * 2 * (2 * tr.A0t / t / std::max({l0, l1, l2})) * std::sqrt(mat.E * mat.density * scale);
+                const MaterialConst mc = plane_constants(mat, plane);
                 Eigen::Matrix<double, 6, 6> K, C;
                 const double h = 1e-7, hv = 1e-3, zero[6] = {0, 0, 0, 0, 0, 0};
                 for (int j = 0; j < 6; ++j) {
