@@ -124,7 +124,7 @@ void Simulation::save_state(StateWriter& w) const {
 #if defined(__x86_64__) && defined(__GLIBCXX__)
     // (not saved: the energy audit's sums, a diagnostic of one process; after a restart it starts over; the node
     // loop's sums node_sums_ and v2max_, which load_state marks unknown)
-    static_assert(sizeof(Simulation) == 4976, "Simulation changed: update state_io (fdem/checkpoint.cpp) and this size");
+    static_assert(sizeof(Simulation) == 5112, "Simulation changed: update state_io (fdem/checkpoint.cpp) and this size");
 #endif
     const_cast<Simulation*>(this)->state_io(w);  // (the writer only reads the fields)
 }

@@ -38,6 +38,7 @@
 #include <sstream>
 #include <type_traits>
 
+#include "fdem/body_step.hpp"
 #include "fdem/common/errors.hpp"
 #include "fdem/node_update.hpp"
 #include "fdem/sim_detail.hpp"
@@ -120,7 +121,7 @@ Simulation::NodalLimit Simulation::nodal_step_limit(const double* mass, const in
     const int nn = model_.n_nodes();
     if (tri_node_k_.size() != static_cast<std::size_t>(nn) || tri_node_k_alpha_ != alpha) {
         tri_node_k_.assign(nn, 0.0);
-        add_triangle_node_stiffness(spec_, model_, nullptr, tri_node_k_.data(), alpha);
+        add_triangle_node_stiffness(spec_, model_, nullptr, tri_node_k_.data(), alpha, rigid_tri());
         tri_node_k_alpha_ = alpha;
     }
     std::vector<double> kt(nn, 0.0), kj(nn, 0.0), kc(nn, 0.0);
@@ -130,8 +131,20 @@ Simulation::NodalLimit Simulation::nodal_step_limit(const double* mass, const in
     double w2max = 0;  // 1/s^2
     for (int k = 0; k < nn; ++k) {
         if (rep && rep[k] != k) continue;  // a copy: its group is counted at its first node
+        // (a rigid body's node: the body's bound below; a held node has no dynamics)
+        if (!bodies_.empty() && (bodies_.node_body[k] >= 0 || bodies_.held[k])) continue;
         const double w2 = (kt[k] + kj[k] + kc[k]) / mass[k];
         if (w2 > w2max) w2max = w2, lim.node = k, lim.k_tri = kt[k], lim.k_joint = kj[k], lim.k_contact = kc[k];
+    }
+    // Rigid bodies (fdem/body_step.hpp): their mass and inertia against the springs at their nodes.
+    for (std::size_t b = 0; b < bodies_.nodes.size(); ++b) {
+        std::vector<double> k(nn, 0.0);
+        double st = 0, sj = 0, sc = 0;
+        for (int j : bodies_.nodes[b]) k[j] = kt[j] + kj[j] + kc[j], st += kt[j], sj += kj[j], sc += kc[j];
+        const double w2 = body_omega2(bodies_.nodes[b], model_.x.data(), mass, k.data());
+        if (w2 > w2max)
+            w2max = w2, lim.node = bodies_.nodes[b].front(), lim.body = static_cast<int>(b), lim.k_tri = st,
+            lim.k_joint = sj, lim.k_contact = sc;
     }
     if (w2max > 0) lim.dt = 2.0 / std::sqrt(w2max);
     return lim;
@@ -145,7 +158,7 @@ double Simulation::stage_alpha(int s) const {
 }
 
 void Simulation::set_step_limits(double alpha, bool set_dt) {
-    const StepLimit lim = triangle_step_limit(spec_, model_, alpha);
+    const StepLimit lim = triangle_step_limit(spec_, model_, alpha, rigid_tri());
     const double* mass = eff_mass_.empty() ? nullptr : eff_mass_.data();
     const int* rep = tie_rep_.empty() ? nullptr : tie_rep_.data();
     dt_triangles_ = lim.dt;
@@ -161,7 +174,11 @@ void Simulation::compute_dt() {
     // The first stage's local damping alpha: each stage that changes it sets the step again (begin_stage), as the
     // damped limit depends on it (damped_step_factor, fdem/model.hpp).
     const double alpha = stage_alpha(0);
-    const StepLimit lim = triangle_step_limit(spec_, model_, alpha);
+    // Groups that are one rigid body all run long take the step of their mass and inertia (fdem/body_step.hpp); not
+    // with tied copies or per-node mass scaling, whose masses are not the lumped ones the body moves with.
+    bodies_ = (spec_.per_node_mass || ties_ || bodies_off_) ? RigidBodies{} : whole_run_bodies(spec_, model_);
+    tri_node_k_.clear();
+    const StepLimit lim = triangle_step_limit(spec_, model_, alpha, rigid_tri());
     dt_limit_ = dt_triangles_ = lim.dt;
     dt_element_ = lim.element;
     const double xi_max = contact_xi_max();
@@ -181,6 +198,13 @@ void Simulation::compute_dt() {
     dt_nodal_ = nodal_step_limit(mass ? mass : model_.mass.data(), rep, xi_max, alpha);
     if (dt_nodal_.dt < dt_limit_) dt_limit_ = dt_nodal_.dt, dt_element_ = -1;
     dt_ = spec_.dt_override ? *spec_.dt_override : spec_.safety * dt_limit_;
+    // Nothing left that moves (every node held or in a body without springs): the bound of every triangle and node.
+    if (!bodies_.empty() && !(dt_limit_ < 1e299)) {
+        bodies_ = RigidBodies{};
+        tri_node_k_.clear();
+        bodies_off_ = true;
+        compute_dt();
+    }
 }
 
 void Simulation::build_ties() {

@@ -255,8 +255,10 @@ double triangle_damped_factor(const double* p, const int* n, const Material& m, 
     return 0.5 * lo * w;
 }
 
-void add_triangle_node_stiffness(const CaseSpec& spec, const Model& model, const int* rep, double* k, double alpha) {
+void add_triangle_node_stiffness(const CaseSpec& spec, const Model& model, const int* rep, double* k, double alpha,
+                                 const std::vector<char>* rigid_tri) {
     for (int e = 0; e < model.n_triangles(); ++e) {
+        if (rigid_tri && (*rigid_tri)[e]) continue;
         const Material& m = spec.materials[model.tri_material[e]];
         const double f = triangle_damped_factor(model.X.data(), model.tris[e].n, m, spec.plane, spec.mass_scale,
                                                 model.tris[e].eta, alpha);
@@ -269,13 +271,14 @@ void add_triangle_node_stiffness(const CaseSpec& spec, const Model& model, const
     }
 }
 
-StepLimit triangle_step_limit(const CaseSpec& spec, const Model& model, double alpha) {
+StepLimit triangle_step_limit(const CaseSpec& spec, const Model& model, double alpha, const std::vector<char>* rigid_tri) {
     StepLimit lim;
     lim.dt = 1e300;
     // Damped central difference: dt <= (2 / omega) damped_step_factor(xi, alpha). With lumped masses the assembled
     // model's highest frequency is at most the highest element frequency, so the minimum over the triangles is a safe
     // limit.
     for (int e = 0; e < model.n_triangles(); ++e) {
+        if (rigid_tri && (*rigid_tri)[e]) continue;  // inside a rigid body: it never deforms
         const Material& m = spec.materials[model.tri_material[e]];
         const double w2 = triangle_omega2(model.X.data(), model.tris[e].n, m, spec.plane, spec.mass_scale);
         const double dt = 2.0 / std::sqrt(w2) *

@@ -77,7 +77,8 @@ struct StepLimit {
     double dt = 0;  // s
     int element = -1;
 };
-StepLimit triangle_step_limit(const CaseSpec& spec, const Model& model, double alpha = 0.0);
+StepLimit triangle_step_limit(const CaseSpec& spec, const Model& model, double alpha = 0.0,
+                              const std::vector<char>* rigid_tri = nullptr);
 
 // The triangles' share of the assembled system's nodal bound (fdem/README.md 'Time step'): adds to k[node] (or to
 // k[rep[node]] when rep is given: tied copies that move as one) sum over the node's triangles of omega_e^2 m_e / 3
@@ -85,8 +86,10 @@ StepLimit triangle_step_limit(const CaseSpec& spec, const Model& model, double a
 // share at mass_scale. With u^T K_e u <= omega_e^2 u^T M_e u per triangle (the element eigenvalue inequality behind
 // the element step bound, Belytschko, Liu & Moran, Nonlinear Finite Elements for Continua and Structures, 2000, §6.3),
 // u^T K u <= sum_i k_i u_i^2 for the triangles, so the node's k / m bounds omega^2 (Rayleigh quotient) together with
-// the springs' Gershgorin row sums.
-void add_triangle_node_stiffness(const CaseSpec& spec, const Model& model, const int* rep, double* k, double alpha = 0.0);
+// the springs' Gershgorin row sums. rigid_tri (optional, per triangle): 1 leaves the triangle out, here and in
+// triangle_step_limit (inside a rigid body, fdem/body_step.hpp).
+void add_triangle_node_stiffness(const CaseSpec& spec, const Model& model, const int* rep, double* k, double alpha = 0.0,
+                                 const std::vector<char>* rigid_tri = nullptr);
 
 // The triangle's damped factor f_e: its stable step is (2 / omega_e) f_e under its viscous coefficient eta (Pa s,
 // TriangleRef::eta) and local damping alpha; damped_step_factor(0, alpha) when eta = 0.

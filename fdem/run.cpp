@@ -158,8 +158,8 @@ void Simulation::run() {
         const NodalLimit& L = dt_nodal_;
         const double k = L.k_tri + L.k_joint + L.k_contact;
         auto pct = [k](double x) { return std::to_string(static_cast<int>(std::lround(100 * x / k))) + " %"; };
-        by = "node " + std::to_string(L.node) + ": triangles " + pct(L.k_tri) + ", joints " + pct(L.k_joint) + ", contact " +
-             pct(L.k_contact) + " of its stiffness";
+        by = (L.body >= 0 ? "rigid body '" + bodies_.group[L.body] + "': triangles " : "node " + std::to_string(L.node) + ": triangles ") +
+             pct(L.k_tri) + ", joints " + pct(L.k_joint) + ", contact " + pct(L.k_contact) + " of its stiffness";
     }
     log("time step: " + sci(dt_) + " s = " + (spec_.dt_override ? std::string("fixed by numerics.dt") : sci(spec_.safety) + " x stable limit") +
         " " + sci(dt_limit_) + " s (set by " + by + ((resumed_ ? alpha_ : stage_alpha(0)) > 0 ? ", at local damping " + sci(resumed_ ? alpha_ : stage_alpha(0)) : std::string()) + ")" +

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "fdem/body_step.hpp"
 #include "fdem/case.hpp"
 #include "fdem/interactions.hpp"
 #include "fdem/load.hpp"
@@ -99,8 +100,10 @@ public:
     struct NodalLimit {
         double dt = std::numeric_limits<double>::infinity();  // s
         int node = -1;                                         // the node that sets it
-        double k_tri = 0, k_joint = 0, k_contact = 0;          // N/m, that node's shares
+        double k_tri = 0, k_joint = 0, k_contact = 0;          // N/m, that node's shares (a body's: its nodes' sums)
+        int body = -1;  // a rigid body sets it (index in bodies()), the node one of its own
     };
+    const RigidBodies& bodies() const { return bodies_; }
     const NodalLimit& nodal_limit() const { return dt_nodal_; }  // at the start of the run
     const CaseSpec& spec() const { return spec_; }
     double time() const { return time_; }
@@ -265,6 +268,9 @@ private:
     NodalLimit dt_nodal_;                    // the assembled bound at the start (for the log)
     std::vector<double> tri_node_k_;         // N/m, per node: the triangles' share of the nodal bound (set-up, not saved)
     double tri_node_k_alpha_ = 0;            // the local damping tri_node_k_ was folded with
+    RigidBodies bodies_;                     // groups one rigid body all run long (compute_dt; not saved)
+    bool bodies_off_ = false;                // compute_dt found nothing left to bound without them
+    const std::vector<char>* rigid_tri() const { return bodies_.empty() ? nullptr : &bodies_.tri; }
     double xi_max_ = 0;                      // largest contact dashpot fraction of any stage
     int mass_raised_nodes_ = 0;              // per-node mass scaling: nodes made heavier, and the total inertial
     double mass_raised_ratio_ = 1;           // mass after it over the total before
