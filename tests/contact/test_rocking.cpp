@@ -53,3 +53,29 @@ TEST_CASE("restitution: a value outside 0 < e <= 1 is an input error naming the 
                           Catch::Contains("restitution") && Catch::Contains("(0, 1]"));
     }
 }
+
+// The block as one rigid body (rigid = "body"), which takes the step of its mass and inertia (fdem/body_step.hpp),
+// on a contact ten times stiffer, k_n 1e12 Pa/m, restitution 0.2: 1.1 s, 447,000 steps (about 25 s). Measured
+// (tests/contact/rocking_study/RESULTS.md): first impact +0.21 %, second -0.04 %, the amplitude before it -0.45 %,
+// r -0.16 % of the pads' value, no hop. The stiffer contact is closer to the rigid block: at k_n 1e11 the same body
+// gives +0.66 %, -1.36 % and -0.50 %.
+TEST_CASE("engine rocking as one rigid body on k_n 1e12: the first two impacts within 0.5 % of Housner's rigid "
+          "block, no hop",
+          "[engine][regression]") {
+    RockingSetup s = housner_setting(1.1);
+    s.kn = 1e12, s.body = true;
+    const RockingResult r = rock(s, "rocking_body");
+    std::vector<double> rt, ra;
+    print_rocking(r, s, rt, ra);
+    REQUIRE(r.times.size() >= 2);
+    REQUIRE(r.amplitudes.size() >= 2);
+    CHECK(r.times[0] == Approx(rt[0]).epsilon(0.005));
+    CHECK(r.times[1] == Approx(rt[1]).epsilon(0.005));
+    CHECK(r.amplitudes[1] == Approx(ra[1]).epsilon(0.005));
+    const double r1 = measured_r(r, 0);
+    std::printf("[rocking]   r of impact 1: %.5f (pads' centres %+.2f %%, Housner %+.2f %%)\n", r1,
+                100 * (r1 / r.rigid.r(r.x_p) - 1), 100 * (r1 / r.rigid.r(r.rigid.b) - 1));
+    CHECK(r1 == Approx(r.rigid.r(r.x_p)).epsilon(0.005));
+    CHECK(r.hop <= r.static_penetration);
+    CHECK(std::fabs(r.books) < 1e-4);
+}
