@@ -68,7 +68,7 @@ std::string stage(const std::string& name, const std::string& supports) {
 
 }  // namespace
 
-TEST_CASE("rigid body step: a block rigid all run long takes its body's step, larger than the elastic block's; "
+TEST_CASE("rigid body step: a block rigid all run long takes its body's step, larger than the elastic block's, "
           "a body for part of the run does not",
           "[engine][regression]") {
     fdem::Simulation elastic = testing::make_simulation(block_case(stage("a", kFixedBase)), "body_step_elastic", {}, 1);
