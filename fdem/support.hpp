@@ -48,7 +48,9 @@ struct RigidStep {
     const double* f_ext;            // N, loads
     const double* tri_forces;       // N, 6 per triangle
     std::array<double, 2> gravity;  // m/s^2, applied
-    double alpha, tau_ld, wf, beta_mass, hm, dt, dtv;
+    // local damping, its filter's time constant (s) and one-step weight, mass damping a (1/s), dtv a / 2, the step
+    // and the velocity update's span (s)
+    double local_damping, filter_tau, wf, mass_damping, hm, dt, dtv;
     double* dof_vel;
     const int* dof_owner;
     const std::unique_ptr<Support>* supports;  // the active supports, indexed by dof_owner (a body finds its other

@@ -37,16 +37,16 @@ public:
         }
         if (!(M > 0)) return;
         const double vold = v_common;
-        const double vrel = s.tau_ld > 0 ? vold - v_ref : vold;
-        const double Fd = vrel > 0 ? -s.alpha * std::abs(F) : vrel < 0 ? s.alpha * std::abs(F) : 0.0;
+        const double vrel = s.filter_tau > 0 ? vold - v_ref : vold;
+        const double Fd = vrel > 0 ? -s.local_damping * std::abs(F) : vrel < 0 ? s.local_damping * std::abs(F) : 0.0;
         const double vnew = ((1 - s.hm) * vold + s.dtv * (F + Fd) / M) / (1 + s.hm);
-        const double Fm = -s.beta_mass * M * 0.5 * (vold + vnew);
+        const double Fm = -s.mass_damping * M * 0.5 * (vold + vnew);
         s.damp += s.dt * Fd * 0.5 * (vold + vnew);
         s.damp_half += 0.5 * s.dt * Fd * vnew;
         s.mass += s.dt * Fm * 0.5 * (vold + vnew);
         s.mass_half += 0.5 * s.dt * Fm * vnew;
         v_common = vnew;
-        if (s.tau_ld > 0) v_ref += s.wf * (vnew - v_ref);
+        if (s.filter_tau > 0) v_ref += s.wf * (vnew - v_ref);
         for (int k : nodes)
             if (s.dof_owner[2 * k + c] == id) s.dof_vel[2 * k + c] = vnew;
     }
