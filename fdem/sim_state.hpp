@@ -17,6 +17,7 @@
 #include <cstdint>
 #include <limits>
 #include <memory>
+#include <stdexcept>
 #include <string>
 #include <utility>
 #include <vector>
@@ -203,6 +204,7 @@ struct StepScratch {
     // The node loop's largest |v|^2 over the nodes, for the contact's detection schedule (ContactSystem::step's
     // v2max, a scan of every node less); -1 when v was set elsewhere since (initial conditions, a restart, model()).
     double v2max = -1.0;
+    std::vector<std::string> notes;  // log lines of the step, written by the observers after it
 };
 
 // The energy audit (CaseSpec::energy_audit): per part (0 triangles, 1 cohesive joints, 2 contact) the work its
@@ -213,6 +215,42 @@ struct EnergyAudit {
     std::vector<double> fj, f, v;  // N, N, m/s per DOF: the joints' forces, the modules' forces, v^{n-1/2}
     std::array<double, 3> w{0, 0, 0}, half{0, 0, 0}, base{0, 0, 0};  // J
     double t0 = -1;                                                  // s; < 0: not started
+};
+
+// ---- The step ----
+
+// Wall time of each stage of Simulation::step (s, cumulative over this process; not saved): fdem_bench's per-kernel
+// breakdown. The contact module's own split (detection, forces, scatter) is in its stats.
+struct StepProfile {
+    double triangles = 0;     // triangle forces and crushing (with the step's set-up)
+    double insertion = 0;     // extrinsic insertion: the check, untying, the step after it
+    double loads = 0;         // loads, gravity and prescribed velocities at t^n
+    double interactions = 0;  // cohesive elements and contact (detection, forces, scatter)
+    double rigid_groups = 0;  // rigid groups' velocities
+    double nodes = 0;         // the node update and the contact dashpots' second half
+    double books = 0;         // energy books, servos, the clock
+    double damage = 0;        // the joints' damage, the step after breaks
+    double observers = 0;     // history rows, snapshots, files, progress, energy checks
+    double integration() const { return rigid_groups + nodes + books; }
+    double other() const { return insertion + loads + damage + observers; }
+};
+
+// What the stages of one step hand on to the next ones (fdem/step.cpp).
+struct StepContext {
+    double dt_before = 0;         // s, the step as the previous one left it
+    double dt = 0;                // s, this step (insertion may have made it smaller)
+    double dtv = 0;               // s, the velocity update's span (dt_before + dt) / 2
+    double* tri_sigma = nullptr;  // the triangles' stresses for the insertion check (ties only), else null
+    double visc_power = 0;        // W, the triangles' viscous power
+    double wf = 0;                // the local damping filter's one-step weight
+    double hm = 0;                // dtv a / 2 of the mass damping a
+    double rigid_damp = 0, rigid_damp_half = 0, rigid_mass = 0, rigid_mass_half = 0;  // J (RigidStep)
+};
+
+// A step that cannot go on (an inverted triangle, a non-finite velocity): thrown by a stage, turned into the run's
+// failure (Simulation::fail, which writes the outputs) by Simulation::step.
+struct StepFailure : std::runtime_error {
+    using std::runtime_error::runtime_error;
 };
 
 }  // namespace fdem

@@ -1,7 +1,8 @@
 // fdem/simulation.cpp: the Simulation object around the integrator: set-up (blocks, ties, time step, history header),
 // monitors, energies and their checks, and the outputs (history rows, snapshots, summary.json). The step itself is in
-// integrator.cpp, the stages (supports, loads, protocols, servos, their endings) in stages.cpp, the run loop with its
-// progress, signals and failures in run.cpp; sim_detail.hpp holds what they share.
+// step.cpp (its time step and tied groups in integrator.cpp), the stages (supports, loads, protocols, servos, their
+// endings) in stages.cpp, the run loop with its progress, signals and failures in run.cpp, checkpoints in
+// checkpoint.cpp; sim_state.hpp holds the state and caches, sim_detail.hpp what the files share.
 #include "fdem/simulation.hpp"
 #include "fdem/version.hpp"
 

@@ -50,15 +50,6 @@ struct Energies {
     double balance_error() const;  // |W - (K + E + D)| relative to the largest term
 };
 
-// Wall time spent in each part of Simulation::step (s, cumulative; not part of the state, not checkpointed). For
-// fdem_bench's per-kernel breakdown; the contact module's own split (detection, forces, scatter) is in its stats.
-struct StepTimes {
-    double triangles = 0;     // triangle forces (and crushing)
-    double interactions = 0;  // cohesive elements and contact (detection, forces, scatter)
-    double integration = 0;   // rigid groups, node loop, block sums
-    double other = 0;         // loads, damage update, outputs, energy checks
-};
-
 class Simulation {
 public:
     Simulation(CaseSpec spec, Model model, RunOptions options);
@@ -67,7 +58,8 @@ public:
     // that cannot end with the state reached.
     void run();
 
-    // Finer control, for tests: set up stage s (0-based), then step.
+    // Finer control, for tests: set up stage s (0-based), then step: one step (advance, fdem/step.cpp) and the
+    // observers after it (history row, snapshot, files, progress, energy check), as run() takes it.
     void begin_stage(int s);
     void step();
     bool stage_finished();  // evaluates the termination rule of the current stage
@@ -98,7 +90,7 @@ public:
     void energy_every_step(bool on) { energy_every_step_ = on; }
     const std::vector<StageResult>& stage_results() const { return ending_.results; }
     double wall_time() const { return wall_time_; }
-    const StepTimes& step_times() const { return step_times_; }
+    const StepProfile& profile() const { return profile_; }  // wall time per stage of step()
     // Energy audit (case key numerics.energy_audit): per part (0 triangles, 1 cohesive joints, 2 contact) the work
     // done on it by the nodes since the audit started and the growth of what it holds and dissipated, for energies e
     // (J; inserted elements' starting energy counts as work done on the joints). All zero before the first step.
@@ -182,9 +174,19 @@ private:
     double snapshot_interval() const;  // s, of the current stage (0: only at stage ends)
     bool history_due(double t, long step) const;
     void write_snapshot();
-    // Stages of step() (fdem/integrator.cpp)
-    double triangle_stage(double* tri_sigma);
+    // The step (fdem/step.cpp): advance() runs the stages in this order and returns the step's dt; observe(dt) runs
+    // the observers after it.
+    double advance();
+    void step_triangles(StepContext& c);
+    void step_insertion(StepContext& c);
+    void step_loads(StepContext& c);
+    void step_interactions(StepContext& c);
+    void step_rigid_groups(StepContext& c);
+    void step_nodes(StepContext& c);
+    void step_books(StepContext& c);
+    void step_damage(StepContext& c);
     void observe(double dt);
+    void write_notes();  // the stages' log lines (StepScratch::notes)
     void dry_joint_forces(const std::vector<contact::ContactSystem::LoadedEdge>& faces, std::vector<double>& force) const;
     void dry_joint_traction(const int* n, const double* F, double& sigma, double& tau) const;
     std::string contact_snapshot(const std::vector<contact::ContactSystem::LoadedEdge>& faces) const;
@@ -202,7 +204,7 @@ private:
     Crushing crush_;            // per-triangle crushing state of the materials with a crushing table (empty: none)
     int control_monitor_ = -1;  // monitor giving the control displacement of the damage records
 
-    // The state (fdem/sim_state.hpp: each with its io, fdem/checkpoint.cpp).
+    // The state (fdem/sim_state.hpp: each with its io, fdem/sim_state.cpp).
     StepClock clock_;
     Supports supports_;
     Loads loads_;
@@ -228,7 +230,7 @@ private:
     double last_checkpoint_wall_ = 0;      // s, wall clock of the last checkpoint (checkpoint_wall_interval)
     double cpu_start_ = 0, cpu_time_ = 0;  // s, process CPU time (cpu_clock), summary.json cpu_time_s
     double wall_start_ = 0, wall_time_ = 0, last_flush_ = 0, last_progress_ = 0, last_progress_log_ = 0;
-    StepTimes step_times_;
+    StepProfile profile_;
 };
 
 // Run a case file end to end (the `fdem run` command). Returns the exit code.

@@ -40,8 +40,9 @@ struct SupportStart {
     const double* dof_vel;          // m/s
 };
 
-// Step 5 of Simulation::step for the rigid supports: the forces on their nodes at t^n and the damping parameters;
-// the supports write dof_vel of the DOFs they own and add their damping's work to the sums (J).
+// The rigid-groups stage of Simulation::step (step_rigid_groups, fdem/step.cpp) for the rigid supports: the forces on
+// their nodes at t^n and the damping parameters; the supports write dof_vel of the DOFs they own and add their
+// damping's work to the sums (J).
 struct RigidStep {
     const Model& model;
     const double* f_mod;            // N, joint and contact forces

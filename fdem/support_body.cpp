@@ -1,8 +1,8 @@
 // fdem/support_body.cpp: support kind `body` (rigid = "body" in a [[stages.supports]] block, both components): the
 // group moves as one rigid body, translating and rotating under its resultant force and its moment about its centre
 // of mass, free. The block's two components are two Supports: the x one carries the body's state and moves it, the
-// y one only owns the y DOFs. Each step (Simulation::step, part 5), with M, the centre of mass c, I = sum m_k |r_k|^2
-// (r_k = x_k - c at t^n, lumped masses), the resultant F and moment T about c of the nodes' forces at t^n:
+// y one only owns the y DOFs. Each step (Simulation::step_rigid_groups), with M, the centre of mass c, I = sum m_k
+// |r_k|^2 (r_k = x_k - c at t^n, lumped masses), the resultant F and moment T about c of the nodes' forces at t^n:
 //   V^{n+1/2} = V^{n-1/2} + dt (F + F_d) / M,   omega^{n+1/2} = omega^{n-1/2} + dt (T + T_d) / I
 // (local damping F_d = -alpha |F| sign(V) per component and T_d = -alpha |T| sign(omega); mass damping as for the
 // nodes: the semi-implicit factor on V and omega). The nodes then move rigidly to

@@ -1,6 +1,6 @@
 // fdem/support_rigid.cpp: support kind `rigid` (rigid = "x" | "y" | "xy" in a [[stages.supports]] block): the group's
 // nodes share one velocity in the component, free as a whole (e.g. rigid = "y" with vx on a loading beam: the beam
-// stays horizontal, moves up and down freely and cannot rotate). Each step (Simulation::step, part 5) the common
+// stays horizontal, moves up and down freely and cannot rotate). Each step (Simulation::step_rigid_groups) the common
 // velocity follows the resultant of the group's nodal forces, v^{n+1/2} = v^{n-1/2} + dt (F + F_d) / M with
 // M = sum of the nodal masses and the [C79] local damping F_d = -alpha |F| sign(v) on the resultant (and the
 // mass-proportional damping -a M v_bar). The node loop then treats the DOFs as prescribed: their reactions
