@@ -37,7 +37,9 @@ namespace fdem {
 namespace {
 
 constexpr char kMagic[8] = {'F', 'D', 'E', 'M', 'C', 'K', 'P', 'T'};
-constexpr std::uint32_t kFormat = 6;  // 4: a seventh double per contact slot (restitution); 5: each load saved by its kind; 6: each support saved by its kind
+// 4: a seventh double per contact slot (restitution); 5: each load saved by its kind; 6: each support saved by its
+// kind; 7: the module forces (zero between steps, a cache) no longer saved
+constexpr std::uint32_t kFormat = 7;
 
 std::uint64_t fnv1a(const char* p, std::size_t n, std::uint64_t h = 1469598103934665603ull) {
     for (std::size_t i = 0; i < n; ++i) h = (h ^ static_cast<unsigned char>(p[i])) * 1099511628211ull;
@@ -175,7 +177,6 @@ void Simulation::state_io(IO& io) {
     }
 
     io.section("energy");
-    io.vec_sized(scratch_.f_mod, nd, "module forces");
     books_.io(io, shape);
 
     io.section("stage");

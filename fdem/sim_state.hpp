@@ -195,7 +195,8 @@ struct TiedUnits {
 // Per-step scratch: written by a step and read within it (or by the observers after it).
 struct StepScratch {
     std::vector<double> tri_forces;  // N, 6 per triangle
-    std::vector<double> f_mod;       // N, joint and contact forces, 2 per node (the node update reads and clears them)
+    std::vector<double> f_mod;  // N, joint and contact forces, 2 per node (the node update reads and clears them: zero
+                                // between steps, where a checkpoint is taken)
     std::vector<double> tri_sigma;   // Pa, per triangle: Cauchy stress xx, yy, xy of the step (ties only)
     std::vector<double> tri_power;   // W, per block of triangles: the viscous power
     std::vector<int> tri_bad;        // per block of triangles: the first inverted triangle (-1: none)
