@@ -11,10 +11,10 @@
 //
 // A restart rebuilds the model from the case (same build, same case: checked), then overwrites every piece of state
 // that changes during a run with the checkpoint's: the Model's positions, velocities and masses, the state structs
-// of fdem/sim_state.hpp (each by its own io, fdem/sim_state.cpp, whose field counts fail the build when a struct
-// gains a field its io does not list), the crushing state and the modules (their own save_state and load_state);
-// the caches are rebuilt. A field that is not saved shows up in tests/core/test_restart.cpp, which compares a
-// restarted run with an uninterrupted one byte for byte.
+// of fdem/sim_state.hpp (each by its own io, fdem/sim_state.cpp, next to a check of the struct's field count that
+// fails the build when the struct gains a field), the crushing state and the modules (their own save_state and
+// load_state); the caches are rebuilt. A field that is not saved shows up in tests/core/test_restart.cpp, which
+// compares a restarted run with an uninterrupted one byte for byte.
 #include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>

@@ -3,8 +3,8 @@
 // resize) under IO::loading. The sections around them, the model, the crushing state, the modules and what a load
 // derives from the state are in Simulation::state_io (fdem/checkpoint.cpp).
 //
-// Each io is checked against its struct's field count: a field added to a state struct fails the build here until
-// its io lists it (and the count below is raised), or it moves to a cache (not saved).
+// Next to each io, its struct's field count: a field added to a state struct fails the build here until it is added
+// to the io and the count raised, or it moves to a cache (not saved).
 #include "fdem/sim_state.hpp"
 
 #include <string>

@@ -3,9 +3,9 @@
 // The state: the structs of the first part, each with one io (IO = StateWriter or StateReader, fdem/common/
 // state_io.hpp) that lists its fields once, in the checkpoint's order, for save and load alike. With the Model's
 // positions, velocities and masses, the crushing state and the contact and cohesive modules (which save their own)
-// it is everything that carries from one step to the next. Each io is checked against its struct's field count
-// (fdem/common/field_count.hpp, next to the io): a field added to a state struct fails the build until its io
-// lists it.
+// it is everything that carries from one step to the next. Next to each io (fdem/sim_state.cpp) a static_assert
+// holds its struct's field count (fdem/common/field_count.hpp): a field added to a state struct fails the build
+// until its author adds it to the io and raises the count (or moves it to a cache).
 //
 // The caches: the structs of the second part, rebuilt from the case and the state (at set-up, by build_ties, by each
 // step) and never saved. A field of Simulation itself outside these is the case, the run's options or the
