@@ -106,7 +106,7 @@ public:
     // explicit step is damped, a mechanism moving at a quasi-static rate is not.
     void set_dashpot(double beta_s) { beta_ = beta_s; }
     // The dashpots' work over a step is booked as the engine books every other force's, -dt f_d . vbar with
-    // vbar = (v^{n-1/2} + v^{n+1/2}) / 2 (integrator.cpp): step() books the half on v^{n-1/2}, which it has, and
+    // vbar = (v^{n-1/2} + v^{n+1/2}) / 2 (fdem/step.cpp): step() books the half on v^{n-1/2}, which it has, and
     // keeps each loaded pair's dashpot forces; finish_step(v), called with v^{n+1/2} once the nodes are updated,
     // works out the half on v^{n+1/2}, booked when the next step starts, so dashpot_dissipation() is always the work
     // up to t^n, the time of the last step's forces, as the rest of the books.

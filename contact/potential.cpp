@@ -213,7 +213,7 @@ void load_edge(const double* __restrict xo, const double* __restrict vo, double*
             }
             // Dissipated this step: the work the spring took, at the mean of its force before and after the step
             // over the step's tangential motion vt dt (the rule by which the engine books every force's work, on the
-            // mean velocity of the step, integrator.cpp), less the energy it gained. While it sticks at an unchanged
+            // mean velocity of the step, fdem/step.cpp), less the energy it gained. While it sticks at an unchanged
             // length this is 0; when it slips at a steady cap, the cap times the slip. (The cap times the slip alone
             // would miss (cap^{n-1} - cap^n)^2 / (2 k_t) at each change of the cap.)
             const double e_new = 0.5 * k_t * kept * kept;

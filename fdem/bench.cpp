@@ -1,7 +1,8 @@
 // fdem_bench: step throughput (triangle-steps per second) for 1 and 2 threads (or --threads LIST), median of
-// several runs, written to a CSV, with the time per step of each kernel (Simulation::step_times and the contact
+// several runs, written to a CSV, with the time per step of each kernel (Simulation::profile and the contact
 // statistics): triangle forces, cohesive elements, contact detection, contact forces (pair kernels), contact scatter
-// (the sum in pair order, each thread its own nodes), integration (node loop) and the rest (loads, damage update, outputs). Without --case: triangle forces and integration of an elastic plate of about N
+// (the sum in pair order, each thread its own nodes), integration (rigid groups, node update, books) and the rest
+// (insertion, loads, damage, outputs). Without --case: triangle forces and integration of an elastic plate of about N
 // triangles. With --case FILE: the first steps of that case's first stage (contact, joints and all), so that the
 // thread scaling of a real scene is measured; --set key=value as for `fdem run`.
 //   fdem_bench [--triangles N | --case FILE [--set k=v ...]] [--steps S] [--repeats R] [--threads 1,2] [--csv FILE]
@@ -318,7 +319,7 @@ int run_bench(const BenchOptions& o, const fdem::CaseSpec& spec, const fdem::Mod
     const char* kernel_names[kKernels] = {"triangles", "cohesive", "contact detection", "contact forces",
                                           "contact scatter", "integration", "other"};
     auto kernel_clock = [](const fdem::Simulation& sim, double* t) {
-        const fdem::StepTimes& st = sim.step_times();
+        const fdem::StepProfile& st = sim.profile();
         const fdem::contact::ContactSystem* cs = sim.interactions().contact();
         const double det = cs ? cs->stats().time_detection : 0.0;
         const double frc = cs ? cs->stats().time_forces : 0.0;  // includes the scatter
@@ -328,8 +329,8 @@ int run_bench(const BenchOptions& o, const fdem::CaseSpec& spec, const fdem::Mod
         t[2] = det;
         t[3] = frc - sct;
         t[4] = sct;
-        t[5] = st.integration;
-        t[6] = st.other;
+        t[5] = st.integration();  // rigid groups, node update, books
+        t[6] = st.other();        // insertion, loads, damage, observers
     };
     std::vector<std::pair<int, double>> medians;
     std::vector<double> first_x;  // end state of the first thread count: every count runs the same steps

@@ -10,9 +10,11 @@
 // leaves the previous checkpoint or the new one, whole. The payload hash catches a damaged file.
 //
 // A restart rebuilds the model from the case (same build, same case: checked), then overwrites every piece of state
-// that changes during a run with the checkpoint's. A field that is not saved shows up in tests/core/test_restart.cpp,
-// which compares a restarted run with an uninterrupted one byte for byte; the sizeof guards below (x86-64
-// libstdc++) fail the build when a class gains a field, so that its author decides whether it must be saved.
+// that changes during a run with the checkpoint's: the Model's positions, velocities and masses, the state structs
+// of fdem/sim_state.hpp (each by its own io, fdem/sim_state.cpp, next to a check of the struct's field count that
+// fails the build when the struct gains a field), the crushing state and the modules (their own save_state and
+// load_state); the caches are rebuilt. A field that is not saved shows up in tests/core/test_restart.cpp, which
+// compares a restarted run with an uninterrupted one byte for byte.
 #include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -35,7 +37,9 @@ namespace fdem {
 namespace {
 
 constexpr char kMagic[8] = {'F', 'D', 'E', 'M', 'C', 'K', 'P', 'T'};
-constexpr std::uint32_t kFormat = 6;  // 4: a seventh double per contact slot (restitution); 5: each load saved by its kind; 6: each support saved by its kind
+// 4: a seventh double per contact slot (restitution); 5: each load saved by its kind; 6: each support saved by its
+// kind; 7: the module forces (zero between steps, a cache) no longer saved
+constexpr std::uint32_t kFormat = 7;
 
 std::uint64_t fnv1a(const char* p, std::size_t n, std::uint64_t h = 1469598103934665603ull) {
     for (std::size_t i = 0; i < n; ++i) h = (h ^ static_cast<unsigned char>(p[i])) * 1099511628211ull;
@@ -111,28 +115,19 @@ void write_durable(const std::string& path, const std::string& content) {
     }
 }
 
-void check_index(int i, int n, const char* what) {
-    if (i < -1 || i >= n) throw StateError(std::string(what) + " out of range");
-}
-
 }  // namespace
 
 std::string Simulation::checkpoint_path() const { return (std::filesystem::path(opt_.out_dir) / "checkpoint.bin").string(); }
 
 // Everything that changes during a run, in one list for both directions (state_io): the order is the format.
 void Simulation::save_state(StateWriter& w) const {
-#if defined(__x86_64__) && defined(__GLIBCXX__)
-    // (not saved: the energy audit's sums, a diagnostic of one process; after a restart it starts over; the node
-    // loop's sums node_sums_ and v2max_, which load_state marks unknown)
-    static_assert(sizeof(Simulation) == 5112, "Simulation changed: update state_io (fdem/checkpoint.cpp) and this size");
-#endif
     const_cast<Simulation*>(this)->state_io(w);  // (the writer only reads the fields)
 }
 
 void Simulation::load_state(StateReader& r) { state_io(r); }
 
-// IO = StateWriter (save) or StateReader (load): each field once; what only a load does (check lengths and indices,
-// resize, derive) under IO::loading.
+// IO = StateWriter (save) or StateReader (load): the sections in order, each state struct by its io; what only a
+// load does (check the mesh and the step, derive the caches that follow from the state) under IO::loading.
 template <class IO>
 void Simulation::state_io(IO& io) {
     constexpr bool load = IO::loading;
@@ -145,126 +140,50 @@ void Simulation::state_io(IO& io) {
         if (n_nodes != nn || n_tri != model_.n_triangles()) throw StateError("another mesh (node or triangle count)");
     io.vec_sized(model_.x, nd, "positions");
     io.vec_sized(model_.v, nd, "velocities");
-    if constexpr (load) v2max_ = -1.0;
+    if constexpr (load) scratch_.v2max = -1.0;
     io.vec_sized(model_.mass, static_cast<std::size_t>(nn), "masses");
     io.vec_sized(model_.inv_mass, static_cast<std::size_t>(nn), "inverse masses");
     io.vec_sized(model_.grav_mass, static_cast<std::size_t>(nn), "gravitational masses");
 
+    const StateShape shape{nn, static_cast<int>(spec_.monitors.size()), static_cast<int>(spec_.stages.size())};
     io.section("clock");
-    double dt0 = dt_initial_;  // the case's step at the start: a load checks it
+    double dt0 = limits_.dt_initial;  // the case's step at the start: a load checks it
     io.pod(dt0);
     if constexpr (load)
-        if (dt0 != dt_initial_)
-            throw StateError("time step " + std::to_string(dt0) + " s, this case gives " + std::to_string(dt_initial_) + " s");
-    io.pod(dt_), io.pod(dt_limit_), io.pod(dt_springs_), io.pod(dt_logged_);  // smaller than at the start after insertions
-    io.pod(time_), io.pod(steps_), io.pod(stage_), io.pod(stage_t0_), io.pod(stage_steps0_), io.pod(broken_total_), io.pod(eq_since_);
-    if constexpr (load)
-        if (stage_ < 0 || stage_ >= static_cast<int>(spec_.stages.size())) throw StateError("stage index out of range");
+        if (dt0 != limits_.dt_initial)
+            throw StateError("time step " + std::to_string(dt0) + " s, this case gives " +
+                             std::to_string(limits_.dt_initial) + " s");
+    clock_.io(io, shape);
 
     io.section("supports");
-    io.vec_sized(dof_kind_, nd, "DOF kinds");
-    io.vec_sized(dof_owner_, nd, "DOF owners");
-    io.vec_sized(dof_vel_, nd, "prescribed velocities");
-    io.vec_sized(reaction_, nd, "reactions");
-    std::uint64_t n_supports = supports_.size();  // per support: its kind's key, then what it saves (fdem/support.hpp)
-    io.pod(n_supports);
-    if constexpr (load) {
-        if (n_supports > io.remaining()) throw StateError("support count out of range");
-        supports_.clear();
-        supports_.resize(static_cast<std::size_t>(n_supports));
-    }
-    for (auto& a : supports_) {
-        if constexpr (load) {
-            std::string key;
-            io.str(key);
-            const SupportKind* kind = find_support_kind(key);
-            if (!kind) throw StateError("a support of an unknown kind '" + key.substr(0, 64) + "'");
-            a = kind->restore();
-            a->load(io, nn);
-        } else {
-            std::string key = a->kind->key();
-            io.str(key);
-            a->save(io);
-        }
-    }
-    if constexpr (load)
-        for (int o : dof_owner_) check_index(o, static_cast<int>(supports_.size()), "DOF owner");
+    supports_.io(io, shape);
 
-    io.section("loads");  // per load: its kind's key, its group, then what its kind saves (fdem/load.hpp)
-    std::uint64_t n_loads = loads_.size();
-    io.pod(n_loads);
+    io.section("loads");
+    loads_.io(io, shape);
     if constexpr (load) {
-        if (n_loads > io.remaining()) throw StateError("load count out of range");
-        loads_.clear();
-        loads_.resize(static_cast<std::size_t>(n_loads));
-    }
-    for (auto& l : loads_) {
-        if constexpr (load) {
-            std::string key;
-            io.str(key);
-            const LoadKind* kind = find_load_kind(key);
-            if (!kind) throw StateError("a load of an unknown kind '" + key.substr(0, 64) + "'");
-            l = kind->restore();
-            io.str(l->group);
-            l->load(io, nn);
-        } else {
-            std::string key = l->kind->key();
-            io.str(key);
-            io.str(l->group);
-            l->save(io);
-        }
-    }
-    io.vec_sized(f_ext_, nd, "applied loads");
-    io.vec(loaded_dofs_);
-    if constexpr (load) {
-        for (int d : loaded_dofs_) check_index(d, static_cast<int>(nd), "loaded DOF");
-        node_loaded_.assign(nd / 2, 0);
-        for (int d : loaded_dofs_) node_loaded_[d / 2] = 1;
+        scratch_.node_loaded.assign(nd / 2, 0);
+        for (int d : loads_.loaded_dofs) scratch_.node_loaded[d / 2] = 1;
     }
 
     io.section("gravity");
-    io.pod(gravity_), io.pod(gravity_start_), io.pod(gravity_target_), io.pod(applied_gravity_);
-    io.pod(gravity_ramp_), io.pod(tilt_rate_), io.pod(tilt_deg_);
-    io_time_function(io, gravity_fn_);
-    io.pod(gravity_fn_t0_);
+    gravity_.io(io, shape);
 
     io.section("damping");
-    io.pod(alpha_), io.pod(tau_ld_), io.vec(v_ref_), io.pod(beta_mass_), io.pod(xi_contact_);
+    damping_.io(io, shape);
     if constexpr (load) {
-        set_step_limits(alpha_, false);  // the current stage's limits (a later insertion compares against them)
-        if (!v_ref_.empty() && v_ref_.size() != nd) throw StateError("velocity filter of another mesh");
-        if (tau_ld_ > 0 && v_ref_.size() != nd) throw StateError("velocity filter missing");
-        inter_.set_contact_dashpot(std::isfinite(dt_contact_) ? xi_contact_ * dt_contact_ : 0.0);  // the contact state holds it too
+        set_step_limits(damping_.local, false);  // the current stage's limits (a later insertion compares against them)
+        inter_.set_contact_dashpot(std::isfinite(limits_.dt_contact) ? damping_.contact * limits_.dt_contact
+                                                                     : 0.0);  // the contact state holds it too
     }
 
     io.section("energy");
-    io.vec_sized(f_mod_, nd, "module forces");
-    io.pod(kinetic_n_), io.pod(work_half_), io.pod(damp_half_), io.pod(mass_half_), io.pod(unbalanced_ratio_);
-    io.pod(W_ext_), io.pod(D_damp_), io.pod(D_visc_), io.pod(D_mass_);
+    books_.io(io, shape);
 
     io.section("stage");
-    io.pod(until_start_), io.pod(until_monitor_), io.pod(stage_ramp_end_);
-    io.pod(peak_load_monitor_), io.pod(peak_disp_monitor_), io.pod(peak_mean_), io.pod(peak_u_prev_), io.pod(peak_load_), io.pod(peak_disp_), io.pod(below_since_);
-    if constexpr (load) {
-        const int nm = static_cast<int>(spec_.monitors.size());
-        check_index(until_monitor_, nm, "until monitor");
-        check_index(peak_load_monitor_, nm, "past_peak load monitor");
-        check_index(peak_disp_monitor_, nm, "past_peak displacement monitor");
-    }
-    io_count(io, stage_results_);
-    for (StageResult& r : stage_results_) {
-        io.str(r.name), io.str(r.ended_by);
-        io.pod(r.time), io.pod(r.steps);
-    }
+    ending_.io(io, shape);
 
     io.section("outputs");
-    io.pod(last_row_step_);
-    io.vec_sized(mon_ext_, spec_.monitors.size(), "monitor extrema");
-    io.pod(mon_ext_init_);
-    io.vec_sized(mon_first_peak_, spec_.monitors.size(), "monitor first peaks");
-    io.pod(next_history_), io.pod(next_snapshot_), io.pod(history_every_steps_), io.pod(next_checkpoint_);
-    io_count(io, snapshots_);
-    for (auto& [t, name] : snapshots_) io.pod(t), io.str(name);
+    out_.io(io, shape);
 
     // Crushing triangles (fdem/plasticity.hpp): plastic strain and softening variable per slot (the rest is set up
     // from the case).
@@ -296,24 +215,23 @@ void Simulation::write_checkpoint() {
     head.pod(build_hash());
     head.pod(case_hash(spec_));
     head.pod(hist_bytes);
-    head.pod(static_cast<std::int64_t>(steps_));
-    head.pod(time_);
+    head.pod(static_cast<std::int64_t>(clock_.steps));
+    head.pod(clock_.time);
     head.pod(static_cast<std::uint64_t>(payload.data().size()));
     head.pod(fnv1a(payload.data().data(), payload.data().size()));
     write_durable(checkpoint_path(), head.data() + payload.data());
     last_checkpoint_wall_ = wall_clock_now();
-    ++checkpoints_written_;
 }
 
 void Simulation::checkpoint_if_due() {
     if (opt_.out_dir.empty()) return;
     bool due = false;
-    if (spec_.checkpoint_interval > 0 && time_ + 1e-9 * dt_ >= next_checkpoint_) {
+    if (spec_.checkpoint_interval > 0 && clock_.time + 1e-9 * clock_.dt >= out_.next_checkpoint) {
         const double ci = spec_.checkpoint_interval;
-        next_checkpoint_ += ci * std::max(1.0, std::floor((time_ - next_checkpoint_) / ci) + 1);
+        out_.next_checkpoint += ci * std::max(1.0, std::floor((clock_.time - out_.next_checkpoint) / ci) + 1);
         due = true;
     }
-    if (spec_.checkpoint_wall_interval > 0 && (steps_ & 15) == 0 &&
+    if (spec_.checkpoint_wall_interval > 0 && (clock_.steps & 15) == 0 &&
         wall_clock_now() - last_checkpoint_wall_ >= spec_.checkpoint_wall_interval)
         due = true;
     if (due) write_checkpoint();
@@ -378,7 +296,7 @@ void Simulation::restore(const std::string& run_dir) {
     // Snapshots written after the checkpoint (the one of the stop itself, or those of a run killed later) are not in
     // run.pvd any more; the continued run writes its own.
     std::set<std::string> kept;
-    for (const auto& s : snapshots_) {
+    for (const auto& s : out_.snapshots) {
         kept.insert(fs::path(s.second).filename().string());
         kept.insert(fs::path(contact_snapshot_name(s.second)).filename().string());
     }
@@ -387,15 +305,15 @@ void Simulation::restore(const std::string& run_dir) {
         const std::string name = entry.path().filename().string();
         long st = -1;
         const bool ours = std::sscanf(name.c_str(), "step_%ld.vtu", &st) == 1 || std::sscanf(name.c_str(), "contacts_%ld.vtu", &st) == 1;
-        if (ours && st >= steps_ && !kept.count(name)) fs::remove(entry.path(), ec);
+        if (ours && st >= clock_.steps && !kept.count(name)) fs::remove(entry.path(), ec);
     }
     // The log goes on after the earlier run's.
     bool log_ok = false;
     log_ = read_all((fs::path(run_dir) / "run.log").string(), log_ok);
     resumed_ = true;
-    log("restart: from " + path + " at step " + std::to_string(steps_) + ", t = " + format_double(time_) + " s, stage " +
-        std::to_string(stage_ + 1) + " '" + spec_.stages[stage_].name + "'; history.csv truncated to its first " +
-        std::to_string(hist_bytes) + " bytes");
+    log("restart: from " + path + " at step " + std::to_string(clock_.steps) + ", t = " + format_double(clock_.time) +
+        " s, stage " + std::to_string(clock_.stage + 1) + " '" + spec_.stages[clock_.stage].name +
+        "'; history.csv truncated to its first " + std::to_string(hist_bytes) + " bytes");
 }
 
 }  // namespace fdem

@@ -10,7 +10,7 @@
 // Adding a kind: write fdem/load_NAME.cpp with a LoadKind (its key, its reading, its begin) and a Load (its forces
 // and state), add its line to fdem/load_registry.cpp, its rows to cases/REFERENCE.md, and a test.
 //
-// What the engine does for every kind (fdem/stages.cpp, fdem/integrator.cpp, fdem/checkpoint.cpp): a block on a
+// What the engine does for every kind (fdem/stages.cpp, fdem/step.cpp, fdem/checkpoint.cpp): a block on a
 // group replaces that group's previous load of the same kind (begin gets it, to ramp from its value); the forces of
 // all loads are summed into f_ext in the order the loads began, and f_ext's work is booked as external work
 // (W_ext, the node loop: dt f . v_bar); a "load" monitor on a group reads f_ext.

@@ -33,33 +33,34 @@ using namespace sim_detail;
 // max_duration, an upper bound, when only that is known; "?" when a later stage ends by a criterion alone).
 std::string Simulation::progress_text(double& frac) {
     const double now = wall_clock();
-    const StageSpec& st = spec_.stages[stage_];
-    const double ts = time_ - stage_t0_;
+    const StageSpec& st = spec_.stages[clock_.stage];
+    const double ts = clock_.time - clock_.stage_t0;
     frac = -1;
     if (st.duration) frac = ts / *st.duration;
-    if (until_monitor_ >= 0 && st.until_value != until_start_)
-        frac = std::max(frac, (monitor_value(until_monitor_) - until_start_) / (st.until_value - until_start_));
+    if (ending_.until_monitor >= 0 && st.until_value != ending_.until_start)
+        frac = std::max(frac, (monitor_value(ending_.until_monitor) - ending_.until_start) /
+                                  (st.until_value - ending_.until_start));
     if (frac < 0 && st.max_duration) frac = ts / *st.max_duration;
     const double el = now - wall_start_;
-    const double rate = std::max(static_cast<double>(steps_) / std::max(el, 1e-9), 1.0);  // steps per wall second
+    const double rate = std::max(static_cast<double>(clock_.steps) / std::max(el, 1e-9), 1.0);  // steps per wall second
     std::string eta = "?", run_eta = "?";
     if (frac > 0.001) {
-        const double stage_left = (1 - std::min(frac, 1.0)) * (ts / std::max(frac, 1e-9)) / dt_ / rate;
+        const double stage_left = (1 - std::min(frac, 1.0)) * (ts / std::max(frac, 1e-9)) / clock_.dt / rate;
         eta = human_time(stage_left);
         double later = 0;
         bool known = true, bound = false;
-        for (std::size_t k = static_cast<std::size_t>(stage_) + 1; k < spec_.stages.size(); ++k) {
+        for (std::size_t k = static_cast<std::size_t>(clock_.stage) + 1; k < spec_.stages.size(); ++k) {
             const StageSpec& sk = spec_.stages[k];
             if (sk.duration) later += *sk.duration;
             else if (sk.max_duration) later += *sk.max_duration, bound = true;
             else known = false;
         }
-        if (known) run_eta = (bound ? "at most " : "") + human_time(stage_left + later / dt_ / rate);
+        if (known) run_eta = (bound ? "at most " : "") + human_time(stage_left + later / clock_.dt / rate);
     }
     char b[320];
-    std::snprintf(b, sizeof b, "[stage %d/%zu %s] %5.1f%%  t = %.4g s  %.3g steps/s  stage left %s  run left %s", stage_ + 1,
-                  spec_.stages.size(), st.name.c_str(), 100 * std::clamp(frac, 0.0, 1.0), time_, rate, eta.c_str(),
-                  run_eta.c_str());
+    std::snprintf(b, sizeof b, "[stage %d/%zu %s] %5.1f%%  t = %.4g s  %.3g steps/s  stage left %s  run left %s",
+                  clock_.stage + 1, spec_.stages.size(), st.name.c_str(), 100 * std::clamp(frac, 0.0, 1.0), clock_.time,
+                  rate, eta.c_str(), run_eta.c_str());
     return b;
 }
 
@@ -80,9 +81,10 @@ void Simulation::progress_log_line() {
 }
 
 void Simulation::fail(const std::string& what) {
-    const std::string msg = what + "; stage " + std::to_string(stage_ + 1) + " '" + spec_.stages[stage_].name + "', step " +
-                            std::to_string(steps_) + ", t = " + sci(time_, 6) + " s (dt = " + sci(dt_) +
-                            " s, stable limit " + sci(dt_limit_) + " s)";
+    const std::string msg = what + "; stage " + std::to_string(clock_.stage + 1) + " '" +
+                            spec_.stages[clock_.stage].name + "', step " + std::to_string(clock_.steps) +
+                            ", t = " + sci(clock_.time, 6) + " s (dt = " + sci(clock_.dt) + " s, stable limit " +
+                            sci(clock_.dt_limit) + " s)";
     wall_time_ = wall_clock() - wall_start_;
     cpu_time_ = cpu_clock() - cpu_start_;
     log_ += "error: run failed: " + msg + "\n";  // run.log; the terminal gets it once, on stderr from main
@@ -134,13 +136,15 @@ void Simulation::interrupt(int sig, const std::string& why) {
                            : sig == SIGTERM   ? "interrupted by SIGTERM"
                            : sig == SIGUSR1   ? "interrupted by SIGUSR1"
                                               : "interrupted by a signal";
-    const std::string msg = by + " in stage " + std::to_string(stage_ + 1) + " '" + spec_.stages[stage_].name + "' at step " +
-                            std::to_string(steps_) + ", t = " + sci(time_, 6) + " s" +
-                            (opt_.out_dir.empty() ? std::string() : "; checkpoint written: continue with fdem run CASE --restart " + opt_.out_dir);
+    const std::string msg =
+        by + " in stage " + std::to_string(clock_.stage + 1) + " '" + spec_.stages[clock_.stage].name + "' at step " +
+        std::to_string(clock_.steps) + ", t = " + sci(clock_.time, 6) + " s" +
+        (opt_.out_dir.empty() ? std::string()
+                              : "; checkpoint written: continue with fdem run CASE --restart " + opt_.out_dir);
     log(msg);
     if (!opt_.out_dir.empty()) {
         record_dry_joints();
-        if (last_row_step_ != steps_) append_history(history_row(energies()));
+        if (out_.last_row_step != clock_.steps) append_history(history_row(energies()));
         write_snapshot();
         flush_files();
         write_summary("interrupted", msg);
@@ -152,18 +156,24 @@ void Simulation::run() {
     log("fdem " FDEM_VERSION ": case '" + spec_.name + "' (" + spec_.file + ")");
     log("mesh: " + std::to_string(model_.n_triangles()) + " triangles, " + std::to_string(model_.n_nodes()) + " nodes");
     std::string by;
-    if (dt_element_ >= 0) {
-        by = "triangle " + std::to_string(dt_element_);
+    if (limits_.dt_element >= 0) {
+        by = "triangle " + std::to_string(limits_.dt_element);
     } else {
-        const NodalLimit& L = dt_nodal_;
+        const NodalLimit& L = limits_.nodal;
         const double k = L.k_tri + L.k_joint + L.k_contact;
         auto pct = [k](double x) { return std::to_string(static_cast<int>(std::lround(100 * x / k))) + " %"; };
-        by = (L.body >= 0 ? "rigid body '" + bodies_.group[L.body] + "': triangles " : "node " + std::to_string(L.node) + ": triangles ") +
+        by = (L.body >= 0 ? "rigid body '" + limits_.bodies.group[L.body] + "': triangles " : "node " + std::to_string(L.node) + ": triangles ") +
              pct(L.k_tri) + ", joints " + pct(L.k_joint) + ", contact " + pct(L.k_contact) + " of its stiffness";
     }
-    log("time step: " + sci(dt_) + " s = " + (spec_.dt_override ? std::string("fixed by numerics.dt") : sci(spec_.safety) + " x stable limit") +
-        " " + sci(dt_limit_) + " s (set by " + by + ((resumed_ ? alpha_ : stage_alpha(0)) > 0 ? ", at local damping " + sci(resumed_ ? alpha_ : stage_alpha(0)) : std::string()) + ")" +
-        (std::isfinite(dt_springs_) ? "; joint/contact springs alone " + sci(dt_springs_) + " s" : std::string()));
+    log("time step: " + sci(clock_.dt) +
+        " s = " + (spec_.dt_override ? std::string("fixed by numerics.dt") : sci(spec_.safety) + " x stable limit") +
+        " " + sci(clock_.dt_limit) + " s (set by " + by +
+        ((resumed_ ? damping_.local : stage_alpha(0)) > 0
+             ? ", at local damping " + sci(resumed_ ? damping_.local : stage_alpha(0))
+             : std::string()) +
+        ")" +
+        (std::isfinite(clock_.dt_springs) ? "; joint/contact springs alone " + sci(clock_.dt_springs) + " s"
+                                          : std::string()));
     if (!model_.has_topology && model_.mesh.n_bodies() > 1)
         log("no interface or fracture rules: the " + std::to_string(model_.mesh.n_bodies()) + " bodies of the mesh are tied into one continuum");
     if (inter_.has_joints()) {
@@ -185,31 +195,33 @@ void Simulation::run() {
         log("mass scaling: inertial mass x " + sci(spec_.mass_scale) + " (time step x " + sci(std::sqrt(spec_.mass_scale)) +
             "); gravity uses the physical mass");
     if (spec_.per_node_mass)
-        log("per-node mass scaling: " + std::to_string(mass_raised_nodes_) + " of " + std::to_string(model_.n_nodes()) +
+        log("per-node mass scaling: " + std::to_string(limits_.mass_raised_nodes) + " of " +
+            std::to_string(model_.n_nodes()) +
             " nodes made heavier for the triangles' limit to bound their springs too; total inertial mass x " +
-            sci(mass_raised_ratio_));
+            sci(limits_.mass_raised_ratio));
     if (!spec_.dt_override && spec_.safety > 1)
         log("warning: numerics.safety = " + sci(spec_.safety) + " > 1: the time step exceeds the stability limit");
     if (!opt_.out_dir.empty()) write_summary("running", "");
     last_progress_log_ = wall_clock();
     // After restore(), the current stage continues where the checkpoint left it (no begin_stage).
-    const std::size_t first = resumed_ ? static_cast<std::size_t>(stage_) : 0;
+    const std::size_t first = resumed_ ? static_cast<std::size_t>(clock_.stage) : 0;
     for (std::size_t s = first; s < spec_.stages.size(); ++s) {
         if (!(resumed_ && s == first)) begin_stage(static_cast<int>(s));
         while (!stage_finished()) {
             step();
             if (g_stop_signal) return interrupt(g_stop_signal);
-            if (opt_.stop_after_steps > 0 && steps_ >= opt_.stop_after_steps)
-                return interrupt(SIGUSR1, "stopped after " + std::to_string(steps_) + " steps (--stop-after-steps)");
+            if (opt_.stop_after_steps > 0 && clock_.steps >= opt_.stop_after_steps)
+                return interrupt(SIGUSR1,
+                                 "stopped after " + std::to_string(clock_.steps) + " steps (--stop-after-steps)");
             checkpoint_if_due();
         }
         if (opt_.progress) progress_line(true);
-        const StageResult& r = stage_results_.back();
+        const StageResult& r = ending_.results.back();
         std::string how = r.ended_by;
         if (r.ended_by == "max_duration") how = "max_duration reached before its until/equilibrium criterion (warning)";
         log("stage " + std::to_string(s + 1) + " '" + r.name + "' ended by " + how + " at t = " + sci(r.time) + " s after " +
             std::to_string(r.steps) + " steps");
-        for (auto& a : supports_) {
+        for (auto& a : supports_.list) {
             const std::string line = a->stage_summary();  // (a servo's statistics of the stage)
             if (!line.empty()) log(line);
         }
@@ -222,18 +234,18 @@ void Simulation::run() {
     }
     wall_time_ = wall_clock() - wall_start_;
     cpu_time_ = cpu_clock() - cpu_start_;
-    const double tps = static_cast<double>(steps_) * model_.n_triangles() / std::max(wall_time_, 1e-9);
+    const double tps = static_cast<double>(clock_.steps) * model_.n_triangles() / std::max(wall_time_, 1e-9);
     if (inter_.has_dry_joints())
         log("dry joint record: " + std::to_string(inter_.dry_open_count()) + " segments opened, " + std::to_string(inter_.dry_slip_count()) +
             " slipped (of " + std::to_string(inter_.dry_joint_count()) + ")");
     if (inter_.has_joints() && inter_.joints()->extrinsic_count() > 0) {
         const auto* J = inter_.joints();
         log("extrinsic insertion: " + std::to_string(J->extrinsic_count() - J->dormant_count()) + " of " +
-            std::to_string(J->extrinsic_count()) + " elements inserted; time step " + sci(dt_) + " s at the end (" +
-            sci(dt_initial_) + " s at the start)");
+            std::to_string(J->extrinsic_count()) + " elements inserted; time step " + sci(clock_.dt) +
+            " s at the end (" + sci(limits_.dt_initial) + " s at the start)");
     }
-    log("done: " + std::to_string(steps_) + " steps in " + human_time(wall_time_) + " (" + sci(tps, 3) + " triangle-steps/s; CPU time " +
-        human_time(cpu_time_) + ")");
+    log("done: " + std::to_string(clock_.steps) + " steps in " + human_time(wall_time_) + " (" + sci(tps, 3) +
+        " triangle-steps/s; CPU time " + human_time(cpu_time_) + ")");
     if (const contact::ContactSystem* c = inter_.contact()) {
         const auto& st = c->stats();
         log("contact: " + std::to_string(st.detections) + " detections, " + std::to_string(st.candidate_pairs) + " candidate pairs (" +

@@ -1,5 +1,5 @@
-// fdem/sim_detail.hpp: constants and small helpers shared by the files of Simulation (simulation.cpp, integrator.cpp,
-// stages.cpp, run.cpp); internal to the engine, not part of its interface.
+// fdem/sim_detail.hpp: constants and small helpers shared by the files of Simulation (simulation.cpp, step.cpp,
+// integrator.cpp, stages.cpp, run.cpp); internal to the engine, not part of its interface.
 #pragma once
 
 #include <chrono>

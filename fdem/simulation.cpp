@@ -1,7 +1,8 @@
 // fdem/simulation.cpp: the Simulation object around the integrator: set-up (blocks, ties, time step, history header),
 // monitors, energies and their checks, and the outputs (history rows, snapshots, summary.json). The step itself is in
-// integrator.cpp, the stages (supports, loads, protocols, servos, their endings) in stages.cpp, the run loop with its
-// progress, signals and failures in run.cpp; sim_detail.hpp holds what they share.
+// step.cpp (its time step and tied groups in integrator.cpp), the stages (supports, loads, protocols, servos, their
+// endings) in stages.cpp, the run loop with its progress, signals and failures in run.cpp, checkpoints in
+// checkpoint.cpp; sim_state.hpp holds the state and caches, sim_detail.hpp what the files share.
 #include "fdem/simulation.hpp"
 #include "fdem/version.hpp"
 
@@ -53,32 +54,33 @@ Simulation::Simulation(CaseSpec spec, Model model, RunOptions options)
     }
     omp_set_num_threads(threads > 0 ? threads : omp_get_num_procs());
     const int nn = model_.n_nodes(), nt = model_.n_triangles();
-    dof_kind_.assign(2 * nn, 0);
-    dof_owner_.assign(2 * nn, -1);
-    dof_vel_.assign(2 * nn, 0.0);
-    reaction_.assign(2 * nn, 0.0);
-    f_ext_.assign(2 * nn, 0.0);
-    node_loaded_.assign(nn, 0);
-    f_mod_.assign(2 * nn, 0.0);
-    tf_.assign(6 * static_cast<std::size_t>(nt), 0.0);
+    supports_.dof_kind.assign(2 * nn, 0);
+    supports_.dof_owner.assign(2 * nn, -1);
+    supports_.dof_velocity.assign(2 * nn, 0.0);
+    supports_.reaction.assign(2 * nn, 0.0);
+    loads_.f_ext.assign(2 * nn, 0.0);
+    scratch_.node_loaded.assign(nn, 0);
+    scratch_.f_mod.assign(2 * nn, 0.0);
+    scratch_.tri_forces.assign(6 * static_cast<std::size_t>(nt), 0.0);
     const int nb = std::max((nn + kBlock - 1) / kBlock, (nt + kBlock - 1) / kBlock);
-    tri_power_.assign(nb, 0), tri_bad_.assign(nb, -1);
-    v2max_ = -1.0;
-    mon_ext_.assign(spec_.monitors.size(), {0, 0, 0});
-    mon_first_peak_.assign(spec_.monitors.size(), 0.0);
+    scratch_.tri_power.assign(nb, 0), scratch_.tri_bad.assign(nb, -1);
+    scratch_.v2max = -1.0;
+    out_.mon_ext.assign(spec_.monitors.size(), {0, 0, 0});
+    out_.mon_first_peak.assign(spec_.monitors.size(), 0.0);
     crush_.setup(spec_, model_);
     build_ties();
     scale_node_masses();
     compute_dt();
-    dt_initial_ = dt_logged_ = dt_;
+    limits_.dt_initial = clock_.dt_logged = clock_.dt;
     // Derived quantities must be finite (issue 26: a huge mass_scale gave dt = 1e148 s, NaN energies and "completed").
     for (int k = 0; k < nn; ++k)
         if (!(std::isfinite(model_.mass[k]) && model_.mass[k] > 0) && !model_.mass.empty())
             throw InputError(spec_.file + ": node " + std::to_string(k) + " has a mass of " + sci(model_.mass[k]) +
                              " kg: expected a finite mass > 0 (check case.thickness, materials.*.density, numerics.mass_scale)");
-    if (!(std::isfinite(dt_) && dt_ > 0 && dt_ < 1e3))
-        throw InputError(spec_.file + ": the time step comes out as " + sci(dt_) +
-                         " s: expected a finite step > 0 (check materials.*.E and density, case.thickness, numerics.mass_scale and numerics.dt)");
+    if (!(std::isfinite(clock_.dt) && clock_.dt > 0 && clock_.dt < 1e3))
+        throw InputError(spec_.file + ": the time step comes out as " + sci(clock_.dt) +
+                         " s: expected a finite step > 0 (check materials.*.E and density, case.thickness, "
+                         "numerics.mass_scale and numerics.dt)");
     // A fixed step (numerics.dt) beyond the stable limit of this mesh would blow up the run after some steps: refused
     // here, so that `fdem check` says it (issue 51: a mesh study of a case with a fixed step at finer sizes).
     // The limit is that of the stage with the most local damping (the lowest).
@@ -86,8 +88,8 @@ Simulation::Simulation(CaseSpec spec, Model model, RunOptions options)
         double alpha_max = 0;
         for (int s = 0; s < static_cast<int>(spec_.stages.size()); ++s) alpha_max = std::max(alpha_max, stage_alpha(s));
         set_step_limits(alpha_max, false);
-        const double limit = std::min(dt_triangles_, dt_nodal_.dt);
-        const double tri = dt_triangles_, springs = dt_nodal_.dt;
+        const double limit = std::min(limits_.dt_triangles, limits_.nodal.dt);
+        const double tri = limits_.dt_triangles, springs = limits_.nodal.dt;
         set_step_limits(stage_alpha(0), false);
         if (*spec_.dt_override > limit)
             throw InputError(spec_.file + ": key 'numerics.dt': a fixed time step of " + sci(*spec_.dt_override) +
@@ -100,7 +102,7 @@ Simulation::Simulation(CaseSpec spec, Model model, RunOptions options)
     wall_start_ = wall_clock();
     cpu_start_ = cpu_clock();
     last_checkpoint_wall_ = wall_start_;
-    if (spec_.checkpoint_interval > 0) next_checkpoint_ = spec_.checkpoint_interval;
+    if (spec_.checkpoint_interval > 0) out_.next_checkpoint = spec_.checkpoint_interval;
     if (!opt_.out_dir.empty()) {
         std::filesystem::create_directories(std::filesystem::path(opt_.out_dir) / "snapshots");
         // History header: time, step, stage, monitors, energies.
@@ -149,9 +151,9 @@ void Simulation::check_energy(const Energies& e) {
     const double held = e.kinetic + e.elastic + e.joint + e.contact + e.damping + e.viscous + e.fracture + e.friction;
     double mag = std::abs(e.external);
     for (double v : {e.kinetic, e.elastic, e.joint, e.contact, e.damping, e.viscous, e.fracture, e.friction}) mag += std::abs(v);
-    const double roundoff = (static_cast<double>(steps_) + 16.0) * std::numeric_limits<double>::epsilon() * mag;
+    const double roundoff = (static_cast<double>(clock_.steps) + 16.0) * std::numeric_limits<double>::epsilon() * mag;
     if (held > 10 * std::abs(e.external) + 1e-9 + roundoff) {
-        if (!opt_.out_dir.empty() && last_row_step_ != steps_) append_history(history_row(e));
+        if (!opt_.out_dir.empty() && out_.last_row_step != clock_.steps) append_history(history_row(e));
         // Name the largest holder: it points at the part that went unstable.
         const std::pair<const char*, double> parts[] = {{"kinetic", e.kinetic}, {"elastic (triangles)", e.elastic},
                                                         {"cohesive joints", e.joint}, {"contact", e.contact}};
@@ -162,7 +164,8 @@ void Simulation::check_energy(const Energies& e) {
         if (!spec_.dt_override && spec_.safety > 1)
             cause += "; numerics.safety = " + sci(spec_.safety) + " > 1 puts the time step beyond the stability limit: reduce numerics.safety below 1";
         else if (spec_.dt_override)
-            cause += "; numerics.dt fixes the step at " + sci(dt_) + " s against a stable limit of " + sci(dt_limit_) + " s";
+            cause += "; numerics.dt fixes the step at " + sci(clock_.dt) + " s against a stable limit of " +
+                     sci(clock_.dt_limit) + " s";
         else if (joints_made_it(e))
             cause += "; the cohesive joints' forces gave out more energy than they hold and dissipated: the law's shear "
                      "curve depends on the compression and is not a potential (fracture/law.hpp), and oscillating joints "
@@ -204,16 +207,16 @@ std::string Simulation::crushed_broken_note() const {
 void Simulation::audit_step(int phase, double dt) {
     const std::size_t n2 = model_.x.size();
     if (phase == 0) {
-        if (audit_t0_ < 0) {
-            audit_parts(energies(), audit_base_);
-            audit_t0_ = time_;
+        if (audit_.t0 < 0) {
+            audit_parts(energies(), audit_.base.data());
+            audit_.t0 = clock_.time;
         }
-        audit_fj_.resize(n2);  // (filled by Interactions::add_forces; audit_f_ by phase 1)
-        audit_v_.assign(model_.v.begin(), model_.v.end());
+        audit_.fj.resize(n2);  // (filled by Interactions::add_forces; audit_.f by phase 1)
+        audit_.v.assign(model_.v.begin(), model_.v.end());
         return;
     }
     if (phase == 1) {
-        audit_f_.assign(f_mod_.begin(), f_mod_.end());
+        audit_.f.assign(scratch_.f_mod.begin(), scratch_.f_mod.end());
         return;
     }
     const int nn = model_.n_nodes();
@@ -223,15 +226,16 @@ void Simulation::audit_step(int phase, double dt) {
         for (int c = 0; c < 2; ++c) {
             const std::size_t d = 2 * static_cast<std::size_t>(k) + c;
             double ft = 0;
-            for (int i = model_.inc_ptr[k]; i < model_.inc_ptr[k + 1]; ++i) ft += tf_[2 * static_cast<std::size_t>(model_.inc_idx[i]) + c];
-            const double f[3] = {ft, audit_fj_[d], audit_f_[d] - audit_fj_[d]};
-            const double vbar = 0.5 * (audit_v_[d] + v[d]);
+            for (int i = model_.inc_ptr[k]; i < model_.inc_ptr[k + 1]; ++i)
+                ft += scratch_.tri_forces[2 * static_cast<std::size_t>(model_.inc_idx[i]) + c];
+            const double f[3] = {ft, audit_.fj[d], audit_.f[d] - audit_.fj[d]};
+            const double vbar = 0.5 * (audit_.v[d] + v[d]);
             for (int m = 0; m < 3; ++m) {
                 w[m] += dt * f[m] * vbar;
                 h[m] += 0.5 * dt * f[m] * v[d];
             }
         }
-    for (int m = 0; m < 3; ++m) audit_w_[m] += w[m], audit_half_[m] = h[m];
+    for (int m = 0; m < 3; ++m) audit_.w[m] += w[m], audit_.half[m] = h[m];
 }
 
 // What each part holds and has dissipated (J): triangles (elastic, viscous element damping, crushing), cohesive
@@ -240,7 +244,7 @@ void Simulation::audit_step(int phase, double dt) {
 void Simulation::audit_parts(const Energies& e, double* held) const {
     const contact::ContactSystem* c = inter_.contact();
     const double contact_friction = c ? c->friction_dissipation() : 0.0;
-    held[0] = e.elastic + D_visc_ + crush_.dissipated();
+    held[0] = e.elastic + books_.D_visc + crush_.dissipated();
     held[1] = e.joint + inter_.fracture_dissipation() + (inter_.friction_dissipation() - contact_friction) -
               inter_.inserted_energy();
     held[2] = e.contact + contact_friction + inter_.contact_damping_dissipation();
@@ -248,19 +252,19 @@ void Simulation::audit_parts(const Energies& e, double* held) const {
 
 std::array<Simulation::AuditPart, 3> Simulation::energy_audit(const Energies& e) const {
     std::array<AuditPart, 3> parts;
-    if (audit_t0_ < 0) return parts;
+    if (audit_.t0 < 0) return parts;
     double held[3];
     audit_parts(e, held);
     for (int m = 0; m < 3; ++m) {
-        parts[m].worked = 0.0 - (audit_w_[m] - audit_half_[m]);  // the nodes' work on the part, to t^n (+0, not -0)
-        parts[m].grew = held[m] - audit_base_[m];
+        parts[m].worked = 0.0 - (audit_.w[m] - audit_.half[m]);  // the nodes' work on the part, to t^n (+0, not -0)
+        parts[m].grew = held[m] - audit_.base[m];
     }
     return parts;
 }
 
 // With the audit on: whether the cohesive joints hold more than half of the energy the run made from nothing.
 bool Simulation::joints_made_it(const Energies& e) const {
-    if (!spec_.energy_audit || audit_t0_ < 0) return false;
+    if (!spec_.energy_audit || audit_.t0 < 0) return false;
     const auto parts = energy_audit(e);
     double total = 0;
     for (const auto& q : parts) total += std::max(0.0, q.grew - q.worked);
@@ -268,10 +272,10 @@ bool Simulation::joints_made_it(const Energies& e) const {
 }
 
 std::string Simulation::audit_text(const Energies& e) const {
-    if (audit_t0_ < 0) return "energy audit: not started";
+    if (audit_.t0 < 0) return "energy audit: not started";
     const auto parts = energy_audit(e);
     static const char* names[3] = {"triangles", "cohesive joints", "contact"};
-    std::string s = "energy audit at t = " + sci(time_) + " s (since " + sci(audit_t0_) +
+    std::string s = "energy audit at t = " + sci(clock_.time) + " s (since " + sci(audit_.t0) +
                     " s), work done on each part against the growth of what it holds and dissipated:";
     int worst = 0;
     double excess[3];
@@ -291,13 +295,13 @@ std::string Simulation::audit_text(const Energies& e) const {
 // bias the energy of hysteresis loops by about k dt times the integral of the squared velocity.
 double Simulation::monitor_value(int i) const {
     const MonitorSpec& m = spec_.monitors[i];
-    const double lag = steps_ > 0 ? dt_ : 0.0;
+    const double lag = clock_.steps > 0 ? clock_.dt : 0.0;
     if (m.type == "tilt") {
         // the angle of gravity from -y (counter-clockwise, deg): the stage's gravity vector as given (a tilted table
         // given as a tilted vector reads its angle) plus the rotation of tilt_rate at t^n
-        const double g = std::hypot(gravity_[0], gravity_[1]);
-        const double base = g > 0 ? std::atan2(gravity_[0], -gravity_[1]) * 180 / kPi : 0.0;
-        return base + (tilt_deg_ - tilt_rate_ * lag);
+        const double g = std::hypot(gravity_.current[0], gravity_.current[1]);
+        const double base = g > 0 ? std::atan2(gravity_.current[0], -gravity_.current[1]) * 180 / kPi : 0.0;
+        return base + (gravity_.tilt_deg - gravity_.tilt_rate * lag);
     }
     const auto& grp = model_.group(m.group);
     if (m.type == "rotation") return rotation_deg(grp.nodes, lag);
@@ -309,10 +313,10 @@ double Simulation::monitor_value(int i) const {
         return grp.nodes.empty() ? 0.0 : s / static_cast<double>(grp.nodes.size());
     }
     if (m.type == "reaction") {
-        for (int k : grp.nodes) s += dof_kind_[2 * k + c] ? reaction_[2 * k + c] : 0.0;
+        for (int k : grp.nodes) s += supports_.dof_kind[2 * k + c] ? supports_.reaction[2 * k + c] : 0.0;
         return s;
     }
-    for (int k : grp.nodes) s += f_ext_[2 * k + c];  // load
+    for (int k : grp.nodes) s += loads_.f_ext[2 * k + c];  // load
     return s;
 }
 
@@ -328,12 +332,12 @@ Energies Simulation::energies() const {
     const int nn = model_.n_nodes(), nt = model_.n_triangles();
     const int nnb = (nn + kBlock - 1) / kBlock, ntb = (nt + kBlock - 1) / kBlock;
     std::vector<double> pk(nnb, 0.0), pe(ntb, 0.0);
-    const bool stepped = steps_ > 0;
+    const bool stepped = clock_.steps > 0;
     std::vector<double> xn;
     const double* xe = model_.x.data();
     if (stepped) {
         xn.resize(model_.x.size());
-        for (std::size_t i = 0; i < xn.size(); ++i) xn[i] = model_.x[i] - dt_ * model_.v[i];
+        for (std::size_t i = 0; i < xn.size(); ++i) xn[i] = model_.x[i] - clock_.dt * model_.v[i];
         xe = xn.data();
     }
 #pragma omp parallel for schedule(static) if (nnb > 1)
@@ -353,12 +357,13 @@ Energies Simulation::energies() const {
     }
     for (double s : pk) e.kinetic += s;
     for (double s : pe) e.elastic += s;
-    if (stepped) e.kinetic = kinetic_n_;
+    if (stepped) e.kinetic = books_.kinetic_n;
     // Extrinsic insertion: the pre-peak energy an inserted element starts with is put in, like work
     // (fracture/cohesive_system.hpp).
-    e.external = W_ext_ - (stepped ? work_half_ : 0.0) + inter_.inserted_energy();
-    e.damping = D_damp_ - (stepped ? damp_half_ : 0.0);
-    e.viscous = D_visc_ + D_mass_ - (stepped ? mass_half_ : 0.0) + inter_.contact_damping_dissipation();
+    e.external = books_.W_ext - (stepped ? books_.work_half : 0.0) + inter_.inserted_energy();
+    e.damping = books_.D_damp - (stepped ? books_.damp_half : 0.0);
+    e.viscous =
+        books_.D_visc + books_.D_mass - (stepped ? books_.mass_half : 0.0) + inter_.contact_damping_dissipation();
     e.joint = inter_.joint_energy();
     e.contact = inter_.contact_energy(xe);
     e.fracture = inter_.fracture_dissipation() + crush_.dissipated();  // crushing work booked with fracture
@@ -369,23 +374,24 @@ Energies Simulation::energies() const {
 void Simulation::write_history_row() {
     const Energies e = energies();
     append_history(history_row(e));
-    if (steps_ > 0) check_energy(e);
+    if (clock_.steps > 0) check_energy(e);
 }
 
 std::string Simulation::history_row(const Energies& e) {
     // The row describes t^n, the time of the last force evaluation (see monitor_value).
-    std::string row = format_double(steps_ > 0 ? time_ - dt_ : time_) + "," + std::to_string(steps_) + "," + std::to_string(stage_ + 1);
+    std::string row = format_double(clock_.steps > 0 ? clock_.time - clock_.dt : clock_.time) + "," +
+                      std::to_string(clock_.steps) + "," + std::to_string(clock_.stage + 1);
     for (std::size_t i = 0; i < spec_.monitors.size(); ++i) {
         const double m = monitor_value(static_cast<int>(i));
         row += "," + format_double(m);
-        auto& ext = mon_ext_[i];
-        if (!mon_ext_init_) ext = {m, m, m};
+        auto& ext = out_.mon_ext[i];
+        if (!out_.mon_ext_init) ext = {m, m, m};
         ext = {std::min(ext[0], m), std::max(ext[1], m), m};
         // The peak before the first cohesive element breaks (reference quantity "first_peak"): the rows up to the
         // first break, so that the ringing after a brittle break does not count as the strength.
-        if (broken_total_ == 0 && std::abs(m) >= std::abs(mon_first_peak_[i])) mon_first_peak_[i] = m;
+        if (clock_.broken_total == 0 && std::abs(m) >= std::abs(out_.mon_first_peak[i])) out_.mon_first_peak[i] = m;
     }
-    mon_ext_init_ = true;
+    out_.mon_ext_init = true;
     for (double v : {e.kinetic, e.elastic, e.joint, e.contact, e.external, e.damping, e.viscous, e.fracture, e.friction, e.balance_error()})
         row += "," + format_double(v);
     if (const auto* c = inter_.counts())
@@ -394,14 +400,14 @@ std::string Simulation::history_row(const Energies& e) {
                 row += "," + std::to_string(c->of(cls, mode));
     if (inter_.has_joints() && inter_.joints()->extrinsic_count() > 0)
         row += "," + std::to_string(inter_.joints()->extrinsic_count() - inter_.joints()->dormant_count());
-    row += "," + format_double(unbalanced_ratio_) + "\n";
+    row += "," + format_double(books_.unbalanced_ratio) + "\n";
     return row;
 }
 
 // history.csv grows by one appended, flushed row at a time (a killed run loses at most the row being written);
 // the file is created with its header on the first row.
 void Simulation::append_history(const std::string& row) {
-    last_row_step_ = steps_;
+    out_.last_row_step = clock_.steps;
     if (opt_.out_dir.empty()) return;
     open_history();
     history_out_ << row;
@@ -435,28 +441,28 @@ void Simulation::flush_files() {
 // the largest absolute value before the first cohesive element breaks (the whole run if none breaks), "final" the
 // last value. From the history rows.
 double Simulation::reference_value(int i) const {
-    const auto& ext = mon_ext_[static_cast<std::size_t>(i)];
+    const auto& ext = out_.mon_ext[static_cast<std::size_t>(i)];
     const std::string& q = spec_.reference.quantity;
     if (q == "final") return ext[2];
-    if (q == "first_peak") return mon_first_peak_[static_cast<std::size_t>(i)];
+    if (q == "first_peak") return out_.mon_first_peak[static_cast<std::size_t>(i)];
     return std::abs(ext[0]) > std::abs(ext[1]) ? ext[0] : ext[1];
 }
 
 bool Simulation::reference_past_peak(int i) const {
     if (spec_.reference.quantity != "peak") return true;
-    if (!stage_results_.empty() && stage_results_.back().ended_by == "past_peak") return true;
-    const auto& ext = mon_ext_[static_cast<std::size_t>(i)];
+    if (!ending_.results.empty() && ending_.results.back().ended_by == "past_peak") return true;
+    const auto& ext = out_.mon_ext[static_cast<std::size_t>(i)];
     const double peak = std::max(std::abs(ext[0]), std::abs(ext[1]));
     return peak > 0 && std::abs(ext[2]) < (1.0 - kPastPeakDrop) * peak;
 }
 
 double Simulation::history_interval() const {
-    const StageSpec& st = spec_.stages[stage_];
+    const StageSpec& st = spec_.stages[clock_.stage];
     return st.history_interval ? *st.history_interval : spec_.history_interval;
 }
 
 double Simulation::snapshot_interval() const {
-    const StageSpec& st = spec_.stages[stage_];
+    const StageSpec& st = spec_.stages[clock_.stage];
     return st.snapshot_interval ? *st.snapshot_interval : spec_.snapshot_interval;
 }
 
@@ -464,7 +470,7 @@ double Simulation::control_displacement() const { return control_monitor_ >= 0 ?
 
 // The dry joint record is checked where a history row is written (and at stage ends).
 void Simulation::record_dry_joints() {
-    if (inter_.has_dry_joints()) inter_.record_dry_joints(time_, control_displacement(), model_.x.data());
+    if (inter_.has_dry_joints()) inter_.record_dry_joints(clock_.time, control_displacement(), model_.x.data());
 }
 
 // Whether a history row is written after the step that ends at time t as step number `step` (one rule for the
@@ -472,7 +478,7 @@ void Simulation::record_dry_joints() {
 bool Simulation::history_due(double t, long step) const {
     if (opt_.out_dir.empty()) return false;
     const double hi = history_interval();
-    return hi > 0 ? t + 1e-9 * dt_ >= next_history_ : (step % history_every_steps_) == 0;
+    return hi > 0 ? t + 1e-9 * clock_.dt >= out_.next_history : (step % out_.history_every_steps) == 0;
 }
 
 void Simulation::write_summary(const std::string& status, const std::string& message) {
@@ -513,22 +519,22 @@ void Simulation::write_summary(const std::string& status, const std::string& mes
     }
     j["n_triangles"] = model_.n_triangles();
     j["n_nodes"] = model_.n_nodes();
-    j["dt"] = dt_;
-    j["dt_stable_limit"] = dt_limit_;
-    j["dt_limiting_triangle"] = dt_element_;
-    j["steps"] = static_cast<long long>(steps_);
+    j["dt"] = clock_.dt;
+    j["dt_stable_limit"] = clock_.dt_limit;
+    j["dt_limiting_triangle"] = limits_.dt_element;
+    j["steps"] = static_cast<long long>(clock_.steps);
     const double wall = status == "running" ? 0.0 : wall_time_;
     j["wall_time_s"] = wall;
     j["cpu_time_s"] = status == "running" ? 0.0 : cpu_time_;
-    j["triangle_steps_per_s"] = wall > 0 ? static_cast<double>(steps_) * model_.n_triangles() / wall : 0.0;
+    j["triangle_steps_per_s"] = wall > 0 ? static_cast<double>(clock_.steps) * model_.n_triangles() / wall : 0.0;
     j["threads"] = omp_get_max_threads();
-    j["time"] = time_;
+    j["time"] = clock_.time;
     Json mons = Json::object();
     for (std::size_t i = 0; i < spec_.monitors.size(); ++i) {
         Json m = Json::object();
-        m["min"] = mon_ext_[i][0];
-        m["max"] = mon_ext_[i][1];
-        m["final"] = mon_ext_[i][2];
+        m["min"] = out_.mon_ext[i][0];
+        m["max"] = out_.mon_ext[i][1];
+        m["final"] = out_.mon_ext[i][2];
         m["unit"] = spec_.monitors[i].unit();
         mons[spec_.monitors[i].name] = m;
     }
@@ -543,7 +549,7 @@ void Simulation::write_summary(const std::string& status, const std::string& mes
         j["joint_record"] = jr;
     }
     Json stages = Json::array();
-    for (const auto& r : stage_results_) {
+    for (const auto& r : ending_.results) {
         Json s = Json::object();
         s["name"] = r.name;
         s["ended_by"] = r.ended_by;
@@ -574,7 +580,9 @@ void Simulation::write_summary(const std::string& status, const std::string& mes
     set["safety"] = spec_.safety;
     set["mass_scale"] = spec_.mass_scale;
     set["mass_scaling"] = spec_.per_node_mass ? "per_node" : "uniform";
-    if (spec_.per_node_mass) set["mass_scaling_nodes_raised"] = mass_raised_nodes_, set["mass_scaling_total_ratio"] = mass_raised_ratio_;
+    if (spec_.per_node_mass)
+        set["mass_scaling_nodes_raised"] = limits_.mass_raised_nodes,
+        set["mass_scaling_total_ratio"] = limits_.mass_raised_ratio;
     if (spec_.dt_override) set["dt_fixed_s"] = *spec_.dt_override;
     Json mats = Json::object();
     for (const auto& m : spec_.materials) {

@@ -94,7 +94,7 @@ void Simulation::write_snapshot() {
     // the dry joints' normal and shear stress from the faces along them.
     const contact::ContactSystem* cs = inter_.contact();
     std::vector<contact::ContactSystem::LoadedEdge> faces;
-    if (cs) faces = cs->loaded_edges(model_.x.data(), model_.v.data(), dt_);
+    if (cs) faces = cs->loaded_edges(model_.x.data(), model_.v.data(), clock_.dt);
     std::vector<double> dry_force(2 * static_cast<std::size_t>(inter_.dry_joint_count()), 0.0);
     dry_joint_forces(faces, dry_force);
     for (int e = 0; e < inter_.dry_joint_count(); ++e) {
@@ -103,7 +103,7 @@ void Simulation::write_snapshot() {
         add_line(inter_.dry_joints()[e].n.data(), 2, -1.0, inter_.dry_recorded(e) ? 1 : 0, std::nan(""), sn, ss);
     }
     char name[64];
-    std::snprintf(name, sizeof name, "snapshots/step_%09ld.vtu", steps_);
+    std::snprintf(name, sizeof name, "snapshots/step_%09ld.vtu", clock_.steps);
     std::vector<VtuArray> cells{stress, von_mises, principal, pdir, mat, region, body, kind};
     if (!lines.empty())
         for (const auto* a : {&damage, &state, &opening, &slip}) cells.push_back(*a);
@@ -121,15 +121,16 @@ void Simulation::write_snapshot() {
     // The names behind the ids: region_names[region], material_names[material].
     VtuStrings region_names{"region_names", model_.mesh.regions}, material_names{"material_names", {}};
     for (const auto& m : spec_.materials) material_names.values.push_back(m.name);
-    write_file_atomic((std::filesystem::path(opt_.out_dir) / name).string(),
-                      vtu_document(model_.X, tri, lines, {disp, vel}, cells, {region_names, material_names}, time_));
-    snapshots_.emplace_back(time_, name);
-    write_file_atomic((std::filesystem::path(opt_.out_dir) / "run.pvd").string(), pvd_document(snapshots_));
+    write_file_atomic(
+        (std::filesystem::path(opt_.out_dir) / name).string(),
+        vtu_document(model_.X, tri, lines, {disp, vel}, cells, {region_names, material_names}, clock_.time));
+    out_.snapshots.emplace_back(clock_.time, name);
+    write_file_atomic((std::filesystem::path(opt_.out_dir) / "run.pvd").string(), pvd_document(out_.snapshots));
     if (cs) {
         write_file_atomic((std::filesystem::path(opt_.out_dir) / contact_snapshot_name(name)).string(),
                           contact_snapshot(faces));
         std::vector<std::pair<double, std::string>> list;
-        for (const auto& [t, n] : snapshots_) list.emplace_back(t, contact_snapshot_name(n));
+        for (const auto& [t, n] : out_.snapshots) list.emplace_back(t, contact_snapshot_name(n));
         write_file_atomic((std::filesystem::path(opt_.out_dir) / "contacts.pvd").string(), pvd_document(list));
     }
 }
@@ -200,7 +201,8 @@ std::string Simulation::contact_snapshot(const std::vector<contact::ContactSyste
         tri.i32.push_back(faces[i].triangle), unit.i32.push_back(unit_of(faces[i].triangle));
         other.i32.push_back(faces[i].other), other_unit.i32.push_back(unit_of(faces[i].other));
     }
-    return points_vtu_document(xy, {normal, force, fn, ft, sn, st, len, sliding, tri, unit, other, other_unit}, {}, time_);
+    return points_vtu_document(xy, {normal, force, fn, ft, sn, st, len, sliding, tri, unit, other, other_unit}, {},
+                               clock_.time);
 }
 
 }  // namespace fdem

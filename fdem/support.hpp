@@ -40,15 +40,18 @@ struct SupportStart {
     const double* dof_vel;          // m/s
 };
 
-// Step 5 of Simulation::step for the rigid supports: the forces on their nodes at t^n and the damping parameters;
-// the supports write dof_vel of the DOFs they own and add their damping's work to the sums (J).
+// The rigid-groups stage of Simulation::step (step_rigid_groups, fdem/step.cpp) for the rigid supports: the forces on
+// their nodes at t^n and the damping parameters; the supports write dof_vel of the DOFs they own and add their
+// damping's work to the sums (J).
 struct RigidStep {
     const Model& model;
     const double* f_mod;            // N, joint and contact forces
     const double* f_ext;            // N, loads
     const double* tri_forces;       // N, 6 per triangle
     std::array<double, 2> gravity;  // m/s^2, applied
-    double alpha, tau_ld, wf, beta_mass, hm, dt, dtv;
+    // local damping, its filter's time constant (s) and one-step weight, mass damping a (1/s), dtv a / 2, the step
+    // and the velocity update's span (s)
+    double local_damping, filter_tau, wf, mass_damping, hm, dt, dtv;
     double* dof_vel;
     const int* dof_owner;
     const std::unique_ptr<Support>* supports;  // the active supports, indexed by dof_owner (a body finds its other

@@ -1,8 +1,8 @@
 // fdem/support_body.cpp: support kind `body` (rigid = "body" in a [[stages.supports]] block, both components): the
 // group moves as one rigid body, translating and rotating under its resultant force and its moment about its centre
 // of mass, free. The block's two components are two Supports: the x one carries the body's state and moves it, the
-// y one only owns the y DOFs. Each step (Simulation::step, part 5), with M, the centre of mass c, I = sum m_k |r_k|^2
-// (r_k = x_k - c at t^n, lumped masses), the resultant F and moment T about c of the nodes' forces at t^n:
+// y one only owns the y DOFs. Each step (Simulation::step_rigid_groups), with M, the centre of mass c, I = sum m_k
+// |r_k|^2 (r_k = x_k - c at t^n, lumped masses), the resultant F and moment T about c of the nodes' forces at t^n:
 //   V^{n+1/2} = V^{n-1/2} + dt (F + F_d) / M,   omega^{n+1/2} = omega^{n-1/2} + dt (T + T_d) / I
 // (local damping F_d = -alpha |F| sign(V) per component and T_d = -alpha |T| sign(omega); mass damping as for the
 // nodes: the semi-implicit factor on V and omega). The nodes then move rigidly to
@@ -87,10 +87,10 @@ void BodySupport::rigid_step(RigidStep& s, int id) {
         I += m.mass[k] * (rx * rx + ry * ry);
     }
     auto advance = [&](double vold, double ref, double force, double inertia) {
-        const double vrel = s.tau_ld > 0 ? vold - ref : vold;
-        const double fd = vrel > 0 ? -s.alpha * std::abs(force) : vrel < 0 ? s.alpha * std::abs(force) : 0.0;
+        const double vrel = s.filter_tau > 0 ? vold - ref : vold;
+        const double fd = vrel > 0 ? -s.local_damping * std::abs(force) : vrel < 0 ? s.local_damping * std::abs(force) : 0.0;
         const double vnew = ((1 - s.hm) * vold + s.dtv * (force + fd) / inertia) / (1 + s.hm);
-        const double fm = -s.beta_mass * inertia * 0.5 * (vold + vnew);
+        const double fm = -s.mass_damping * inertia * 0.5 * (vold + vnew);
         s.damp += s.dt * fd * 0.5 * (vold + vnew), s.damp_half += 0.5 * s.dt * fd * vnew;
         s.mass += s.dt * fm * 0.5 * (vold + vnew), s.mass_half += 0.5 * s.dt * fm * vnew;
         return vnew;
@@ -98,7 +98,7 @@ void BodySupport::rigid_step(RigidStep& s, int id) {
     V[0] = advance(V[0], V_ref[0], F[0], M);
     V[1] = advance(V[1], V_ref[1], F[1], M);
     if (I > 0) omega = advance(omega, omega_ref, T, I);
-    if (s.tau_ld > 0) {
+    if (s.filter_tau > 0) {
         V_ref[0] += s.wf * (V[0] - V_ref[0]), V_ref[1] += s.wf * (V[1] - V_ref[1]);
         omega_ref += s.wf * (omega - omega_ref);
     }

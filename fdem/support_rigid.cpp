@@ -1,6 +1,6 @@
 // fdem/support_rigid.cpp: support kind `rigid` (rigid = "x" | "y" | "xy" in a [[stages.supports]] block): the group's
 // nodes share one velocity in the component, free as a whole (e.g. rigid = "y" with vx on a loading beam: the beam
-// stays horizontal, moves up and down freely and cannot rotate). Each step (Simulation::step, part 5) the common
+// stays horizontal, moves up and down freely and cannot rotate). Each step (Simulation::step_rigid_groups) the common
 // velocity follows the resultant of the group's nodal forces, v^{n+1/2} = v^{n-1/2} + dt (F + F_d) / M with
 // M = sum of the nodal masses and the [C79] local damping F_d = -alpha |F| sign(v) on the resultant (and the
 // mass-proportional damping -a M v_bar). The node loop then treats the DOFs as prescribed: their reactions
@@ -37,16 +37,16 @@ public:
         }
         if (!(M > 0)) return;
         const double vold = v_common;
-        const double vrel = s.tau_ld > 0 ? vold - v_ref : vold;
-        const double Fd = vrel > 0 ? -s.alpha * std::abs(F) : vrel < 0 ? s.alpha * std::abs(F) : 0.0;
+        const double vrel = s.filter_tau > 0 ? vold - v_ref : vold;
+        const double Fd = vrel > 0 ? -s.local_damping * std::abs(F) : vrel < 0 ? s.local_damping * std::abs(F) : 0.0;
         const double vnew = ((1 - s.hm) * vold + s.dtv * (F + Fd) / M) / (1 + s.hm);
-        const double Fm = -s.beta_mass * M * 0.5 * (vold + vnew);
+        const double Fm = -s.mass_damping * M * 0.5 * (vold + vnew);
         s.damp += s.dt * Fd * 0.5 * (vold + vnew);
         s.damp_half += 0.5 * s.dt * Fd * vnew;
         s.mass += s.dt * Fm * 0.5 * (vold + vnew);
         s.mass_half += 0.5 * s.dt * Fm * vnew;
         v_common = vnew;
-        if (s.tau_ld > 0) v_ref += s.wf * (vnew - v_ref);
+        if (s.filter_tau > 0) v_ref += s.wf * (vnew - v_ref);
         for (int k : nodes)
             if (s.dof_owner[2 * k + c] == id) s.dof_vel[2 * k + c] = vnew;
     }

@@ -1,5 +1,5 @@
-// fdem/common/state_io.hpp: the byte stream of a checkpoint (fdem/checkpoint.hpp). Header-only and without dependencies,
-// so that the contact and fracture modules (leaves) serialise their own state with it: each subsystem has
+// fdem/common/state_io.hpp: the byte stream of a checkpoint (fdem/checkpoint.hpp). Header-only and without
+// dependencies, so that the contact and fracture modules (leaves) serialise their own state with it: each subsystem has
 // save_state(StateWriter&) const and load_state(StateReader&), which write and read the same fields in the same order.
 //
 // Format: a sequence of tagged sections. section("name") writes the name; the reader checks it, so a load that
@@ -7,10 +7,11 @@
 // reading garbage. Values are raw bytes of trivially copyable types (the same build on the same machine reads
 // them: a checkpoint from another build is refused before any state is read); vectors and strings carry their length.
 //
-// Adding a field to a subsystem: write it in save_state and read it in load_state at the same place. The sizeof
-// guards next to each save_state (fdem/checkpoint.cpp, contact/contact_system.cpp, fracture/cohesive_system.cpp)
-// fail the build when a class grows, to make a forgotten field visible; the restart test
-// (tests/core/test_restart.cpp) compares a restarted run with an uninterrupted one byte for byte.
+// Adding a field to a subsystem: write it in save_state and read it in load_state at the same place. The guards
+// next to each (the field counts of the engine's state structs, fdem/sim_state.cpp; the sizeof guards of
+// contact/contact_system.cpp and fracture/cohesive_system.cpp) fail the build when a state grows, to make a
+// forgotten field visible; the restart test (tests/core/test_restart.cpp) compares a restarted run with an
+// uninterrupted one byte for byte.
 #pragma once
 
 #include <algorithm>

@@ -1,4 +1,4 @@
-// tests/core/test_rigid_body.cpp: a support rigid = "body" (fdem/integrator.cpp, Simulation::body_step).
+// tests/core/test_rigid_body.cpp: a support rigid = "body" (fdem/support_body.cpp).
 //
 // SCENE. A 0.4 x 0.2 m block (E 1e9 Pa, 2000 kg/m^3, thickness 0.1 m, mesh 0.05 m), no contact, given an initial
 // velocity v0 and angular velocity omega0 about its centre ([[initial]]), one stage with rigid = "body" on the block.
