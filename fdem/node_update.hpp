@@ -18,7 +18,9 @@
 // triangles' 6-double records). Blocks: kBlock nodes, or the tied units' blocks u_block. dof_kind 0 free, 1 fixed,
 // 2 prescribed velocity dof_velocity. f_mod is read and, when reset_fmod, zeroed for the next step. Each block writes
 // only its own units' x, v, v_ref, reactions and its NodeBlockSums: any thread may take any block, the result is
-// the same bits.
+// the same bits. Plain nodes go two at a time where the CPU has AVX (lanes): each lane does the scalar operations in
+// the same order and each book takes its terms in unit order, so the width does not change the bits
+// (tests/core/test_node_update.cpp compares them).
 #pragma once
 
 #include <cstdint>
@@ -58,6 +60,7 @@ struct NodeUpdate {
     double hm = 0;            // dtv a / 2
     double wf = 0;            // the filter's one-step weight
     double gx = 0, gy = 0;    // gravity (m/s^2)
+    int lanes = 0;            // 0: plain nodes two at a time where the CPU has AVX; 1: one at a time (the same bits)
 };
 
 // One block's books (J, N, m^2/s^2) and its first unit's node with a non-finite velocity (-1: none).

@@ -105,6 +105,9 @@ void Simulation::step_triangles(StepContext& c) {
         double pv = 0;
         int bad = -1;
         const int e1 = std::min(nt, (b + 1) * kBlock);
+        // No crushing and no stresses wanted: the block four at a time where the CPU can (fdem/triangle.hpp).
+        if (!tsig && !crush_.active()) triangle_forces_range(tris, mats, x, v, tf, b * kBlock, e1, pv, bad);
+        else
         for (int e = b * kBlock; e < e1; ++e) {
             double p;
             const int cs = crush_.slot(e);  // crushing triangles: fdem/plasticity.hpp (state updated per triangle)

@@ -113,6 +113,13 @@ inline double triangle_forces(const TriangleRef& t, const MaterialConst& m, cons
     return J;
 }
 
+// triangle_forces for the elastic triangles e0 <= e < e1 of tris, into tf (6 per triangle): each one's viscous power
+// added to visc_power in triangle order, and bad set to the first inverted triangle (J <= 0) if bad < 0. Four at a
+// time where the CPU has AVX (lanes = 0; 1: one at a time), with the same bits: every lane does triangle_forces'
+// operations in the same order (tests/core/test_triangle_range.cpp compares them).
+void triangle_forces_range(const TriangleRef* tris, const MaterialConst* mats, const double* x, const double* v,
+                           double* tf, int e0, int e1, double& visc_power, int& bad, int lanes = 0);
+
 // Deformation gradient of a triangle (row-major F00 F01 F10 F11).
 inline void triangle_F(const TriangleRef& t, const double* x, double* F) {
     const int i0 = t.n[0], i1 = t.n[1], i2 = t.n[2];

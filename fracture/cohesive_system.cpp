@@ -9,7 +9,8 @@
 //   force_[8e + 2k + {0,1}] (k = a0, a1, b0, b1), energy_[e], dissipated_[e].
 // - plain_ (detail::PlainJoint, one 128-byte record per element) and other_ group the intact elements by law, each in
 //   active_ order: derived from active_, elems_ and law_ by build_hot(), not saved. The force loop walks plain_ in
-//   order, four or two elements at a time where it can (plain_quad, plain_pair), and other_ with the general laws.
+//   order, eight, four or two elements at a time where it can (plain_oct, plain_quad, plain_pair), and other_ with the
+//   general laws.
 // - active_ lists the intact elements in ascending order; broken ones leave it and their force slots are zeroed,
 //   so the node gather (CSR over the intact elements, slots in element order) stays valid between rebuilds, which
 //   happen once a quarter of its slots belong to broken elements.
@@ -302,11 +303,160 @@ bool avx_available() {
   static const bool yes = __builtin_cpu_supports("avx");
   return yes;
 }
+#define FDEM_PLAIN_OCT 1
+// (GCC 12 warns of its own AVX-512 intrinsics' undefined vectors, a false positive: off for this function)
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+// Eight plain elements at once with AVX-512 (lane j = element J[j]): plain_quad's operations in the same order on
+// twice the lanes (AVX-512 arithmetic is IEEE per lane; no FMA), for the same common case; otherwise it writes
+// nothing and returns false. Compiled for AVX-512 F and DQ whatever the build's baseline; called only where the CPU
+// has them (avx512_available).
+__attribute__((target("avx512f,avx512dq,avx2"))) bool plain_oct(const detail::PlainJoint* const J[8], const double* x,
+                                                              PointHistory* hist, double* force, double* energy_out) {
+  PointHistory* h[8];
+  for (int j = 0; j < 8; ++j) h[j] = hist + 3 * std::size_t(J[j]->e);
+  const __m512d zero = _mm512_setzero_pd();
+  __mmask8 bad = 0;
+  for (int i = 0; i < 3; ++i)
+    bad |= _mm512_cmp_pd_mask(_mm512_set_pd(h[7][i].damage, h[6][i].damage, h[5][i].damage, h[4][i].damage,
+                                            h[3][i].damage, h[2][i].damage, h[1][i].damage, h[0][i].damage),
+                              zero, _CMP_NEQ_UQ);
+  if (bad) return false;
+  const __m512d one = _mm512_set1_pd(1.0), two = _mm512_set1_pd(2.0), three = _mm512_set1_pd(3.0),
+                half = _mm512_set1_pd(0.5), two_thirds = _mm512_set1_pd(2.0 / 3.0), sign = _mm512_set1_pd(-0.0);
+#define sel(m, a, b) _mm512_mask_blend_pd(m, b, a)
+#define neg(a) _mm512_xor_pd(a, sign)
+  // Node k of the eight elements as (x_0, ..., x_7) and (y_0, ..., y_7).
+  __m512d xa0, ya0, xa1, ya1, xb0, yb0, xb1, yb1;
+  __m512d* const vx[4] = {&xa0, &xa1, &xb0, &xb1};
+  __m512d* const vy[4] = {&ya0, &ya1, &yb0, &yb1};
+  for (int k = 0; k < 4; ++k) {
+    __m128d p[8];
+    for (int j = 0; j < 8; ++j) p[j] = _mm_loadu_pd(x + 2 * J[j]->n[k]);
+    const __m512d lo = _mm512_insertf64x4(
+        _mm512_castpd256_pd512(_mm256_insertf128_pd(_mm256_castpd128_pd256(p[0]), p[2], 1)),
+        _mm256_insertf128_pd(_mm256_castpd128_pd256(p[4]), p[6], 1), 1);
+    const __m512d hi = _mm512_insertf64x4(
+        _mm512_castpd256_pd512(_mm256_insertf128_pd(_mm256_castpd128_pd256(p[1]), p[3], 1)),
+        _mm256_insertf128_pd(_mm256_castpd128_pd256(p[5]), p[7], 1), 1);
+    *vx[k] = _mm512_unpacklo_pd(lo, hi);
+    *vy[k] = _mm512_unpackhi_pd(lo, hi);
+  }
+  __m512d tx = _mm512_sub_pd(_mm512_add_pd(xa1, xb1), _mm512_add_pd(xa0, xb0));
+  __m512d ty = _mm512_sub_pd(_mm512_add_pd(ya1, yb1), _mm512_add_pd(ya0, yb0));
+  const __m512d len = _mm512_sqrt_pd(_mm512_add_pd(_mm512_mul_pd(tx, tx), _mm512_mul_pd(ty, ty)));
+  const __mmask8 has_len = _mm512_cmp_pd_mask(len, zero, _CMP_GT_OQ);
+  tx = sel(has_len, _mm512_div_pd(tx, len), one);
+  ty = sel(has_len, _mm512_div_pd(ty, len), zero);
+  const __m512d nx = ty, ny = neg(tx);
+  const __m512d d0x = _mm512_sub_pd(xb0, xa0), d0y = _mm512_sub_pd(yb0, ya0);
+  const __m512d d1x = _mm512_sub_pd(xb1, xa1), d1y = _mm512_sub_pd(yb1, ya1);
+  const __m512d dx[3] = {d0x, _mm512_mul_pd(half, _mm512_add_pd(d0x, d1x)), d1x};
+  const __m512d dy[3] = {d0y, _mm512_mul_pd(half, _mm512_add_pd(d0y, d1y)), d1y};
+#define FDEM_OCT(field) \
+  _mm512_set_pd(J[7]->field, J[6]->field, J[5]->field, J[4]->field, J[3]->field, J[2]->field, J[1]->field, J[0]->field)
+  const __m512d K_n = FDEM_OCT(K_n), inv_K_s = FDEM_OCT(inv_K_s);
+  const __m512d o_p = FDEM_OCT(o_p), inv_o_p = FDEM_OCT(inv_o_p), inv_o_t = FDEM_OCT(inv_o_t);
+  const __m512d s_p0 = FDEM_OCT(s_p0), inv_s_p0 = FDEM_OCT(inv_s_p0), inv_s_t0 = FDEM_OCT(inv_s_t0);
+  const __m512d f_t = FDEM_OCT(f_t), c = FDEM_OCT(c), tan_phi = FDEM_OCT(tan_phi);
+  const __m512d w_end = FDEM_OCT(w_end), w_mid = FDEM_OCT(w_mid);
+#undef FDEM_OCT
+  __m512d Tx[3], Ty[3], trial[3], E0[3];
+  __m512d energy = zero;
+#pragma GCC unroll 3
+  for (int i = 0; i < 3; ++i) {
+    const __m512d o = _mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(dx[i], nx), _mm512_mul_pd(dy[i], ny)), zero);
+    const __m512d s = _mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(dx[i], tx), _mm512_mul_pd(dy[i], ty)), zero);
+    const __mmask8 comp = _mm512_cmp_pd_mask(o, zero, _CMP_LT_OQ);
+    const __m512d sc = _mm512_mul_pd(K_n, o);
+    const __m512d fs_c =
+        _mm512_add_pd(c, _mm512_maskz_mov_pd(_mm512_cmp_pd_mask(sc, zero, _CMP_LT_OQ), _mm512_mul_pd(neg(sc), tan_phi)));
+    const __m512d sp_c = _mm512_mul_pd(_mm512_mul_pd(two, fs_c), inv_K_s);
+    const __m512d sigma_c = _mm512_maskz_mov_pd(comp, sc);
+    const __m512d f_s = sel(comp, fs_c, c);
+    const __m512d s_p = sel(comp, sp_c, s_p0);
+    const __m512d inv_s_p = sel(comp, _mm512_div_pd(one, sp_c), inv_s_p0);
+    const __mmask8 s_neg = _mm512_cmp_pd_mask(s, zero, _CMP_LT_OQ);
+    const __m512d a_s = sel(s_neg, neg(s), s);
+    const __m512d dI = _mm512_mul_pd(_mm512_sub_pd(o, o_p), inv_o_t);
+    const __m512d dII = _mm512_mul_pd(_mm512_sub_pd(a_s, s_p), inv_s_t0);
+    bad |= (comp & _mm512_cmp_pd_mask(a_s, s_p, _CMP_GT_OQ)) | _mm512_cmp_pd_mask(dI, zero, _CMP_GT_OQ) |
+           _mm512_cmp_pd_mask(dII, zero, _CMP_GT_OQ);
+    trial[i] = sel(_mm512_cmp_pd_mask(dI, dII, _CMP_GT_OQ), dI, dII);
+    const __m512d u = _mm512_mul_pd(o, inv_o_p);
+    const __m512d pre_t = _mm512_mul_pd(_mm512_mul_pd(u, _mm512_sub_pd(two, u)), f_t);
+    const __m512d pre_e = _mm512_mul_pd(
+        _mm512_mul_pd(_mm512_mul_pd(_mm512_mul_pd(u, u), _mm512_sub_pd(one, _mm512_div_pd(u, three))), f_t), o_p);
+    const __m512d top_e =
+        _mm512_mul_pd(f_t, _mm512_add_pd(_mm512_mul_pd(o_p, two_thirds), _mm512_sub_pd(o, o_p)));
+    const __mmask8 tension = _mm512_cmp_pd_mask(o, zero, _CMP_GT_OQ), top = _mm512_cmp_pd_mask(o, o_p, _CMP_GE_OQ);
+    const __m512d t_n0 = _mm512_maskz_mov_pd(tension, sel(top, f_t, pre_t));
+    const __m512d e_n0 = _mm512_maskz_mov_pd(tension, sel(top, top_e, pre_e));
+    const __m512d y = _mm512_mul_pd(a_s, inv_s_p);
+    const __m512d pre_ts = _mm512_mul_pd(_mm512_mul_pd(y, _mm512_sub_pd(two, y)), f_s);
+    const __m512d pre_es = _mm512_mul_pd(
+        _mm512_mul_pd(_mm512_mul_pd(_mm512_mul_pd(y, y), _mm512_sub_pd(one, _mm512_div_pd(y, three))), f_s), s_p);
+    const __m512d top_es =
+        _mm512_mul_pd(f_s, _mm512_add_pd(_mm512_mul_pd(s_p, two_thirds), _mm512_sub_pd(a_s, s_p)));
+    const __mmask8 top_s = _mm512_cmp_pd_mask(a_s, s_p, _CMP_GE_OQ);
+    const __m512d t_s0 = sel(top_s, f_s, pre_ts);
+    const __m512d e_s0 = sel(top_s, top_es, pre_es);
+    E0[i] = _mm512_add_pd(e_n0, e_s0);
+    const __m512d sigma = sel(comp, sigma_c, _mm512_mul_pd(one, t_n0));
+    const __m512d tau = _mm512_mul_pd(sel(s_neg, neg(one), one), t_s0);
+    const __m512d en =
+        _mm512_add_pd(_mm512_mul_pd(one, E0[i]), _mm512_maskz_mov_pd(comp, _mm512_mul_pd(_mm512_mul_pd(half, sigma_c), o)));
+    const __m512d w = i == 1 ? w_mid : w_end;
+    Tx[i] = _mm512_mul_pd(w, _mm512_add_pd(_mm512_mul_pd(sigma, nx), _mm512_mul_pd(tau, tx)));
+    Ty[i] = _mm512_mul_pd(w, _mm512_add_pd(_mm512_mul_pd(sigma, ny), _mm512_mul_pd(tau, ty)));
+    energy = _mm512_add_pd(energy, _mm512_mul_pd(w, en));
+  }
+  if (bad) return false;
+  const __m512d fa0x = _mm512_add_pd(Tx[0], _mm512_mul_pd(half, Tx[1]));
+  const __m512d fa0y = _mm512_add_pd(Ty[0], _mm512_mul_pd(half, Ty[1]));
+  const __m512d fa1x = _mm512_add_pd(Tx[2], _mm512_mul_pd(half, Tx[1]));
+  const __m512d fa1y = _mm512_add_pd(Ty[2], _mm512_mul_pd(half, Ty[1]));
+  // (f_a0x, f_a0y) per element: element 2l in 128-bit lane l of the unpacklo, 2l + 1 in that of the unpackhi
+  alignas(64) double a0[2][8], a1[2][8], en_l[8], trial_l[3][8], E0_l[3][8];
+  _mm512_store_pd(a0[0], _mm512_unpacklo_pd(fa0x, fa0y));
+  _mm512_store_pd(a0[1], _mm512_unpackhi_pd(fa0x, fa0y));
+  _mm512_store_pd(a1[0], _mm512_unpacklo_pd(fa1x, fa1y));
+  _mm512_store_pd(a1[1], _mm512_unpackhi_pd(fa1x, fa1y));
+#undef sel
+#undef neg
+  _mm512_store_pd(en_l, energy);
+  for (int i = 0; i < 3; ++i) {
+    _mm512_store_pd(trial_l[i], trial[i]);
+    _mm512_store_pd(E0_l[i], E0[i]);
+  }
+  const __m128d sign2 = _mm_set1_pd(-0.0);
+  for (int j = 0; j < 8; ++j) {
+    double* fe = force + 8 * std::size_t(J[j]->e);
+    const __m128d p0 = _mm_load_pd(&a0[j & 1][2 * (j >> 1)]), p1 = _mm_load_pd(&a1[j & 1][2 * (j >> 1)]);
+    _mm_storeu_pd(fe + 0, p0);
+    _mm_storeu_pd(fe + 2, p1);
+    _mm_storeu_pd(fe + 4, _mm_xor_pd(p0, sign2));
+    _mm_storeu_pd(fe + 6, _mm_xor_pd(p1, sign2));
+    energy_out[J[j]->e] = en_l[j];
+    for (int i = 0; i < 3; ++i) {
+      h[j][i].trial = trial_l[i][j];
+      h[j][i].undamaged_energy = E0_l[i][j];
+    }
+  }
+  return true;
+}
+#pragma GCC diagnostic pop
+bool avx512_available() {
+  static const bool yes = __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512dq");
+  return yes;
+}
 #else
 bool avx_available() { return false; }
+bool avx512_available() { return false; }
 #endif
 #else
 bool avx_available() { return false; }
+bool avx512_available() { return false; }
 #endif  // __SSE2__
 }  // namespace
 
@@ -495,7 +645,7 @@ void CohesiveSystem::add_forces(const double* x, double* f) {
   const int np = int(plain_.size()), no = int(other_.size());
   const int rows = int(gather_node_.size());
   int pending = 0, pending_plain = 0;
-  const int lanes = lanes_ >= 4 && !avx_available() ? 2 : lanes_;
+  const int lanes = lanes_ >= 8 && avx512_available() ? 8 : (lanes_ >= 4 && avx_available() ? 4 : std::min(lanes_, 2));
   (void)lanes;  // (read only where the build has SSE2 or the AVX kernel)
   // One plain element (the same arithmetic as the general loop below with evaluate_point; see plain_point). Returns
   // whether it is pending. An element that was pending is still fully damaged (damage never decreases), so pending_
@@ -672,10 +822,28 @@ void CohesiveSystem::add_forces(const double* x, double* f) {
   {
   // Plain group, in quads (lanes_ == 4), pairs (2) or one by one (1): the same bits whichever evaluates an element.
   // Integer reductions: exact, so the count does not depend on the thread count.
-  const int quads = (np + 3) / 4;
+  // (in groups of eight: a quad or a pair that cannot go falls back as before, so the groups do not change the bits)
+  const int octs = (np + 7) / 8;
 #pragma omp for schedule(static) reduction(+ : pending_plain) nowait
-  for (int q = 0; q < quads; ++q) {
-    const int k0 = 4 * q, k1 = std::min(k0 + 4, np);
+  for (int q = 0; q < octs; ++q) {
+    const int g0 = 8 * q, g1 = std::min(g0 + 8, np);
+    // ask for the records four groups ahead and the point histories of the elements two groups ahead
+    if (g0 + 40 <= np)
+      for (int j = 0; j < 8; ++j) {
+        const char* rec = reinterpret_cast<const char*>(&plain_[g0 + 32 + j]);
+        __builtin_prefetch(rec), __builtin_prefetch(rec + 64);
+        const char* hp = reinterpret_cast<const char*>(&history_[3 * std::size_t(plain_[g0 + 16 + j].e)]);
+        __builtin_prefetch(hp), __builtin_prefetch(hp + 64), __builtin_prefetch(hp + 119);
+      }
+#if defined(FDEM_PLAIN_OCT)
+    if (lanes >= 8 && g1 - g0 == 8) {
+      const detail::PlainJoint* const J[8] = {&plain_[g0],     &plain_[g0 + 1], &plain_[g0 + 2], &plain_[g0 + 3],
+                                              &plain_[g0 + 4], &plain_[g0 + 5], &plain_[g0 + 6], &plain_[g0 + 7]};
+      if (plain_oct(J, x, history_.data(), force_.data(), energy_.data())) continue;
+    }
+#endif
+    for (int k0 = g0; k0 < g1; k0 += 4) {
+    const int k1 = std::min(k0 + 4, g1);
 #if defined(FDEM_PLAIN_QUAD)
     if (lanes >= 4 && k1 - k0 == 4) {
       const detail::PlainJoint* const J[4] = {&plain_[k0], &plain_[k0 + 1], &plain_[k0 + 2], &plain_[k0 + 3]};
@@ -691,6 +859,7 @@ void CohesiveSystem::add_forces(const double* x, double* f) {
       } else {
         pending_plain += plain_element(plain_[k]);
       }
+    }
     }
   }
 
@@ -741,10 +910,14 @@ void CohesiveSystem::add_forces(const double* x, double* f) {
   // (implicit barrier: every element's forces are in force_ before any node gathers them)
 
   // Gather: each node sums its element contributions in element order; nodes are independent.
+  // The slots of a node lie anywhere in force_ (element order): each one is asked for kAhead slots before it is read.
+  const int last_slot = int(gather_slot_.size()) - 1;
+  constexpr int kAhead = 24;
 #pragma omp for schedule(static)
   for (int r = 0; r < rows; ++r) {
     double sx = 0.0, sy = 0.0;
     for (int k = gather_start_[r]; k < gather_start_[r + 1]; ++k) {
+      __builtin_prefetch(&force_[gather_slot_[std::min(k + kAhead, last_slot)]]);
       sx += force_[gather_slot_[k]];
       sy += force_[gather_slot_[k] + 1];
     }

@@ -147,8 +147,9 @@ class CohesiveSystem {
   // dissipation, and ADD its nodal forces (N, whole thickness) to f (2 * num_nodes). Deterministic: per-element
   // forces are computed in parallel, then every node sums its contributions in element order.
   void add_forces(const double* x, double* f);
-  // Elements the force loop evaluates at once where it can (fracture/README.md "Force loop"): 4 (AVX, where the CPU
-  // has it; the default), 2 (SSE2) or 1. The results are the same bits for each; tests compare them.
+  // Elements the force loop evaluates at once where it can (fracture/README.md "Force loop"): 8 (AVX-512 F and DQ,
+  // where the CPU has them; the default), 4 (AVX, where the CPU has it), 2 (SSE2) or 1. The results are the same
+  // bits for each; tests compare them.
   void set_vector_lanes(int lanes) { lanes_ = lanes; }
 
   // Remove the elements that became fully damaged in the last add_forces from the force loop and return one record
@@ -234,7 +235,7 @@ class CohesiveSystem {
   // the general point laws.
   std::vector<detail::PlainJoint> plain_;
   std::vector<int> other_;
-  int lanes_ = 4;
+  int lanes_ = 8;
   bool plain_law(int e) const;  // whether intact element e belongs in plain_
   void build_hot();
   BreakCounts counts_;

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstring>
 #include <random>
+#include <tuple>
 #include <vector>
 
 #include "fdem/node_update.hpp"
@@ -109,5 +110,79 @@ TEST_CASE("node update kernel: the same bits on 1, 2 and 4 threads", "[unit]") {
         CHECK(std::memcmp(one.first.x.data(), other.first.x.data(), one.first.x.size() * sizeof(double)) == 0);
         CHECK(std::memcmp(one.first.v.data(), other.first.v.data(), one.first.v.size() * sizeof(double)) == 0);
         CHECK(std::memcmp(&one.second, &other.second, sizeof(double)) == 0);
+    }
+}
+
+TEST_CASE("node update kernel: two plain nodes at a time give the bits of one at a time", "[unit]") {
+    // Odd blocks, nodes with 0-3 triangles, loads, fixed and prescribed DOFs, and each damping variant: the pairs
+    // (AVX where the CPU has it) against lanes = 1 (unit by unit).
+    const int n = 1001, blocks = (n + 255) / 256, nt = 700;
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<double> u(-1, 1);
+    std::uniform_int_distribution<int> pick(0, 99);
+    Nodes ref(n, 1.0);
+    std::vector<double> tf(6 * nt), vref(2 * n);
+    std::vector<int> inc_idx;
+    for (int k = 0; k < n; ++k) {
+        ref.mass[k] = 1 + 0.5 * u(rng), ref.grav_mass[k] = 0.7 * ref.mass[k], ref.inv_mass[k] = 1 / ref.mass[k];
+        const int c = pick(rng) % 4;
+        for (int j = 0; j < c; ++j) inc_idx.push_back(pick(rng) * 3 * nt / 100 % (3 * nt));
+        ref.inc_ptr[k + 1] = static_cast<int>(inc_idx.size());
+        if (pick(rng) < 10) ref.loaded[k] = 1, ref.f_ext[2 * k] = u(rng), ref.f_ext[2 * k + 1] = u(rng);
+        for (int c2 = 0; c2 < 2; ++c2) {
+            const int r = pick(rng);
+            ref.kind[2 * k + c2] = r < 3 ? 1 : (r < 6 ? 2 : 0);
+            ref.dof_vel[2 * k + c2] = 0.1 * u(rng);
+        }
+    }
+    ref.kind[2 * 600] = ref.kind[2 * 600 + 1] = 0;  // (free: its non-finite force below makes a non-finite velocity)
+    for (double& t : tf) t = u(rng);
+    for (int i = 0; i < 2 * n; ++i) ref.v[i] = u(rng), ref.x[i] = u(rng), vref[i] = 0.5 * u(rng);
+    for (int variant = 0; variant < 4; ++variant) {
+        const bool filter = variant & 1, mass_damping = variant & 2;
+        auto run = [&](int lanes, bool nan) {
+            Nodes s = ref;
+            std::vector<double> vr = vref;
+            std::vector<fdem::NodeBlockSums> sums(blocks);
+            for (int step = 0; step < 3; ++step) {
+                for (int i = 0; i < 2 * n; ++i) s.f_mod[i] = std::sin(3 * s.x[i]);
+                if (nan && step == 2) s.f_mod[2 * 600 + 1] = std::nan("");
+                fdem::NodeUpdate a = s.args(1e-3, 0.3, -9.81);
+                a.gx = 0.5;
+                a.dtv = 1.1e-3;
+                a.tri_forces = tf.data(), a.inc_idx = inc_idx.data();
+                if (filter) a.v_ref = vr.data(), a.wf = 0.05;
+                if (mass_damping) a.beta_mass = 20.0, a.hm = 0.5 * a.dtv * a.beta_mass;
+                a.lanes = lanes;
+                fdem::update_nodes(a, sums);
+            }
+            return std::make_tuple(s, vr, sums);
+        };
+        const auto one = run(1, false), two = run(0, false);
+        const Nodes& a = std::get<0>(one);
+        const Nodes& b = std::get<0>(two);
+        INFO("variant " << variant);
+        auto same = [](const std::vector<double>& p, const std::vector<double>& q) {
+            return std::memcmp(p.data(), q.data(), p.size() * sizeof(double)) == 0;
+        };
+        CHECK(same(a.x, b.x));
+        CHECK(same(a.v, b.v));
+        CHECK(same(a.reaction, b.reaction));
+        CHECK(same(a.f_mod, b.f_mod));
+        CHECK(same(std::get<1>(one), std::get<1>(two)));
+        for (int bl = 0; bl < blocks; ++bl) {
+            const fdem::NodeBlockSums &p = std::get<2>(one)[bl], &q = std::get<2>(two)[bl];
+            const std::vector<double> bp{p.work, p.damping, p.unbalanced, p.scale, p.kinetic, p.work_half,
+                                         p.damping_half, p.mass, p.mass_half, p.v2};
+            const std::vector<double> bq{q.work, q.damping, q.unbalanced, q.scale, q.kinetic, q.work_half,
+                                         q.damping_half, q.mass, q.mass_half, q.v2};
+            CHECK(same(bp, bq));
+            CHECK(p.bad == -1);
+            CHECK(q.bad == -1);
+        }
+        // a non-finite velocity: the same node reported
+        const auto one_nan = run(1, true), two_nan = run(0, true);
+        CHECK(std::get<2>(one_nan)[2].bad == 600);
+        CHECK(std::get<2>(two_nan)[2].bad == 600);
     }
 }

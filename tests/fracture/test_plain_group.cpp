@@ -1,5 +1,5 @@
 // The force loop's plain group (CohesiveSystem::plain_: the [K25] law without keep_friction or cap, evaluated inline,
-// four, two or one element at a time) against the general point law: the same bits as evaluate_point element by
+// eight, four, two or one element at a time) against the general point law: the same bits as evaluate_point element by
 // element and the same node sums, through every state (intact, damaged, compressed past the shear peak, broken), with
 // elements of another law (keep_friction) mixed in, for 1 and 2 threads and each vector width.
 #include <catch2/catch.hpp>
@@ -175,12 +175,14 @@ Counts compare_with_reference(const SplitGrid& g, int threads, int lanes) {
 }
 }  // namespace
 
-TEST_CASE("plain group of the force loop: the bits of evaluate_point through every state, 1 and 2 threads, 4, 2, 1 "
-          "lanes", "[unit]") {
+TEST_CASE("plain group of the force loop: the bits of evaluate_point through every state, 1 and 2 threads, 8, 4, 2, "
+          "1 lanes", "[unit]") {
   const SplitGrid g = make_split_grid(60, 40, 0.01);  // ~7100 elements: above the parallel threshold
   const int saved = omp_get_max_threads();
   const Counts c1 = compare_with_reference(g, 1, 4);  // four at a time (AVX; two where the CPU has no AVX)
   const Counts c2 = compare_with_reference(g, 2, 4);
+  const Counts c8 = compare_with_reference(g, 1, 8);  // eight at a time (AVX-512; else as with 4)
+  compare_with_reference(g, 2, 8);
   compare_with_reference(g, 1, 2);  // two at a time (SSE2)
   compare_with_reference(g, 2, 1);  // one at a time
   omp_set_num_threads(saved);
@@ -190,4 +192,5 @@ TEST_CASE("plain group of the force loop: the bits of evaluate_point through eve
   CHECK(c1.damaged > 100);
   CHECK(c1.compressed_past_shear_peak > 10);
   CHECK(c2.broken == c1.broken);
+  CHECK(c8.broken == c1.broken);
 }
