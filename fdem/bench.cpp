@@ -184,7 +184,7 @@ int bench_nodes(long n, long steps, long repeats, const std::vector<int>& thread
     a.f_ext = f_ext.data(), a.loaded = loaded.data(), a.f_mod = f_mod.data(), a.reset_fmod = true;
     a.dof_kind = kind.data(), a.dof_velocity = dof_vel.data(), a.reaction = reaction.data();
     a.x = x.data(), a.v = v.data();
-    a.dt = a.dtv = 1e-6, a.alpha = 0.1, a.gy = -9.81;
+    a.dt = a.dtv = 1e-6, a.local_damping = 0.1, a.gy = -9.81;
     std::vector<fdem::NodeBlockSums> sums((n + 255) / 256);
     std::printf("node update: %ld nodes; %ld steps x %ld repeats\n", n, steps, repeats);
     for (int nth : thread_counts) {

@@ -49,7 +49,7 @@ inline void unit_update(const NodeUpdate& a, int u, Books& s) {
     double* xw = a.x;
     double* vw = a.v;
     double* vref = a.v_ref;
-    const double dt = a.dt, dtv = a.dtv, alpha = a.alpha, beta_mass = a.beta_mass, hm = a.hm, wf = a.wf;
+    const double dt = a.dt, dtv = a.dtv, alpha = a.local_damping, mass_damp = a.mass_damping, hm = a.hm, wf = a.wf;
     const int j0 = kTied ? u_start[u] : u, j1 = kTied ? u_start[u + 1] : u + 1;
     // the resultant: internal (joints, contact, triangles) and external (loads, gravity) sums
     double S[4] = {0, 0, 0, 0};
@@ -103,7 +103,7 @@ inline void unit_update(const NodeUpdate& a, int u, Books& s) {
             s.work_half += 0.5 * dt * fe * vnew;
             s.damping_half -= 0.5 * dt * fd * vnew;
             if (kMass) {  // -a m vbar: work dt (-a m vbar) vbar, and its share up to t^n
-                const double fm = -beta_mass * M * vbar;
+                const double fm = -mass_damp * M * vbar;
                 s.mass -= dt * fm * vbar;
                 s.mass_half -= 0.5 * dt * fm * vnew;
             }
@@ -214,10 +214,10 @@ __attribute__((target("avx"))) void plain_node_block(const NodeUpdate& a, int b,
     double* vw = a.v;
     double* vref = a.v_ref;
     const __m256d zero = _mm256_setzero_pd(), sign = _mm256_set1_pd(-0.0), half = _mm256_set1_pd(0.5);
-    const __m256d dt = _mm256_set1_pd(a.dt), dtv = _mm256_set1_pd(a.dtv), alpha = _mm256_set1_pd(a.alpha);
+    const __m256d dt = _mm256_set1_pd(a.dt), dtv = _mm256_set1_pd(a.dtv), alpha = _mm256_set1_pd(a.local_damping);
     const __m256d hdt = _mm256_set1_pd(0.5 * a.dt), g = _mm256_set_pd(a.gy, a.gx, a.gy, a.gx);
     const __m256d one_m_hm = _mm256_set1_pd(1 - a.hm), one_p_hm = _mm256_set1_pd(1 + a.hm), wf = _mm256_set1_pd(a.wf);
-    const __m256d neg_beta = _mm256_set1_pd(-a.beta_mass);
+    const __m256d neg_mass_damp = _mm256_set1_pd(-a.mass_damping);
     // the books, four to a register: (work, work_half, damping, damping_half), (unbalanced, kinetic, scale,
     // nonfinite), (mass, mass_half, -, -)
     alignas(32) double gb[12];
@@ -275,7 +275,7 @@ __attribute__((target("avx"))) void plain_node_block(const NodeUpdate& a, int b,
         add_terms(b2, abs_f, _mm256_mul_pd(_mm256_mul_pd(_mm256_mul_pd(half, M), vold), vnew), sc,
                   _mm256_sub_pd(vnew, vnew));
         if (kMass) {  // the negated mass damping force -(-a m vbar)
-            const __m256d nfm = _mm256_xor_pd(_mm256_mul_pd(_mm256_mul_pd(neg_beta, M), vbar), sign);
+            const __m256d nfm = _mm256_xor_pd(_mm256_mul_pd(_mm256_mul_pd(neg_mass_damp, M), vbar), sign);
             add_terms(b3, _mm256_mul_pd(_mm256_mul_pd(dt, nfm), vbar), _mm256_mul_pd(_mm256_mul_pd(hdt, nfm), vnew),
                       zero, zero);
         }

@@ -55,8 +55,8 @@ struct NodeUpdate {
     double* v = nullptr;
     double* v_ref = nullptr;  // the filter's moving means, or null (no filter)
     double dt = 0, dtv = 0;   // s
-    double alpha = 0;         // local damping
-    double beta_mass = 0;     // mass-proportional damping a (1/s)
+    double local_damping = 0; // [C79] local damping alpha
+    double mass_damping = 0;  // mass-proportional (Rayleigh) damping a (1/s)
     double hm = 0;            // dtv a / 2
     double wf = 0;            // the filter's one-step weight
     double gx = 0, gy = 0;    // gravity (m/s^2)

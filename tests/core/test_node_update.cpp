@@ -33,7 +33,7 @@ struct Nodes {
         a.f_ext = f_ext.data(), a.loaded = loaded.data(), a.f_mod = f_mod.data(), a.reset_fmod = true;
         a.dof_kind = kind.data(), a.dof_velocity = dof_vel.data(), a.reaction = reaction.data();
         a.x = x.data(), a.v = v.data();
-        a.dt = a.dtv = dt, a.alpha = alpha, a.gy = gy;
+        a.dt = a.dtv = dt, a.local_damping = alpha, a.gy = gy;
         return a;
     }
 };
@@ -152,7 +152,7 @@ TEST_CASE("node update kernel: two plain nodes at a time give the bits of one at
                 a.dtv = 1.1e-3;
                 a.tri_forces = tf.data(), a.inc_idx = inc_idx.data();
                 if (filter) a.v_ref = vr.data(), a.wf = 0.05;
-                if (mass_damping) a.beta_mass = 20.0, a.hm = 0.5 * a.dtv * a.beta_mass;
+                if (mass_damping) a.mass_damping = 20.0, a.hm = 0.5 * a.dtv * a.mass_damping;
                 a.lanes = lanes;
                 fdem::update_nodes(a, sums);
             }
