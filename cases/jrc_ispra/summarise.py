@@ -24,7 +24,7 @@ sys.path.insert(0, os.path.join(HERE, "..", "..", "tools"))
 sys.path.insert(0, HERE)
 
 from make_cases import read_reference  # noqa: E402  (reference.csv: the test and seeds/000's M-DEM numbers)
-from fdemtools.figures import savefig_stamped  # noqa: E402  (the runs' build and case hashes on the figures)
+from fdemtools.figures import run_stamp, savefig_stamped  # noqa: E402  (the runs' build and case hashes on the figures)
 
 _REF = read_reference()
 TEST = {p: dict(peak=float(r["experiment_kN"]), k_el=float(r["k_el_kN_per_mm"]), drift=float(r["drift_pct"]),
@@ -71,9 +71,10 @@ def main():
     ap.add_argument("runs", nargs="+")
     ap.add_argument("--out", default="jrc_ispra_summary")
     a = ap.parse_args()
-    table, curves = [], []
+    table, curves, summaries = [], [], []
     for run in a.runs:
         u, H, s = read(run)
+        summaries.append(s)
         name = s.get("case", os.path.basename(run)).replace("jrc_ispra_", "")
         pier = "LW" if "_LW" in name else "HW"
         el = next((e for e in ("EL005", "EL010", "EL020") if e in name), "")
@@ -117,7 +118,10 @@ def main():
         ax.legend(fontsize=7)
         ax.grid(alpha=0.3)
     fig.tight_layout()
-    savefig_stamped(fig, a.out + ".png", a.runs, dpi=130)
+    # the corner's stamp names four cases and "and N more"; the files' metadata, which `fdem-tools provenance` checks,
+    # names every run's case and hash
+    meta = {"Source": run_stamp(summaries, limit=None)}
+    savefig_stamped(fig, a.out + ".png", a.runs, dpi=130, metadata=meta)
     # run time against error: the CPU time (wall time where a run has none) against |peak error| and |k_el error|
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.5))
     for ax, key, name in ((axes[0], "peak_err", "|peak base shear - test| (% of the test)"),
@@ -139,7 +143,7 @@ def main():
     axes[0].set_title("macro-blocks (M): circles monotonic, triangles cyclic; micro-models: squares; "
                       "blue LW, red HW", fontsize=8)
     fig.tight_layout()
-    savefig_stamped(fig, a.out + "_speed.png", a.runs, dpi=130)
+    savefig_stamped(fig, a.out + "_speed.png", a.runs, dpi=130, metadata=meta)
     print(f"wrote {a.out}.csv, {a.out}.png, {a.out}_speed.png")
 
 
