@@ -130,3 +130,19 @@ def test_a_figure_from_a_dirty_build_is_flagged(tmp_path, cli):
     rc, out, err = cli("plot", str(run), "--figures", "curves", "--out-dir", str(cases / "fig"))
     rc, out, err = cli("provenance", str(cases / "fig"), "--cases", str(cases), "--fdem", fdem_bin())
     assert "uncommitted" not in out
+
+
+def test_every_committed_figure_matches_its_case(cli, monkeypatch):
+    """The shipped figures and validate reports under cases/ (strict): each is stamped, every case it names hashes now
+    as when it was drawn, and none was drawn by a build with uncommitted changes. A change to a case (or to what
+    its hash covers) fails this until its figures are drawn again from runs of the changed case (each family's
+    RESULTS.md says how)."""
+    if not os.access(fdem_bin(), os.X_OK):
+        pytest.fail(f"no fdem executable at {fdem_bin()} (build it or set FDEM_BIN)")
+    monkeypatch.chdir(REPO)
+    rc, out, err = cli("provenance", "cases", "--fdem", fdem_bin(), "--strict")
+    bad = [ln for ln in out.splitlines() if ln.split() and len(ln.split()) > 1 and ln.split()[1] != "ok"
+           and not ln.split()[0].isdigit()]
+    assert rc == 0, "\n".join(bad) + err
+    assert "uncommitted changes" not in out, out
+    assert " 0 stale, 0 unknown, 0 unstamped " in out, out
