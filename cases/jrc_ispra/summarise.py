@@ -122,7 +122,7 @@ def main():
     # names every run's case and hash
     meta = {"Source": run_stamp(summaries, limit=None)}
     savefig_stamped(fig, a.out + ".png", a.runs, dpi=130, metadata=meta)
-    # run time against error: the CPU time (wall time where a run has none) against |peak error| and |k_el error|
+    # run time against error: the CPU time against |peak error| and |k_el error|
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.5))
     for ax, key, name in ((axes[0], "peak_err", "|peak base shear - test| (% of the test)"),
                           (axes[1], "k_el_err", "|k_el - test| (% of the test)")):
