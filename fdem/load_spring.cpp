@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "fdem/case_reader.hpp"
+#include "fdem/common/errors.hpp"
 #include "fdem/load.hpp"
 #include "fdem/sim_detail.hpp"
 
@@ -79,6 +80,20 @@ public:
         sp->comp = l.spring_component, sp->k = l.spring_stiffness, sp->v = l.spring_velocity;
         sp->anchor0 = 0;
         for (std::size_t i = 0; i < sp->nodes.size(); ++i) sp->anchor0 += sp->weight[i] * s.model.x[2 * sp->nodes[i] + sp->comp];
+        // The spring's stiffness on the group, K_ij = k w_i w_j, has rank one: its largest omega^2 under the lumped
+        // masses is k sum_i w_i^2 / m_i. The step does not count it; it is stable with the rest while
+        // omega_s^2 dt^2 <= 1, since lambda_max(M^-1 (K_rest + K_s)) <= lambda_max(M^-1 K_rest) + omega_s^2 and the
+        // rest's bound at the default safety 0.8 gives (2 safety)^2 = 2.56 < 4 - 1.
+        double w2 = 0;  // 1/s^2
+        for (std::size_t i = 0; i < sp->nodes.size(); ++i) w2 += sp->weight[i] * sp->weight[i] / s.model.mass[sp->nodes[i]];
+        w2 *= sp->k;
+        if (s.dt > 0 && w2 * s.dt * s.dt > 1.0)
+            throw InputError(s.file + ":" + std::to_string(l.line) + ": key 'spring': too stiff for the time step: " +
+                             case_detail::g4(sp->k) + " N/m on group '" + l.group + "' (omega " + case_detail::g4(std::sqrt(w2)) +
+                             " rad/s on its nodes' masses) needs a step below " + case_detail::g4(1.0 / std::sqrt(w2)) +
+                             " s, and the run's step is " + case_detail::g4(s.dt) +
+                             " s (the stable step does not count load springs); expected a stiffness below " +
+                             case_detail::g4(sp->k / (w2 * s.dt * s.dt)) + " N/m");
         return sp;
     }
     std::unique_ptr<Load> restore() const override { return std::make_unique<SpringLoad>(*this); }

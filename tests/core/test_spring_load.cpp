@@ -10,9 +10,11 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <cstdio>
 #include <string>
 
 #include "engine_helpers.hpp"
+#include "mesh/topology.hpp"
 
 namespace {
 
@@ -75,4 +77,33 @@ TEST_CASE("spring load: bad input names the key", "[unit][spring]") {
     CHECK_THROWS_WITH(testing::make_simulation(spring_case("  spring = { component = \"z\", stiffness = 1.0, velocity = 0.01 }\n"),
                                                "spring_bad_component"),
                       Catch::Contains("component"));
+}
+
+// The spring's largest frequency on its group, omega^2 = k sum_i w_i^2 / m_i (rank-one stiffness k w w^T), against
+// the step: refused above omega^2 dt^2 = 1, accepted below, and stable there for the whole stage.
+TEST_CASE("spring load: a spring too stiff for the step is refused at its stage, one just below runs stable", "[unit][spring]") {
+    auto probe = testing::make_simulation(spring_case("  spring = { component = \"x\", stiffness = 1.0e3, velocity = 0.0 }\n"),
+                                          "spring_probe");
+    const auto& md = probe.model();
+    double s2 = 0;  // sum w_i^2 / m_i (1/kg)
+    for (const auto& [k, w] : fdem::mesh::load_shares(md.group("left"), md.X)) s2 += w * w / md.mass[k];
+    const double dt = probe.dt();
+    const double k_max = 1.0 / (dt * dt * s2);  // N/m
+    std::printf("[spring] step %.4e s, sum w^2/m %.4e 1/kg: the largest stiffness %.4e N/m\n", dt, s2, k_max);
+    auto spring = [&](double k) {
+        char b[160];
+        std::snprintf(b, sizeof b, "  spring = { component = \"x\", stiffness = %.9e, velocity = 0.01 }\n", k);
+        return spring_case(b);
+    };
+    auto stiff = testing::make_simulation(spring(1.02 * k_max), "spring_stiff");
+    CHECK_THROWS_WITH(stiff.begin_stage(0), Catch::Contains("key 'spring': too stiff for the time step") &&
+                                                Catch::Contains("expected a stiffness below"));
+    auto fine = testing::make_simulation(spring(0.98 * k_max), "spring_fine");
+    fine.begin_stage(0);
+    REQUIRE(fine.dt() == dt);
+    while (!fine.stage_finished()) fine.step();
+    const auto e = fine.energies();
+    std::printf("[spring] 0.98 of it: %ld steps, balance error %.3e\n", fine.steps(), e.balance_error());
+    CHECK(std::isfinite(mean_ux(fine)));
+    CHECK(std::abs(e.balance_error()) < 1e-3);
 }
