@@ -153,4 +153,12 @@ inline double measured_r(const RockingResult& r, std::size_t i) {
     return std::sqrt((std::cos(al - r.amplitudes[i + 1]) - std::cos(al)) / (std::cos(al - r.amplitudes[i]) - std::cos(al)));
 }
 
+// measured_r of impact i + 1, printed against the pads' centres' and Housner's values.
+inline double print_measured_r(const RockingResult& r, std::size_t i) {
+    const double ri = measured_r(r, i);
+    std::printf("[rocking]   r of impact %zu: %.5f (pads' centres %+.2f %%, Housner %+.2f %%)\n", i + 1, ri,
+                100 * (ri / r.rigid.r(r.x_p) - 1), 100 * (ri / r.rigid.r(r.rigid.b) - 1));
+    return ri;
+}
+
 }  // namespace contact_test

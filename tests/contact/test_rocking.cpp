@@ -30,9 +30,7 @@ TEST_CASE("engine rocking: a block on its corners with restitution 0.2 rocks as 
     CHECK(r.times[0] == Approx(rt[0]).epsilon(0.02));
     CHECK(r.times[1] == Approx(rt[1]).epsilon(0.02));
     CHECK(r.amplitudes[1] == Approx(ra[1]).epsilon(0.02));
-    const double r1 = measured_r(r, 0);
-    std::printf("[rocking]   r of impact 1: %.5f (pads' centres %+.2f %%, Housner %+.2f %%)\n", r1,
-                100 * (r1 / r.rigid.r(r.x_p) - 1), 100 * (r1 / r.rigid.r(r.rigid.b) - 1));
+    const double r1 = print_measured_r(r, 0);
     CHECK(r1 == Approx(r.rigid.r(r.x_p)).epsilon(0.02));
     CHECK(r1 == Approx(r.rigid.r(r.rigid.b)).epsilon(0.02));
     CHECK(r.hop <= r.static_penetration);
@@ -72,9 +70,7 @@ TEST_CASE("engine rocking as one rigid body on k_n 1e12: the first two impacts w
     CHECK(r.times[0] == Approx(rt[0]).epsilon(0.005));
     CHECK(r.times[1] == Approx(rt[1]).epsilon(0.005));
     CHECK(r.amplitudes[1] == Approx(ra[1]).epsilon(0.005));
-    const double r1 = measured_r(r, 0);
-    std::printf("[rocking]   r of impact 1: %.5f (pads' centres %+.2f %%, Housner %+.2f %%)\n", r1,
-                100 * (r1 / r.rigid.r(r.x_p) - 1), 100 * (r1 / r.rigid.r(r.rigid.b) - 1));
+    const double r1 = print_measured_r(r, 0);
     CHECK(r1 == Approx(r.rigid.r(r.x_p)).epsilon(0.005));
     CHECK(r.hop <= r.static_penetration);
     CHECK(std::fabs(r.books) < 1e-4);

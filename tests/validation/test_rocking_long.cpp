@@ -26,9 +26,7 @@ TEST_CASE("engine rocking over five impacts: impact times and r per impact withi
     REQUIRE(r.amplitudes.size() >= 6);
     for (std::size_t i = 0; i < 5; ++i) CHECK(r.times[i] == Approx(rt[i]).epsilon(0.02));
     for (std::size_t i = 0; i < 5; ++i) {
-        const double ri = measured_r(r, i);
-        std::printf("[rocking]   r of impact %zu: %.5f (pads' centres %+.2f %%, Housner %+.2f %%)\n", i + 1, ri,
-                    100 * (ri / r.rigid.r(r.x_p) - 1), 100 * (ri / r.rigid.r(r.rigid.b) - 1));
+        const double ri = print_measured_r(r, i);
         CHECK(ri == Approx(r.rigid.r(r.x_p)).epsilon(0.02));
     }
     CHECK(r.amplitudes[1] == Approx(ra[1]).epsilon(0.02));
@@ -56,9 +54,7 @@ TEST_CASE("engine rocking as one rigid body on k_n 1e13: five impacts and the am
     for (std::size_t i = 0; i < 6; ++i) CHECK(r.times[i] == Approx(rt[i]).epsilon(0.01));
     for (std::size_t i = 1; i < 6; ++i) CHECK(r.amplitudes[i] == Approx(ra[i]).epsilon(0.02));
     for (std::size_t i = 0; i < 5; ++i) {
-        const double ri = measured_r(r, i);
-        std::printf("[rocking]   r of impact %zu: %.5f (pads' centres %+.2f %%, Housner %+.2f %%)\n", i + 1, ri,
-                    100 * (ri / r.rigid.r(r.x_p) - 1), 100 * (ri / r.rigid.r(r.rigid.b) - 1));
+        const double ri = print_measured_r(r, i);
         CHECK(ri == Approx(r.rigid.r(r.x_p)).epsilon(0.005));
     }
     // the landing speed of the new pivot at the first impact, from the energy of the fall from theta0
