@@ -20,6 +20,32 @@ void check_index(int i, int n, const char* what) {
     if (i < -1 || i >= n) throw StateError(std::string(what) + " out of range");
 }
 
+// A list of polymorphic items (supports, loads): the count, then per item its kind's key and what body(item) does
+// (the item's own io). A load restores each item from its kind (find(key), kind->restore()) before body reads it.
+template <class IO, class Ptr, class Find, class Body>
+void kind_list_io(IO& io, std::vector<Ptr>& list, const char* what, Find find, Body body) {
+    std::uint64_t n = list.size();
+    io.pod(n);
+    if constexpr (IO::loading) {
+        if (n > io.remaining()) throw StateError(std::string(what) + " count out of range");
+        list.clear();
+        list.resize(static_cast<std::size_t>(n));
+    }
+    for (auto& a : list) {
+        std::string key;
+        if constexpr (IO::loading) {
+            io.str(key);
+            const auto* kind = find(key);
+            if (!kind) throw StateError("a " + std::string(what) + " of an unknown kind '" + key.substr(0, 64) + "'");
+            a = kind->restore();
+        } else {
+            key = a->kind->key();
+            io.str(key);
+        }
+        body(*a);
+    }
+}
+
 }  // namespace
 
 static_assert(field_count<StepClock>() == 11, "StepClock changed: update StepClock::io and this count");
@@ -41,27 +67,10 @@ void Supports::io(IO& io, const StateShape& shape) {
     io.vec_sized(dof_owner, nd, "DOF owners");
     io.vec_sized(dof_velocity, nd, "prescribed velocities");
     io.vec_sized(reaction, nd, "reactions");
-    std::uint64_t n = list.size();
-    io.pod(n);
-    if constexpr (IO::loading) {
-        if (n > io.remaining()) throw StateError("support count out of range");
-        list.clear();
-        list.resize(static_cast<std::size_t>(n));
-    }
-    for (auto& a : list) {
-        if constexpr (IO::loading) {
-            std::string key;
-            io.str(key);
-            const SupportKind* kind = find_support_kind(key);
-            if (!kind) throw StateError("a support of an unknown kind '" + key.substr(0, 64) + "'");
-            a = kind->restore();
-            a->load(io, shape.nodes);
-        } else {
-            std::string key = a->kind->key();
-            io.str(key);
-            a->save(io);
-        }
-    }
+    kind_list_io(io, list, "support", [](const std::string& k) { return find_support_kind(k); }, [&](Support& a) {
+        if constexpr (IO::loading) a.load(io, shape.nodes);
+        else a.save(io);
+    });
     if constexpr (IO::loading)
         for (int o : dof_owner) check_index(o, static_cast<int>(list.size()), "DOF owner");
 }
@@ -71,29 +80,11 @@ static_assert(field_count<Loads>() == 3, "Loads changed: update Loads::io and th
 template <class IO>
 void Loads::io(IO& io, const StateShape& shape) {
     const std::size_t nd = 2 * static_cast<std::size_t>(shape.nodes);
-    std::uint64_t n = list.size();
-    io.pod(n);
-    if constexpr (IO::loading) {
-        if (n > io.remaining()) throw StateError("load count out of range");
-        list.clear();
-        list.resize(static_cast<std::size_t>(n));
-    }
-    for (auto& l : list) {
-        if constexpr (IO::loading) {
-            std::string key;
-            io.str(key);
-            const LoadKind* kind = find_load_kind(key);
-            if (!kind) throw StateError("a load of an unknown kind '" + key.substr(0, 64) + "'");
-            l = kind->restore();
-            io.str(l->group);
-            l->load(io, shape.nodes);
-        } else {
-            std::string key = l->kind->key();
-            io.str(key);
-            io.str(l->group);
-            l->save(io);
-        }
-    }
+    kind_list_io(io, list, "load", find_load_kind, [&](Load& l) {
+        io.str(l.group);
+        if constexpr (IO::loading) l.load(io, shape.nodes);
+        else l.save(io);
+    });
     io.vec_sized(f_ext, nd, "applied loads");
     io.vec(loaded_dofs);
     if constexpr (IO::loading)
