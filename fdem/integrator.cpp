@@ -66,7 +66,8 @@ void Simulation::scale_node_masses() {
     // per-node cache instead: the same values up to rounding, and each order is the one the committed results hold).
     std::vector<double> kt(nn, 0.0), kj(nn, 0.0), kc(nn, 0.0);
     add_triangle_node_stiffness(spec_, model_, rep, kt.data());
-    inter_.add_node_stiffness(model_, contact_xi_max(), 0.0, rep, kj.data(), kc.data());
+    // (the masses stay for the whole run: every face that may touch counts, not only the candidates of the moment)
+    inter_.add_node_stiffness(model_, contact_xi_max(), 0.0, rep, kj.data(), kc.data(), true);
     // m >= k dt^2 / 4, with a relative margin of 1e-12 so that rounding leaves the nodal bound at or above dt_t.
     const double q = 0.25 * dt * dt * (1 + 1e-12);
     std::vector<double> need(nn, 0.0);
@@ -110,7 +111,10 @@ Simulation::NodalLimit Simulation::nodal_step_limit(const double* mass, const in
     }
     std::vector<double> kt(nn, 0.0), kj(nn, 0.0), kc(nn, 0.0);
     for (int k = 0; k < nn; ++k) kt[rep ? rep[k] : k] += limits_.tri_node_k[k];
-    inter_.add_node_stiffness(model_, xi_contact, alpha, rep, kj.data(), kc.data());
+    // The contact springs of the faces with a candidate pair (Interactions::add_node_stiffness): the step follows
+    // the list (reduce_dt_after_insertion when it grows). A fixed step (numerics.dt) cannot: its limit counts every
+    // face that may touch.
+    inter_.add_node_stiffness(model_, xi_contact, alpha, rep, kj.data(), kc.data(), spec_.dt_override.has_value());
     NodalLimit lim;
     double w2max = 0;  // 1/s^2
     for (int k = 0; k < nn; ++k) {
@@ -312,7 +316,7 @@ void Simulation::share_nodes_with_contact(int n_thr) {
     inter_.set_node_owner(std::move(owner), n_thr);
 }
 
-void Simulation::reduce_dt_after_insertion() {
+void Simulation::reduce_dt_after_insertion(const char* cause) {
     if (spec_.dt_override) return;  // numerics.dt: the user's step
     const double* mass = units_.eff_mass.empty() ? nullptr : units_.eff_mass.data();
     const int* rep = units_.rep.empty() ? nullptr : units_.rep.data();
@@ -326,7 +330,7 @@ void Simulation::reduce_dt_after_insertion() {
     if (clock_.dt < 0.9 * clock_.dt_logged) {  // (a note of the step: the observers log it)
         clock_.dt_logged = clock_.dt;
         scratch_.notes.push_back("time step: " + sci(clock_.dt) + " s from t = " + sci(clock_.time) +
-                                 " s (cracks inserted or joints broken: new faces for contact)");
+                                 " s (" + cause + ")");
     }
 }
 

@@ -70,6 +70,8 @@ Simulation::Simulation(CaseSpec spec, Model model, RunOptions options)
     crush_.setup(spec_, model_);
     build_ties();
     scale_node_masses();
+    // The first contact detection, so that the first step's bound counts the faces of its candidate pairs only.
+    inter_.refresh_contact(model_.x.data(), model_.v.data(), 0.0, -1.0);
     compute_dt();
     limits_.dt_initial = clock_.dt_logged = clock_.dt;
     // Derived quantities must be finite (issue 26: a huge mass_scale gave dt = 1e148 s, NaN energies and "completed").

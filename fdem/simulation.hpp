@@ -150,7 +150,9 @@ private:
     void scale_node_masses();  // [numerics] mass_scaling = "per_node" (integrator.cpp)
     double contact_xi_max() const;
     void check_ties() const;
-    void reduce_dt_after_insertion();          // the step after nodes were untied: never larger, smaller if needed
+    // The step after nodes were untied, joints broke or the contact candidates grew (cause, for the log): never
+    // larger, smaller if the nodal bound of the current springs needs it.
+    void reduce_dt_after_insertion(const char* cause);
     void share_nodes_with_contact(int n_thr);  // tells the contact which thread integrates each node
     int node_block_count() const;              // the node loop's blocks: units of tied copies, or kBlock nodes
     void apply_time_dependent(double t);

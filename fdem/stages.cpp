@@ -55,6 +55,7 @@ void Simulation::apply_initial_conditions() {
             model_.v[2 * k] = in.velocity[0] - in.angular_velocity * (xk[1] - in.center[1]);
             model_.v[2 * k + 1] = in.velocity[1] + in.angular_velocity * (xk[0] - in.center[0]);
         }
+        if (in.rotation != 0) inter_.invalidate_contact();  // (the first step detects again, and bounds its step)
         scratch_.v2max = -1.0;  // (the node loop's speed is not this v's)
         log("initial conditions on '" + in.group + "': " + std::to_string(grp.nodes.size()) + " nodes" +
             (in.rotation != 0 ? ", placement turned by " + sci(in.rotation) + " deg" : std::string()) +
