@@ -102,7 +102,8 @@ void Simulation::scale_node_masses() {
     if (raised > 0) build_ties();  // the groups' masses and the copies' shares
 }
 
-Simulation::NodalLimit Simulation::nodal_step_limit(const double* mass, const int* rep, double xi_contact, double alpha) {
+Simulation::NodalLimit Simulation::nodal_step_limit(const double* mass, const int* rep, double xi_contact, double alpha,
+                                                    bool every_face) {
     const int nn = model_.n_nodes();
     if (limits_.tri_node_k.size() != static_cast<std::size_t>(nn) || limits_.tri_node_k_alpha != alpha) {
         limits_.tri_node_k.assign(nn, 0.0);
@@ -114,7 +115,8 @@ Simulation::NodalLimit Simulation::nodal_step_limit(const double* mass, const in
     // The contact springs of the faces with a candidate pair (Interactions::add_node_stiffness): the step follows
     // the list (reduce_dt_after_insertion when it grows). A fixed step (numerics.dt) cannot: its limit counts every
     // face that may touch.
-    inter_.add_node_stiffness(model_, xi_contact, alpha, rep, kj.data(), kc.data(), spec_.dt_override.has_value());
+    inter_.add_node_stiffness(model_, xi_contact, alpha, rep, kj.data(), kc.data(),
+                              every_face || spec_.dt_override.has_value());
     NodalLimit lim;
     double w2max = 0;  // 1/s^2
     for (int k = 0; k < nn; ++k) {
@@ -139,6 +141,9 @@ Simulation::NodalLimit Simulation::nodal_step_limit(const double* mass, const in
             lim.k_joint = sj, lim.k_contact = sc;
     }
     if (w2max > 0) lim.dt = 2.0 / std::sqrt(w2max);
+    // Nothing bounded (rigid bodies and held nodes only, no spring near a candidate: a body in free flight): the
+    // bound of every face, which a contact would shrink the step to, keeps the step finite.
+    if (!every_face && !(lim.dt < 1e299)) return nodal_step_limit(mass, rep, xi_contact, alpha, true);
     return lim;
 }
 

@@ -142,7 +142,10 @@ private:
     // the step (clock_; begin_stage, when a stage changes the local damping).
     void set_step_limits(double alpha, bool set_dt);
     double stage_alpha(int s) const;  // the local damping in force in stage s (a stage without the key keeps it)
-    NodalLimit nodal_step_limit(const double* mass, const int* rep, double xi_contact, double alpha);  // (see NodalLimit)
+    // (see NodalLimit) every_face: the contact springs of every face that may touch, not only those near a
+    // candidate pair (Interactions::add_node_stiffness)
+    NodalLimit nodal_step_limit(const double* mass, const int* rep, double xi_contact, double alpha,
+                                bool every_face = false);
     // Extrinsic insertion (fracture/cohesive_system.hpp): the copies joined by dormant cohesive elements move as one
     // node. build_ties groups them (units_: union-find over the dormant elements' node pairs; groups in order of
     // their first node, members ascending); check_ties refuses a support that holds only some copies of a group.
