@@ -112,7 +112,7 @@ Simulation::NodalLimit Simulation::nodal_step_limit(const double* mass, const in
     }
     std::vector<double> kt(nn, 0.0), kj(nn, 0.0), kc(nn, 0.0);
     for (int k = 0; k < nn; ++k) kt[rep ? rep[k] : k] += limits_.tri_node_k[k];
-    // The contact springs of the faces with a candidate pair (Interactions::add_node_stiffness): the step follows
+    // The contact springs of the edges near a candidate pair (Interactions::add_node_stiffness): the step follows
     // the list (reduce_dt_after_insertion when it grows). A fixed step (numerics.dt) cannot: its limit counts every
     // face that may touch.
     inter_.add_node_stiffness(model_, xi_contact, alpha, rep, kj.data(), kc.data(),

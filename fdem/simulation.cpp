@@ -70,7 +70,7 @@ Simulation::Simulation(CaseSpec spec, Model model, RunOptions options)
     crush_.setup(spec_, model_);
     build_ties();
     scale_node_masses();
-    // The first contact detection, so that the first step's bound counts the faces of its candidate pairs only.
+    // The first contact detection, so that the first step's bound counts the edges near its candidate pairs only.
     inter_.refresh_contact(model_.x.data(), model_.v.data(), 0.0, -1.0);
     compute_dt();
     limits_.dt_initial = clock_.dt_logged = clock_.dt;
