@@ -126,9 +126,16 @@ Simulation::NodalLimit Simulation::nodal_step_limit(const double* mass, const in
         const double w2 = (kt[k] + kj[k] + kc[k]) / mass[k];
         if (w2 > w2max) w2max = w2, lim.node = k, lim.k_tri = kt[k], lim.k_joint = kj[k], lim.k_contact = kc[k];
     }
-    // Rigid bodies (fdem/body_step.hpp): their mass and inertia against the springs at their nodes.
+    // Rigid bodies (fdem/body_step.hpp): their mass and inertia against the springs at their nodes. A body counts
+    // every face that may touch, candidate or not: its contact is all its deformation, and the step of its candidate
+    // springs alone resolves an impact by two or three steps, where its restitution needs about ten (fdem/README.md
+    // 'Time step'; tests/contact/test_rocking.cpp).
     std::vector<double> k;  // N/m, per node: the three shares summed (read at the bodies' nodes only)
     if (!limits_.bodies.nodes.empty()) {
+        if (!every_face && !spec_.dt_override.has_value()) {
+            std::fill(kj.begin(), kj.end(), 0.0), std::fill(kc.begin(), kc.end(), 0.0);
+            inter_.add_node_stiffness(model_, xi_contact, alpha, rep, kj.data(), kc.data(), true);
+        }
         k.resize(nn);
         for (int j = 0; j < nn; ++j) k[j] = kt[j] + kj[j] + kc[j];
     }

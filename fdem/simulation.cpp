@@ -224,6 +224,8 @@ void Simulation::audit_step(int phase, double dt) {
     const int nn = model_.n_nodes();
     const double* v = model_.v.data();
     double w[3] = {0, 0, 0}, h[3] = {0, 0, 0};
+    // (the last step's length: on a change of step the work is f over (x^{n+1} - x^{n-1}) / 2, fdem/node_update.hpp)
+    const double h1 = clock_.dt_last > 0 ? clock_.dt_last : dt;
     for (int k = 0; k < nn; ++k)
         for (int c = 0; c < 2; ++c) {
             const std::size_t d = 2 * static_cast<std::size_t>(k) + c;
@@ -233,7 +235,7 @@ void Simulation::audit_step(int phase, double dt) {
             const double f[3] = {ft, audit_.fj[d], audit_.f[d] - audit_.fj[d]};
             const double vbar = 0.5 * (audit_.v[d] + v[d]);
             for (int m = 0; m < 3; ++m) {
-                w[m] += dt * f[m] * vbar;
+                w[m] += h1 != dt ? f[m] * (0.5 * (h1 * audit_.v[d] + dt * v[d])) : dt * f[m] * vbar;
                 h[m] += 0.5 * dt * f[m] * v[d];
             }
         }

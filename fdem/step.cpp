@@ -66,7 +66,7 @@ double Simulation::advance() {
     StepContext c;
     double t = omp_get_wtime();
     if (spec_.energy_audit) audit_step(0, clock_.dt);
-    c.dt_before = clock_.dt;
+    c.dt_before = clock_.dt_last > 0 ? clock_.dt_last : clock_.dt;
     step_triangles(c);
     t = lap(profile_.triangles, t);
     step_insertion(c);
@@ -195,6 +195,7 @@ void Simulation::step_rigid_groups(StepContext& c) {
                  c.dtv,
                  supports_.dof_velocity.data(),
                  supports_.dof_owner.data(),
+                 c.dt_before,
                  supports_.list.data(),
                  static_cast<int>(supports_.list.size())};
     for (std::size_t id = 0; id < supports_.list.size(); ++id) supports_.list[id]->rigid_step(rs, static_cast<int>(id));
@@ -228,7 +229,7 @@ void Simulation::step_nodes(StepContext& c) {
     u.reaction = supports_.reaction.data();
     u.x = model_.x.data(), u.v = model_.v.data();
     u.v_ref = damping_.filter_tau > 0 ? damping_.v_ref.data() : nullptr;
-    u.dt = c.dt, u.dtv = c.dtv, u.local_damping = damping_.local, u.mass_damping = damping_.mass, u.hm = c.hm, u.wf = c.wf;
+    u.dt = c.dt, u.dtv = c.dtv, u.dt_before = c.dt_before, u.local_damping = damping_.local, u.mass_damping = damping_.mass, u.hm = c.hm, u.wf = c.wf;
     u.gx = gravity_.applied[0], u.gy = gravity_.applied[1];
     const int nnb = node_block_count();
     const int n_thr = nnb > 1 ? omp_get_max_threads() : 1;
@@ -268,6 +269,7 @@ void Simulation::step_books(StepContext& c) {
     books_.unbalanced_ratio = scale > 0 ? unb / scale : 0;
     supports_after_step();
     clock_.time += c.dt;
+    clock_.dt_last = c.dt;
     gravity_.tilt_deg += gravity_.tilt_rate * c.dt;
     ++clock_.steps;
 }
