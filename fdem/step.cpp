@@ -229,7 +229,8 @@ void Simulation::step_nodes(StepContext& c) {
     u.reaction = supports_.reaction.data();
     u.x = model_.x.data(), u.v = model_.v.data();
     u.v_ref = damping_.filter_tau > 0 ? damping_.v_ref.data() : nullptr;
-    u.dt = c.dt, u.dtv = c.dtv, u.dt_before = c.dt_before, u.local_damping = damping_.local, u.mass_damping = damping_.mass, u.hm = c.hm, u.wf = c.wf;
+    u.dt = c.dt, u.dtv = c.dtv, u.dt_before = c.dt_before;
+    u.local_damping = damping_.local, u.mass_damping = damping_.mass, u.hm = c.hm, u.wf = c.wf;
     u.gx = gravity_.applied[0], u.gy = gravity_.applied[1];
     const int nnb = node_block_count();
     const int n_thr = nnb > 1 ? omp_get_max_threads() : 1;
