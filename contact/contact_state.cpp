@@ -65,7 +65,7 @@ double ContactSystem::normal_energy_at(const double* x) const {
 // add the field to save_state and load_state if it carries from one step to the next, then update the size.
 void ContactSystem::save_state(StateWriter& w) const {
 #if defined(__x86_64__) && defined(__GLIBCXX__)
-    static_assert(sizeof(ContactSystem) == 1584, "ContactSystem changed: update state_io and this size");
+    static_assert(sizeof(ContactSystem) == 1640, "ContactSystem changed: update state_io and this size");
 #endif
     const_cast<ContactSystem*>(this)->state_io(w);  // (the writer only reads the fields)
 }
@@ -114,6 +114,7 @@ void ContactSystem::state_io(IO& io) {
             if (t < 0 || t >= n_tri_) throw StateError("contact: item index out of range");
         set_pair_nodes();
     }
+    io.vec_sized(near_law_, 3 * static_cast<std::size_t>(n_tri_), "faces near a candidate partner");
     io.pod(energy_normal_), io.pod(energy_tangential_), io.pod(dissipation_), io.pod(damping_);
     io.pod(beta_), io.pod(energy_current_), io.pod(opt_.compute_energy);
     io.pod(damping_next_);  // (dashpot_dt_ is 0 between steps: finish_step has run; inelastic_ comes from the laws)

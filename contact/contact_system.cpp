@@ -113,6 +113,37 @@ double largest_speed2(const double* v, int n) {
     return m;
 }
 
+// Whether segment PQ and triangle T (6 coordinates, m) are within d of each other (m): P or Q inside T, or PQ
+// crossing an edge, or an end point within d of the other's segments. Collinear and touching cases count as within.
+bool segment_near_triangle(const double* P, const double* Q, const double* T, double d) {
+    auto orient = [](const double* a, const double* b, const double* c) {
+        return (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
+    };
+    auto point_segment2 = [](const double* p, const double* a, const double* b) {
+        const double ux = b[0] - a[0], uy = b[1] - a[1], wx = p[0] - a[0], wy = p[1] - a[1];
+        const double uu = ux * ux + uy * uy;
+        const double s = uu > 0.0 ? std::clamp((wx * ux + wy * uy) / uu, 0.0, 1.0) : 0.0;
+        const double rx = wx - s * ux, ry = wy - s * uy;
+        return rx * rx + ry * ry;
+    };
+    const double* A[3] = {T, T + 2, T + 4};
+    const double area = orient(A[0], A[1], A[2]);
+    for (const double* p : {P, Q}) {  // an end point inside T (or on its boundary)
+        const double o0 = orient(A[0], A[1], p), o1 = orient(A[1], A[2], p), o2 = orient(A[2], A[0], p);
+        if (area >= 0.0 ? (o0 >= 0.0 && o1 >= 0.0 && o2 >= 0.0) : (o0 <= 0.0 && o1 <= 0.0 && o2 <= 0.0)) return true;
+    }
+    const double d2 = d * d;
+    for (int k = 0; k < 3; ++k) {
+        const double* a = A[k];
+        const double* b = A[(k + 1) % 3];
+        const double s1 = orient(P, Q, a), s2 = orient(P, Q, b), s3 = orient(a, b, P), s4 = orient(a, b, Q);
+        if (((s1 <= 0.0 && s2 >= 0.0) || (s1 >= 0.0 && s2 <= 0.0)) && ((s3 <= 0.0 && s4 >= 0.0) || (s3 >= 0.0 && s4 <= 0.0)))
+            return true;  // PQ meets edge ab
+        if (point_segment2(P, a, b) <= d2 || point_segment2(Q, a, b) <= d2 || point_segment2(a, P, Q) <= d2) return true;
+    }
+    return false;
+}
+
 }  // namespace
 
 ContactSystem::ContactSystem(const int* tri, int n_tri, int n_nodes, double thickness, std::vector<int> tri_material,
@@ -167,6 +198,7 @@ ContactSystem::ContactSystem(const int* tri, int n_tri, int n_nodes, double thic
     }
     for (const ResolvedLaw& L : laws_) inelastic_ = inelastic_ || L.restitution < 1.0;
     capable_.assign(n_tri, 0);
+    near_law_.assign(3 * static_cast<std::size_t>(n_tri), 0);
     excluded_.resize(n_tri);
     // Edges shared by two triangles through both nodes lie inside a continuum: no face.
     continuum_faces_.assign(n_tri, 7);
@@ -256,18 +288,24 @@ void ContactSystem::release_vertex_of(int node) {
     r = 1;
 }
 
-std::vector<double> ContactSystem::node_stiffness(const double* x, const std::uint8_t* held) const {
-    // Per material: the stiffest stiffness-law slope (Pa/m) and the largest penalty (Pa) it can meet.
-    std::vector<double> k_max(n_mat_, 0.0), p_max(n_mat_, 0.0);
-    // (an inelastic law unloads along a line of slope k / e^2: potential.hpp, PairParams::inv_e2)
-    auto account = [&](int m, int li) {
-        if (li < 0) return;
+std::vector<double> ContactSystem::node_stiffness(const double* x, const std::uint8_t* held, bool candidates) const {
+    // Per law: the stiffest stiffness-law slope (Pa/m) and the largest penalty (Pa) it has, normal or tangential (an
+    // inelastic law unloads along a line of slope k / e^2: potential.hpp, PairParams::inv_e2).
+    const int nl = static_cast<int>(laws_.size());
+    std::vector<double> k_law(nl, 0.0), p_law(nl, 0.0);
+    for (int li = 0; li < nl; ++li) {
         const ResolvedLaw& L = laws_[li];
         const double unloading = L.normal / (L.restitution * L.restitution);
-        (L.normal_is_stiffness ? k_max[m] : p_max[m]) =
-            std::max(L.normal_is_stiffness ? k_max[m] : p_max[m], unloading);
-        (L.tangential_is_stiffness ? k_max[m] : p_max[m]) =
-            std::max(L.tangential_is_stiffness ? k_max[m] : p_max[m], L.tangential);
+        (L.normal_is_stiffness ? k_law[li] : p_law[li]) = unloading;
+        double& tg = L.tangential_is_stiffness ? k_law[li] : p_law[li];
+        tg = std::max(tg, L.tangential);
+    }
+    // Per material: the same over every law it can meet (without candidates).
+    std::vector<double> k_max(n_mat_, 0.0), p_max(n_mat_, 0.0);
+    auto account = [&](int m, int li) {
+        if (li < 0) return;
+        k_max[m] = std::max(k_max[m], k_law[li]);
+        p_max[m] = std::max(p_max[m], p_law[li]);
     };
     for (int a = 0; a < n_mat_; ++a) {
         account(a, crack_law_[a]);
@@ -278,17 +316,27 @@ std::vector<double> ContactSystem::node_stiffness(const double* x, const std::ui
     // so each face at the node adds k t L. Every edge that is or may become a face counts (all but the edges
     // inside a continuum): a node on a straight boundary of a continuum has two, a copy at a corner of a split
     // triangle two. (Counting one triangle's longest edge once, the bound let a stack of stiff dry joints go
-    // unstable at 0.76-0.8 of the step it allowed.)
+    // unstable at 0.76-0.8 of the step it allowed.) With candidates, an edge counts with the laws of the candidate
+    // partners it was near at the last detection (near_law_), and not at all without one.
     std::vector<double> k(n_nodes_, 0.0);
     for (int t = 0; t < n_tri_; ++t) {
+        const std::uint64_t* near = &near_law_[3 * static_cast<std::size_t>(t)];
+        if (candidates && (near[0] | near[1] | near[2]) == 0) continue;
         double T[6];
         gather(x, tri_ + 3 * t, T);
         const double h = smallest_altitude(T);
-        // Penalty law: pressure/overlap slope 3 p (1/H_a + 1/H_b) <= 6 p / H ([MA00] phi = 3 min L_k).
-        const double slope = std::max(k_max[material_[t]], 6.0 * p_max[material_[t]] / h);  // Pa/m
         for (int e = 0; e < 3; ++e) {
             if (!((continuum_faces_[t] >> e) & 1)) continue;
             if (held && ((held[t] >> e) & 1)) continue;
+            // Penalty law: pressure/overlap slope 3 p (1/H_a + 1/H_b) <= 6 p / H ([MA00] phi = 3 min L_k).
+            double slope = std::max(k_max[material_[t]], 6.0 * p_max[material_[t]] / h);  // Pa/m
+            if (candidates) {
+                double kc = 0.0, pc = 0.0;
+                for (int li = 0; li < nl; ++li)
+                    if ((near[e] >> std::min(li, 63)) & 1) kc = std::max(kc, k_law[li]), pc = std::max(pc, p_law[li]);
+                if (kc == 0.0 && pc == 0.0) continue;
+                slope = std::max(kc, 6.0 * pc / h);
+            }
             const int e1 = (e + 1) % 3;
             const double kf = slope * thickness_ * std::hypot(T[2 * e1] - T[2 * e], T[2 * e1 + 1] - T[2 * e + 1]);  // N/m
             k[tri_[3 * t + e]] += kf;
@@ -432,6 +480,28 @@ void ContactSystem::detect(const double* x) {
     pair_law_.resize(np);
     for (int p = 0; p < np; ++p) pair_law_[p] = law_of(pair_a_[p], pair_b_[p]);
     set_pair_nodes();
+    // The edges that can load before the next detection, each with the laws it can meet: each edge of a pair's
+    // triangle within the buffer of its partner, with the pair's law (each point of a triangle moves at most
+    // travel_ <= buffer_ / 2 until then, so an edge farther than the buffer from the partner cannot enter it, nor
+    // the partner's faces cross it). Law l is bit min(l, 63).
+    std::vector<std::uint64_t>& now = near_law_new_;
+    now.assign(3 * static_cast<std::size_t>(n_tri_), 0);
+    for (int p = 0; p < np; ++p) {
+        const int ab[2] = {pair_a_[p], pair_b_[p]};
+        const std::uint64_t bit = std::uint64_t{1} << std::min(pair_law_[p], 63);
+        double T[2][6];
+        gather(x, tri_ + 3 * ab[0], T[0]);
+        gather(x, tri_ + 3 * ab[1], T[1]);
+        for (int i = 0; i < 2; ++i)
+            for (int e = 0; e < 3; ++e) {
+                std::uint64_t& m = now[3 * static_cast<std::size_t>(ab[i]) + e];
+                if (!((continuum_faces_[ab[i]] >> e) & 1) || (m & bit)) continue;
+                const int e1 = (e + 1) % 3;
+                if (segment_near_triangle(T[i] + 2 * e, T[i] + 2 * e1, T[1 - i], buffer_)) m |= bit;
+            }
+    }
+    for (std::size_t i = 0; i < now.size() && !candidates_grew_; ++i) candidates_grew_ = (now[i] & ~near_law_[i]) != 0;
+    near_law_.swap(now);
     pair_f_.resize(12 * static_cast<size_t>(np));
     pair_e_.resize(4 * static_cast<size_t>(np));
     pair_on_.resize(np);
@@ -454,6 +524,15 @@ void ContactSystem::set_pair_nodes() {
             pair_nodes_[6 * p + 3 + k] = tri_[3 * pair_b_[p] + k];
         }
     own_threads_ = 0;
+}
+
+bool ContactSystem::prepare(const double* x, const double* v, double dt, double v2max) {
+    if (faces_dirty_) update_faces();
+    candidates_grew_ = false;
+    // (the test of step(), on the same arguments)
+    if (dirty_ || 2.0 * (travel_ + dt * std::sqrt(v2max >= 0.0 ? v2max : largest_speed2(v, n_nodes_))) > buffer_)
+        detect(x);
+    return candidates_grew_;
 }
 
 void ContactSystem::step(const double* x, const double* v, double dt, double* f, double v2max) {

@@ -39,7 +39,7 @@ namespace {
 constexpr char kMagic[8] = {'F', 'D', 'E', 'M', 'C', 'K', 'P', 'T'};
 // 4: a seventh double per contact slot (restitution); 5: each load saved by its kind; 6: each support saved by its
 // kind; 7: the module forces (zero between steps, a cache) no longer saved
-constexpr std::uint32_t kFormat = 7;
+constexpr std::uint32_t kFormat = 8;
 
 std::uint64_t fnv1a(const char* p, std::size_t n, std::uint64_t h = 1469598103934665603ull) {
     for (std::size_t i = 0; i < n; ++i) h = (h ^ static_cast<unsigned char>(p[i])) * 1099511628211ull;

@@ -66,7 +66,8 @@ void Simulation::scale_node_masses() {
     // per-node cache instead: the same values up to rounding, and each order is the one the committed results hold).
     std::vector<double> kt(nn, 0.0), kj(nn, 0.0), kc(nn, 0.0);
     add_triangle_node_stiffness(spec_, model_, rep, kt.data());
-    inter_.add_node_stiffness(model_, contact_xi_max(), 0.0, rep, kj.data(), kc.data());
+    // (the masses stay for the whole run: every face that may touch counts, not only the candidates of the moment)
+    inter_.add_node_stiffness(model_, contact_xi_max(), 0.0, rep, kj.data(), kc.data(), true);
     // m >= k dt^2 / 4, with a relative margin of 1e-12 so that rounding leaves the nodal bound at or above dt_t.
     const double q = 0.25 * dt * dt * (1 + 1e-12);
     std::vector<double> need(nn, 0.0);
@@ -101,7 +102,8 @@ void Simulation::scale_node_masses() {
     if (raised > 0) build_ties();  // the groups' masses and the copies' shares
 }
 
-Simulation::NodalLimit Simulation::nodal_step_limit(const double* mass, const int* rep, double xi_contact, double alpha) {
+Simulation::NodalLimit Simulation::nodal_step_limit(const double* mass, const int* rep, double xi_contact, double alpha,
+                                                    bool every_face) {
     const int nn = model_.n_nodes();
     if (limits_.tri_node_k.size() != static_cast<std::size_t>(nn) || limits_.tri_node_k_alpha != alpha) {
         limits_.tri_node_k.assign(nn, 0.0);
@@ -110,7 +112,11 @@ Simulation::NodalLimit Simulation::nodal_step_limit(const double* mass, const in
     }
     std::vector<double> kt(nn, 0.0), kj(nn, 0.0), kc(nn, 0.0);
     for (int k = 0; k < nn; ++k) kt[rep ? rep[k] : k] += limits_.tri_node_k[k];
-    inter_.add_node_stiffness(model_, xi_contact, alpha, rep, kj.data(), kc.data());
+    // The contact springs of the edges near a candidate pair (Interactions::add_node_stiffness): the step follows
+    // the list (reduce_dt_after_insertion when it grows). A fixed step (numerics.dt) cannot: its limit counts every
+    // face that may touch.
+    inter_.add_node_stiffness(model_, xi_contact, alpha, rep, kj.data(), kc.data(),
+                              every_face || spec_.dt_override.has_value());
     NodalLimit lim;
     double w2max = 0;  // 1/s^2
     for (int k = 0; k < nn; ++k) {
@@ -120,9 +126,16 @@ Simulation::NodalLimit Simulation::nodal_step_limit(const double* mass, const in
         const double w2 = (kt[k] + kj[k] + kc[k]) / mass[k];
         if (w2 > w2max) w2max = w2, lim.node = k, lim.k_tri = kt[k], lim.k_joint = kj[k], lim.k_contact = kc[k];
     }
-    // Rigid bodies (fdem/body_step.hpp): their mass and inertia against the springs at their nodes.
+    // Rigid bodies (fdem/body_step.hpp): their mass and inertia against the springs at their nodes. A body counts
+    // every face that may touch, candidate or not: its contact is all its deformation, and the step of its candidate
+    // springs alone resolves an impact by two or three steps, where its restitution needs about ten (fdem/README.md
+    // 'Time step'; tests/contact/test_rocking.cpp).
     std::vector<double> k;  // N/m, per node: the three shares summed (read at the bodies' nodes only)
     if (!limits_.bodies.nodes.empty()) {
+        if (!every_face && !spec_.dt_override.has_value()) {
+            std::fill(kj.begin(), kj.end(), 0.0), std::fill(kc.begin(), kc.end(), 0.0);
+            inter_.add_node_stiffness(model_, xi_contact, alpha, rep, kj.data(), kc.data(), true);
+        }
         k.resize(nn);
         for (int j = 0; j < nn; ++j) k[j] = kt[j] + kj[j] + kc[j];
     }
@@ -135,6 +148,9 @@ Simulation::NodalLimit Simulation::nodal_step_limit(const double* mass, const in
             lim.k_joint = sj, lim.k_contact = sc;
     }
     if (w2max > 0) lim.dt = 2.0 / std::sqrt(w2max);
+    // Nothing bounded (rigid bodies and held nodes only, no spring near a candidate: a body in free flight): the
+    // bound of every face, which a contact would shrink the step to, keeps the step finite.
+    if (!every_face && !(lim.dt < 1e299)) return nodal_step_limit(mass, rep, xi_contact, alpha, true);
     return lim;
 }
 
@@ -312,7 +328,7 @@ void Simulation::share_nodes_with_contact(int n_thr) {
     inter_.set_node_owner(std::move(owner), n_thr);
 }
 
-void Simulation::reduce_dt_after_insertion() {
+void Simulation::reduce_dt_after_insertion(const char* cause) {
     if (spec_.dt_override) return;  // numerics.dt: the user's step
     const double* mass = units_.eff_mass.empty() ? nullptr : units_.eff_mass.data();
     const int* rep = units_.rep.empty() ? nullptr : units_.rep.data();
@@ -326,7 +342,7 @@ void Simulation::reduce_dt_after_insertion() {
     if (clock_.dt < 0.9 * clock_.dt_logged) {  // (a note of the step: the observers log it)
         clock_.dt_logged = clock_.dt;
         scratch_.notes.push_back("time step: " + sci(clock_.dt) + " s from t = " + sci(clock_.time) +
-                                 " s (cracks inserted or joints broken: new faces for contact)");
+                                 " s (" + cause + ")");
     }
 }
 

@@ -256,7 +256,7 @@ double Interactions::stable_dt(const Model& model, double xi_contact, const doub
 }
 
 void Interactions::add_node_stiffness(const Model& model, double xi_contact, double alpha, const int* rep, double* k_joint,
-                                      double* k_contact) const {
+                                      double* k_contact, bool every_face) const {
     if (joints_) {
         // (1 + alpha = 1 / damped_step_factor(0, alpha)^2: the joints' springs have no dashpots)
         const std::vector<double> k = joints_->node_stiffness(rep);
@@ -284,7 +284,8 @@ void Interactions::add_node_stiffness(const Model& model, double xi_contact, dou
                 mark(el.tri_b, el.n[2], el.n[3]);
             }
         }
-        const std::vector<double> k = contact_->node_stiffness(model.X.data(), held.empty() ? nullptr : held.data());
+        const std::vector<double> k =
+            contact_->node_stiffness(model.X.data(), held.empty() ? nullptr : held.data(), !every_face);
         // A tied group (rep) takes its stiffest copy's, not the sum: each copy's count holds the faces a crack could
         // open at it, which are no faces while the group is tied (summed, the default wall's groups asked 4 times the
         // mass); once an insertion unties the copies, reduce_dt_after_insertion checks the step again.

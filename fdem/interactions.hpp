@@ -35,9 +35,23 @@ public:
     // The springs' share of the assembled system's nodal bound: adds to k_joint and k_contact (per node, or per
     // representative with rep) the Gershgorin row sums of the intact joints and of the contact springs (N/m), each
     // divided by damped_step_factor(xi, alpha)^2: xi_contact of critical for the contact's dashpots, 0 for the
-    // joints', alpha the local damping.
+    // joints', alpha the local damping. The contact springs counted are those of the edges near a candidate partner
+    // at the last detection, at that pair's law (ContactSystem::node_stiffness: every spring that can load before
+    // the next detection; refresh_contact keeps the list current), or with every_face those of every edge that is or
+    // may become a face at the stiffest law its material can meet (a bound for the whole run, as a fixed step or the
+    // masses of per-node scaling need).
     void add_node_stiffness(const Model& model, double xi_contact, double alpha, const int* rep, double* k_joint,
-                            double* k_contact) const;
+                            double* k_contact, bool every_face = false) const;
+    // Runs the contact detection the next add_forces(x, v, dt, ..., v2max) would run first (ContactSystem::prepare);
+    // true when it brought an edge or a law into the count that the list before had not (the step must be bounded
+    // again).
+    bool refresh_contact(const double* x, const double* v, double dt, double v2max) {
+        return contact_ && contact_->prepare(x, v, dt, v2max);
+    }
+    // The contact list is stale (nodes were moved other than by the step): the next refresh or step detects.
+    void invalidate_contact() {
+        if (contact_) contact_->invalidate();
+    }
     // Undamped stable step of the contact springs alone (s), +inf without contact: beta = xi * this.
     double contact_stable_dt(const Model& model, const double* mass = nullptr) const;
     void set_contact_dashpot(double beta_s) {

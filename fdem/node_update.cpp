@@ -50,6 +50,7 @@ inline void unit_update(const NodeUpdate& a, int u, Books& s) {
     double* vw = a.v;
     double* vref = a.v_ref;
     const double dt = a.dt, dtv = a.dtv, alpha = a.local_damping, mass_damp = a.mass_damping, hm = a.hm, wf = a.wf;
+    const bool change = a.dt_before != 0 && a.dt_before != dt;  // (the same for every unit of the step)
     const int j0 = kTied ? u_start[u] : u, j1 = kTied ? u_start[u + 1] : u + 1;
     // the resultant: internal (joints, contact, triangles) and external (loads, gravity) sums
     double S[4] = {0, 0, 0, 0};
@@ -98,13 +99,15 @@ inline void unit_update(const NodeUpdate& a, int u, Books& s) {
             // (without mass damping the same bits without the division: (1 - 0) v = v, x / 1 = x)
             vnew = kMass ? ((1 - hm) * vold + dtv * (f + fd) * im) / (1 + hm) : vold + dtv * (f + fd) * im;
             const double vbar = 0.5 * (vold + vnew);
-            s.work += dt * fe * vbar;
-            s.damping -= dt * fd * vbar;
+            // (a change of step: f over (x^{n+1} - x^{n-1}) / 2, node_update.hpp)
+            const double span = change ? 0.5 * (a.dt_before * vold + dt * vnew) : 0.0;
+            s.work += change ? fe * span : dt * fe * vbar;
+            s.damping -= change ? fd * span : dt * fd * vbar;
             s.work_half += 0.5 * dt * fe * vnew;
             s.damping_half -= 0.5 * dt * fd * vnew;
             if (kMass) {  // -a m vbar: work dt (-a m vbar) vbar, and its share up to t^n
                 const double fm = -mass_damp * M * vbar;
-                s.mass -= dt * fm * vbar;
+                s.mass -= change ? fm * span : dt * fm * vbar;
                 s.mass_half -= 0.5 * dt * fm * vnew;
             }
             s.unbalanced += std::abs(f);
@@ -115,7 +118,8 @@ inline void unit_update(const NodeUpdate& a, int u, Books& s) {
                 const double w = kTied ? a.tie_w[k] : 1.0;
                 const double R = mass[k] * (vnew - vold) / dtv - w * f;
                 reac[2 * k + c] = R;
-                s.work += dt * (w * fe + R) * 0.5 * (vold + vnew);
+                s.work += change ? (w * fe + R) * (0.5 * (a.dt_before * vold + dt * vnew))
+                                 : dt * (w * fe + R) * 0.5 * (vold + vnew);
                 s.work_half += 0.5 * dt * (w * fe + R) * vnew;
             }
         }
@@ -308,7 +312,7 @@ template <bool kTied, bool kFilter, bool kMass>
 void run_blocks(const NodeUpdate& a, std::vector<NodeBlockSums>& sums) {
     const int nnb = static_cast<int>(sums.size());
 #if defined(FDEM_NODE_AVX)
-    const bool avx = a.lanes != 1 && avx_available();
+    const bool avx = a.lanes != 1 && avx_available() && (a.dt_before == 0 || a.dt_before == a.dt);
 #endif
 #pragma omp parallel if (nnb > 1)
     {

@@ -10,7 +10,11 @@
 // units the books of the step on vbar = (v^{n-1/2} + v^{n+1/2}) / 2: work dt (f_ext + R) . vbar, local and mass
 // damping, K^n = 1/2 M v^{n-1/2} . v^{n+1/2}, the halves on v^{n+1/2} that run ahead of t^n, the unbalanced force
 // and its scale, the largest |v|^2, and the first unit with a non-finite velocity. dtv = (dt^{n-1/2} + dt^{n+1/2}) / 2
-// (a step that changed the step size; Belytschko, Liu & Moran 2000, §6.2).
+// (a step that changed the step size; Belytschko, Liu & Moran 2000, §6.2). On such a step the work takes f^n over
+// (x^{n+1} - x^{n-1}) / 2 = (dt^{n-1/2} v^{n-1/2} + dt^{n+1/2} v^{n+1/2}) / 2, which is dt vbar only while the step
+// is constant: the sum of these over the steps is the trapezoidal work of the positions, the one the potential
+// energies and K^n agree with (dt vbar at a change books f^n . v^{n-1/2} (dt^{n-1/2} - dt^{n+1/2}) / 2 too many).
+// Such a step runs the scalar code.
 //
 // DATA CONTRACT. Node k's DOFs at 2k, 2k + 1. Units (tied only): members u_node[u_start[u] .. u_start[u + 1]), the
 // unit's mass u_mass[u] and its inverse; a member j with u_slot[j] >= 0 reads its triangle forces from that slot
@@ -55,6 +59,7 @@ struct NodeUpdate {
     double* v = nullptr;
     double* v_ref = nullptr;  // the filter's moving means, or null (no filter)
     double dt = 0, dtv = 0;   // s
+    double dt_before = 0;     // s, the last step's length when it differs from dt (0: the same)
     double local_damping = 0; // [C79] local damping alpha
     double mass_damping = 0;  // mass-proportional (Rayleigh) damping a (1/s)
     double hm = 0;            // dtv a / 2

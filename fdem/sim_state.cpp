@@ -48,10 +48,10 @@ void kind_list_io(IO& io, std::vector<Ptr>& list, const char* what, Find find, B
 
 }  // namespace
 
-static_assert(field_count<StepClock>() == 11, "StepClock changed: update StepClock::io and this count");
+static_assert(field_count<StepClock>() == 12, "StepClock changed: update StepClock::io and this count");
 template <class IO>
 void StepClock::io(IO& io, const StateShape& shape) {
-    io.pod(dt), io.pod(dt_limit), io.pod(dt_springs), io.pod(dt_logged);
+    io.pod(dt), io.pod(dt_limit), io.pod(dt_springs), io.pod(dt_logged), io.pod(dt_last);
     io.pod(time), io.pod(steps), io.pod(stage), io.pod(stage_t0), io.pod(stage_steps0), io.pod(broken_total),
         io.pod(eq_since);
     if constexpr (IO::loading)

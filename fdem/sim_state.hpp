@@ -53,6 +53,7 @@ struct StepClock {
     double dt = 0, dt_limit = 0;  // s, the step and the stable limit it is a fraction of
     double dt_springs = 0;        // s, bound of joint and contact springs alone (the log)
     double dt_logged = 0;         // s, the last step reported in the log
+    double dt_last = 0;           // s, the length of the last step taken (0 before the first)
     double time = 0;              // s
     long steps = 0;
     int stage = -1;
@@ -242,7 +243,7 @@ struct StepProfile {
 
 // What the stages of one step hand on to the next ones (fdem/step.cpp).
 struct StepContext {
-    double dt_before = 0;         // s, the step as the previous one left it
+    double dt_before = 0;         // s, the length of the previous step (this one's at the first)
     double dt = 0;                // s, this step (insertion may have made it smaller)
     double dtv = 0;               // s, the velocity update's span (dt_before + dt) / 2
     double* tri_sigma = nullptr;  // the triangles' stresses for the insertion check (ties only), else null

@@ -70,6 +70,8 @@ Simulation::Simulation(CaseSpec spec, Model model, RunOptions options)
     crush_.setup(spec_, model_);
     build_ties();
     scale_node_masses();
+    // The first contact detection, so that the first step's bound counts the edges near its candidate pairs only.
+    inter_.refresh_contact(model_.x.data(), model_.v.data(), 0.0, -1.0);
     compute_dt();
     limits_.dt_initial = clock_.dt_logged = clock_.dt;
     // Derived quantities must be finite (issue 26: a huge mass_scale gave dt = 1e148 s, NaN energies and "completed").
@@ -222,6 +224,8 @@ void Simulation::audit_step(int phase, double dt) {
     const int nn = model_.n_nodes();
     const double* v = model_.v.data();
     double w[3] = {0, 0, 0}, h[3] = {0, 0, 0};
+    // (the last step's length: on a change of step the work is f over (x^{n+1} - x^{n-1}) / 2, fdem/node_update.hpp)
+    const double h1 = clock_.dt_last > 0 ? clock_.dt_last : dt;
     for (int k = 0; k < nn; ++k)
         for (int c = 0; c < 2; ++c) {
             const std::size_t d = 2 * static_cast<std::size_t>(k) + c;
@@ -231,7 +235,7 @@ void Simulation::audit_step(int phase, double dt) {
             const double f[3] = {ft, audit_.fj[d], audit_.f[d] - audit_.fj[d]};
             const double vbar = 0.5 * (audit_.v[d] + v[d]);
             for (int m = 0; m < 3; ++m) {
-                w[m] += dt * f[m] * vbar;
+                w[m] += h1 != dt ? f[m] * (0.5 * (h1 * audit_.v[d] + dt * v[d])) : dt * f[m] * vbar;
                 h[m] += 0.5 * dt * f[m] * v[d];
             }
         }

@@ -142,7 +142,10 @@ private:
     // the step (clock_; begin_stage, when a stage changes the local damping).
     void set_step_limits(double alpha, bool set_dt);
     double stage_alpha(int s) const;  // the local damping in force in stage s (a stage without the key keeps it)
-    NodalLimit nodal_step_limit(const double* mass, const int* rep, double xi_contact, double alpha);  // (see NodalLimit)
+    // (see NodalLimit) every_face: the contact springs of every face that may touch, not only those near a
+    // candidate pair (Interactions::add_node_stiffness)
+    NodalLimit nodal_step_limit(const double* mass, const int* rep, double xi_contact, double alpha,
+                                bool every_face = false);
     // Extrinsic insertion (fracture/cohesive_system.hpp): the copies joined by dormant cohesive elements move as one
     // node. build_ties groups them (units_: union-find over the dormant elements' node pairs; groups in order of
     // their first node, members ascending); check_ties refuses a support that holds only some copies of a group.
@@ -150,7 +153,9 @@ private:
     void scale_node_masses();  // [numerics] mass_scaling = "per_node" (integrator.cpp)
     double contact_xi_max() const;
     void check_ties() const;
-    void reduce_dt_after_insertion();          // the step after nodes were untied: never larger, smaller if needed
+    // The step after nodes were untied, joints broke or the contact candidates grew (cause, for the log): never
+    // larger, smaller if the nodal bound of the current springs needs it.
+    void reduce_dt_after_insertion(const char* cause);
     void share_nodes_with_contact(int n_thr);  // tells the contact which thread integrates each node
     int node_block_count() const;              // the node loop's blocks: units of tied copies, or kBlock nodes
     void apply_time_dependent(double t);

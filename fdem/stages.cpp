@@ -55,12 +55,16 @@ void Simulation::apply_initial_conditions() {
             model_.v[2 * k] = in.velocity[0] - in.angular_velocity * (xk[1] - in.center[1]);
             model_.v[2 * k + 1] = in.velocity[1] + in.angular_velocity * (xk[0] - in.center[0]);
         }
+        if (in.rotation != 0) inter_.invalidate_contact();
         scratch_.v2max = -1.0;  // (the node loop's speed is not this v's)
         log("initial conditions on '" + in.group + "': " + std::to_string(grp.nodes.size()) + " nodes" +
             (in.rotation != 0 ? ", placement turned by " + sci(in.rotation) + " deg" : std::string()) +
             ", velocity [" + sci(in.velocity[0]) + ", " + sci(in.velocity[1]) + "] m/s" +
             (in.angular_velocity != 0 ? " + " + sci(in.angular_velocity) + " rad/s about the centre" : std::string()));
     }
+    // A turned placement: the contact list of the new positions, and the first step bounded by it.
+    if (inter_.refresh_contact(model_.x.data(), model_.v.data(), clock_.dt, -1.0))
+        reduce_dt_after_insertion("initial placement: new contact candidates");
 }
 
 // begin_stage, part 1: the damping (local, its filter, mass, contact dashpots) and gravity (vector, ramp, tilt,

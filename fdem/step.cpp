@@ -5,7 +5,8 @@
 // damping, fdem/README.md 'Time step'; [M04] ch. 4, [C79]) from x^n, v^{n-1/2}, in this order:
 //   step_triangles     triangle forces f_int(x^n, v^{n-1/2}) in parallel, one 6-double record per triangle;
 //   step_insertion     extrinsic insertion: dormant edges whose traction reached the strength get their element, the
-//                      copies are untied, the step may shrink;
+//                      copies are untied, the step may shrink; then the contact detection, when due, and the step
+//                      shrinks if the new candidate pairs need it;
 //   step_loads         loads, gravity and prescribed velocities at t^n (ramps, protocols, tilting; after the
 //                      insertion, as a prescribed velocity reads the step);
 //   step_interactions  joint and contact forces into f_mod (Interactions::add_forces);
@@ -65,7 +66,7 @@ double Simulation::advance() {
     StepContext c;
     double t = omp_get_wtime();
     if (spec_.energy_audit) audit_step(0, clock_.dt);
-    c.dt_before = clock_.dt;
+    c.dt_before = clock_.dt_last > 0 ? clock_.dt_last : clock_.dt;
     step_triangles(c);
     t = lap(profile_.triangles, t);
     step_insertion(c);
@@ -144,8 +145,13 @@ void Simulation::step_triangles(StepContext& c) {
 void Simulation::step_insertion(StepContext& c) {
     if (units_.active && inter_.insert_cracks(model_.x.data(), c.tri_sigma) > 0) {
         build_ties();
-        reduce_dt_after_insertion();
+        reduce_dt_after_insertion("cracks inserted: nodes untied");
     }
+    // This step's contact detection (the one step_interactions would run, on the same x^n, dt and speed), before
+    // the step is set: the nodal bound counts the faces of the candidate pairs, and a pair not in the list cannot
+    // touch before the next detection, so the step shrinks here when a triangle joins the list.
+    if (inter_.refresh_contact(model_.x.data(), model_.v.data(), clock_.dt, scratch_.v2max))
+        reduce_dt_after_insertion("new contact candidates");
     c.dt = clock_.dt;
     c.dtv = 0.5 * (c.dt_before + c.dt);
 }
@@ -189,6 +195,7 @@ void Simulation::step_rigid_groups(StepContext& c) {
                  c.dtv,
                  supports_.dof_velocity.data(),
                  supports_.dof_owner.data(),
+                 c.dt_before,
                  supports_.list.data(),
                  static_cast<int>(supports_.list.size())};
     for (std::size_t id = 0; id < supports_.list.size(); ++id) supports_.list[id]->rigid_step(rs, static_cast<int>(id));
@@ -222,7 +229,8 @@ void Simulation::step_nodes(StepContext& c) {
     u.reaction = supports_.reaction.data();
     u.x = model_.x.data(), u.v = model_.v.data();
     u.v_ref = damping_.filter_tau > 0 ? damping_.v_ref.data() : nullptr;
-    u.dt = c.dt, u.dtv = c.dtv, u.local_damping = damping_.local, u.mass_damping = damping_.mass, u.hm = c.hm, u.wf = c.wf;
+    u.dt = c.dt, u.dtv = c.dtv, u.dt_before = c.dt_before;
+    u.local_damping = damping_.local, u.mass_damping = damping_.mass, u.hm = c.hm, u.wf = c.wf;
     u.gx = gravity_.applied[0], u.gy = gravity_.applied[1];
     const int nnb = node_block_count();
     const int n_thr = nnb > 1 ? omp_get_max_threads() : 1;
@@ -262,6 +270,7 @@ void Simulation::step_books(StepContext& c) {
     books_.unbalanced_ratio = scale > 0 ? unb / scale : 0;
     supports_after_step();
     clock_.time += c.dt;
+    clock_.dt_last = c.dt;
     gravity_.tilt_deg += gravity_.tilt_rate * c.dt;
     ++clock_.steps;
 }
@@ -271,7 +280,7 @@ void Simulation::step_damage(StepContext&) {
     if (!inter_.has_joints()) return;
     const int broke = inter_.after_step(clock_.time, control_displacement(), model_.x.data());
     clock_.broken_total += broke;
-    if (broke > 0) reduce_dt_after_insertion();
+    if (broke > 0) reduce_dt_after_insertion("joints broken: new faces for contact");
 }
 
 // The log lines the stages left (StepScratch::notes), in their order.

@@ -54,6 +54,7 @@ struct RigidStep {
     double local_damping, filter_tau, wf, mass_damping, hm, dt, dtv;
     double* dof_vel;
     const int* dof_owner;
+    double dt_before;  // s, the last step's length (= dt while the step is constant; fdem/node_update.hpp)
     const std::unique_ptr<Support>* supports;  // the active supports, indexed by dof_owner (a body finds its other
     int n_supports;                            // component's support)
     double damp = 0, damp_half = 0, mass = 0, mass_half = 0;  // J: dt F_d v_bar, dt/2 F_d v^{n+1/2}; the same for -a M v

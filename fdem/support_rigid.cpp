@@ -41,9 +41,12 @@ public:
         const double Fd = vrel > 0 ? -s.local_damping * std::abs(F) : vrel < 0 ? s.local_damping * std::abs(F) : 0.0;
         const double vnew = ((1 - s.hm) * vold + s.dtv * (F + Fd) / M) / (1 + s.hm);
         const double Fm = -s.mass_damping * M * 0.5 * (vold + vnew);
-        s.damp += s.dt * Fd * 0.5 * (vold + vnew);
+        // (a change of step: F over (x^{n+1} - x^{n-1}) / 2, fdem/node_update.hpp)
+        const bool change = s.dt_before != s.dt;
+        const double span = 0.5 * (s.dt_before * vold + s.dt * vnew);
+        s.damp += change ? Fd * span : s.dt * Fd * 0.5 * (vold + vnew);
         s.damp_half += 0.5 * s.dt * Fd * vnew;
-        s.mass += s.dt * Fm * 0.5 * (vold + vnew);
+        s.mass += change ? Fm * span : s.dt * Fm * 0.5 * (vold + vnew);
         s.mass_half += 0.5 * s.dt * Fm * vnew;
         v_common = vnew;
         if (s.filter_tau > 0) v_ref += s.wf * (vnew - v_ref);

@@ -83,6 +83,39 @@ TEST_CASE("node update kernel: free, damped and held DOFs move and book as centr
     CHECK(sums[0].bad == 1);
 }
 
+TEST_CASE("node update kernel: across a change of step the books take the work of the positions", "[unit]") {
+    // A free node under a constant load F with local damping alpha (the damping force -alpha F while it moves up),
+    // three steps of h1, then h2: at the change the velocity update spans (h1 + h2) / 2 and the work is F over
+    // (x^{n+1} - x^{n-1}) / 2. The loads' work and the damping are then exact: F and alpha F times the distance
+    // between the positions the books stand at (dt vbar at the change would be off by F v^{n-1/2} (h1 - h2) / 2,
+    // 10 % here). K^n = m v^{n-1/2} v^{n+1/2} / 2 then differs from the net work by the leapfrog's second-order term
+    // (h1 - h2) / (4 hbar) m |dv|^2 of the changing step, dv its velocity change (node_update.hpp).
+    const double m = 2.0, F = 3.0, alpha = 0.5, h1 = 1e-3, h2 = 4e-4;
+    Nodes s(1, m);
+    s.f_ext[1] = F, s.loaded[0] = 1;
+    s.v[1] = 0.2;
+    std::vector<fdem::NodeBlockSums> sums(1);
+    double W = 0, D = 0, dv_change = 0;
+    std::vector<double> y, Wt, Dt, K;
+    for (int j = 0; j < 6; ++j) {
+        const double h = j < 3 ? h1 : h2, before = j == 3 ? h1 : h;
+        fdem::NodeUpdate a = s.args(h, alpha, 0.0);
+        a.dtv = 0.5 * (before + h), a.dt_before = before;
+        y.push_back(s.x[1]);
+        const double v0 = s.v[1];
+        fdem::update_nodes(a, sums);
+        if (j == 3) dv_change = s.v[1] - v0;
+        W += sums[0].work, D += sums[0].damping;
+        Wt.push_back(W - sums[0].work_half), Dt.push_back(D - sums[0].damping_half), K.push_back(sums[0].kinetic);
+    }
+    const double dy = y[5] - y[0];
+    CHECK(Wt[5] - Wt[0] == Approx(F * dy).epsilon(1e-12));
+    CHECK(Dt[5] - Dt[0] == Approx(alpha * F * dy).epsilon(1e-12));
+    const double hbar = 0.5 * (h1 + h2);
+    CHECK(dv_change == Approx(hbar * (1 - alpha) * F / m).epsilon(1e-12));
+    CHECK(K[5] - K[0] == Approx((1 - alpha) * F * dy + (h1 - h2) / (4 * hbar) * m * dv_change * dv_change).epsilon(1e-12));
+}
+
 TEST_CASE("node update kernel: the same bits on 1, 2 and 4 threads", "[unit]") {
     const int n = 5000, blocks = (n + 255) / 256;
     std::mt19937 rng(3);
