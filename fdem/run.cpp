@@ -172,8 +172,10 @@ void Simulation::run() {
              ? ", at local damping " + sci(resumed_ ? damping_.local : stage_alpha(0))
              : std::string()) +
         ")" +
-        (std::isfinite(clock_.dt_springs) ? "; joint/contact springs alone " + sci(clock_.dt_springs) + " s"
-                                          : std::string()));
+        (std::isfinite(clock_.dt_springs)
+             ? "; the joint and contact springs alone, every face that may touch in contact: " +
+                   sci(clock_.dt_springs) + " s"
+             : std::string()));
     if (!model_.has_topology && model_.mesh.n_bodies() > 1)
         log("no interface or fracture rules: the " + std::to_string(model_.mesh.n_bodies()) + " bodies of the mesh are tied into one continuum");
     if (inter_.has_joints()) {

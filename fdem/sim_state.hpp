@@ -51,7 +51,7 @@ struct StateShape {
 // conditions hold without a break (s; -1: they do not).
 struct StepClock {
     double dt = 0, dt_limit = 0;  // s, the step and the stable limit it is a fraction of
-    double dt_springs = 0;        // s, bound of joint and contact springs alone (the log)
+    double dt_springs = 0;        // s, bound of joint and contact springs alone, every face in contact (the log)
     double dt_logged = 0;         // s, the last step reported in the log
     double dt_last = 0;           // s, the length of the last step taken (0 before the first)
     double time = 0;              // s
