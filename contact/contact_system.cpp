@@ -526,21 +526,22 @@ void ContactSystem::set_pair_nodes() {
     own_threads_ = 0;
 }
 
-bool ContactSystem::prepare(const double* x, const double* v, double dt, double v2max) {
+// [MA98]: a pair can only appear once two triangles have moved towards each other by the buffer; each moved at most
+// the accumulated dt max|v|. Anticipate this step's motion so the list is valid until the next call.
+void ContactSystem::detect_if_due(const double* x, double dt, double vmax) {
     if (faces_dirty_) update_faces();
+    if (dirty_ || 2.0 * (travel_ + dt * vmax) > buffer_) detect(x);
+}
+
+bool ContactSystem::prepare(const double* x, const double* v, double dt, double v2max) {
     candidates_grew_ = false;
-    // (the test of step(), on the same arguments)
-    if (dirty_ || 2.0 * (travel_ + dt * std::sqrt(v2max >= 0.0 ? v2max : largest_speed2(v, n_nodes_))) > buffer_)
-        detect(x);
+    detect_if_due(x, dt, std::sqrt(v2max >= 0.0 ? v2max : largest_speed2(v, n_nodes_)));
     return candidates_grew_;
 }
 
 void ContactSystem::step(const double* x, const double* v, double dt, double* f, double v2max) {
     const double vmax = std::sqrt(v2max >= 0.0 ? v2max : largest_speed2(v, n_nodes_));
-    // [MA98]: a pair can only appear once two triangles have moved towards each other by the buffer; each moved
-    // at most the accumulated dt max|v|. Anticipate this step's motion so the list is valid until the next call.
-    if (faces_dirty_) update_faces();
-    if (dirty_ || 2.0 * (travel_ + dt * vmax) > buffer_) detect(x);
+    detect_if_due(x, dt, vmax);
     travel_ += dt * vmax;
 
     const double t0 = omp_get_wtime();

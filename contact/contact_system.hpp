@@ -92,20 +92,13 @@ public:
     // joints' row sums for the step of the assembled system). held (optional): per triangle, bit e set when its edge e
     // (from node e to node e + 1) is held by an intact cohesive element, which keeps it out of contact until it breaks.
     // candidates: only the edges that were within the buffer of a candidate partner at the last detection (prepare
-    // or step; near_faces), each with the slopes of those pairs' laws. A penalty spring loads only while its edge
+    // or step; near_law_), each with the slopes of those pairs' laws. A penalty spring loads only while its edge
     // overlaps the partner or the partner's faces cross it, the buffer keeps every pair that can overlap before the
     // next detection in the list, and each point moves at most half the buffer until then, so this count holds
     // every contact spring that can load until the next detection; false: every edge that is or may become a face,
     // with the stiffest law its material can meet, whatever the list (a bound for the whole run).
     std::vector<double> node_stiffness(const double* x, const std::uint8_t* held = nullptr,
                                        bool candidates = false) const;
-    // Per triangle t, bit e set when its edge e (a face of the continuum) was within the buffer of a candidate
-    // partner at the last detection.
-    unsigned near_faces(int t) const {
-        unsigned b = 0;
-        for (int e = 0; e < 3; ++e) b |= near_law_[3 * static_cast<std::size_t>(t) + e] ? 1u << e : 0u;
-        return b;
-    }
 
     // One step: re-detects when 2 * (sum of dt max|v| since the last detection) would exceed the buffer, then
     // evaluates all pairs and adds the contact forces (N) to f. dt in s. v2max >= 0: the caller's largest |v|^2 over
@@ -115,7 +108,7 @@ public:
     // The detection step(x, v, dt, f, v2max) would run first, run now (the faces brought up to date, then NBS when
     // the list is stale or 2 * (travel + dt max|v|) would exceed the buffer), so that a caller can bound its step by
     // the new list before the step that uses it; step() then finds nothing left to do. Returns true when the
-    // detection set a bit of near_faces that the one before had not.
+    // detection set a bit of near_law_ that the one before had not.
     bool prepare(const double* x, const double* v, double dt, double v2max = -1.0);
     void set_compute_energy(bool on) { opt_.compute_energy = on; }
     // Contact dashpots ([C79]'s viscous contact damping, made stiffness-proportional like Rayleigh beta damping;
@@ -220,6 +213,8 @@ private:
     // detection set a bit the one before had not.
     std::vector<std::uint64_t> near_law_, near_law_new_;
     bool candidates_grew_ = false;
+    // The detection when the list is stale or this step's motion would exceed the buffer (step, prepare).
+    void detect_if_due(const double* x, double dt, double vmax);
     std::vector<double> hist_;  // kHistPerPair per pair
     // scratch
     std::vector<char> pair_hist_on_;  // per pair: bit s set when slot s of hist_ may be nonzero (derived, not saved)
